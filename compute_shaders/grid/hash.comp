@@ -1,0 +1,36 @@
+#version 450
+// Neighbour grid, step 1: the cell of every particle as a (cell, slot) pair for the sort, and
+// the particle count of every cell (integer atomics: the counts do not depend on order).
+// Particles outside the grid are clamped into the border cells and counted; a particle with
+// a non-finite coordinate goes to cell 0 and is counted separately so the caller can stop.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/grid.h"
+#include "common/index.glsl"
+#include "common/grid.glsl"
+
+layout(std430, binding = HEMO_HASH_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
+layout(std430, binding = HEMO_HASH_BINDING_PAIRS) writeonly buffer Pairs { uvec2 pairs[]; };
+layout(std430, binding = HEMO_HASH_BINDING_CELL_COUNTS) buffer CellCounts { uint cellCounts[]; };
+layout(std430, binding = HEMO_HASH_BINDING_COUNTERS) buffer Counters { uint counters[]; };
+layout(push_constant) uniform Push { vec4 originInvCell; uvec4 dimsN; } pc;
+
+void main() {
+  const uint i = hemo_global_index();
+  if (i >= pc.dimsN.w) {
+    return;
+  }
+  const vec3 p = positions[i].xyz;
+  uint cell = 0u;
+  if (any(isnan(p)) || any(isinf(p))) {
+    atomicAdd(counters[HEMO_COUNTER_NONFINITE], 1u);
+  } else {
+    bool outside;
+    const ivec3 c = hemo_cell_coords(p, pc.originInvCell, pc.dimsN.xyz, outside);
+    cell = hemo_cell_linear(c, pc.dimsN.xyz);
+    if (outside) {
+      atomicAdd(counters[HEMO_COUNTER_OUTSIDE], 1u);
+    }
+  }
+  pairs[i] = uvec2(cell, i);
+  atomicAdd(cellCounts[cell], 1u);
+}

@@ -1,0 +1,31 @@
+#version 450
+// Neighbour grid, step 4 (after the sort and the scan of the cell counts): gathers particle
+// data into cell order and records where each particle id now lives.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/grid.h"
+#include "common/index.glsl"
+
+layout(std430, binding = HEMO_REORDER_BINDING_PAIRS) readonly buffer Pairs { uvec2 pairs[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_POS_IN) readonly buffer PosIn { vec4 posIn[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_VEL_IN) readonly buffer VelIn { vec4 velIn[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_ID_IN) readonly buffer IdIn { uint idIn[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_POS_OUT) writeonly buffer PosOut { vec4 posOut[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_VEL_OUT) writeonly buffer VelOut { vec4 velOut[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_ID_OUT) writeonly buffer IdOut { uint idOut[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_SLOT_OF_ID) writeonly buffer SlotOfId { uint slotOfId[]; };
+layout(push_constant) uniform Push { uint n; uint idCapacity; } pc;
+
+void main() {
+  const uint i = hemo_global_index();
+  if (i >= pc.n) {
+    return;
+  }
+  const uint src = pairs[i].y;
+  posOut[i] = posIn[src];
+  velOut[i] = velIn[src];
+  const uint id = idIn[src];
+  idOut[i] = id;
+  if (id < pc.idCapacity) {
+    slotOfId[id] = i;  // ids are unique, so this scatter has exactly one writer per entry
+  }
+}

@@ -1,0 +1,41 @@
+// Uniform-grid neighbour search (compute_shaders/grid/).
+#ifndef HEMO_INTERFACE_GRID_H
+#define HEMO_INTERFACE_GRID_H
+
+// Cells are linearised x-fastest: cell = x + dims.x * (y + dims.y * z), so the three
+// x-adjacent cells of a neighbour query are one contiguous range of the sorted particles.
+// cellStart has cellCount + 1 entries; empty cells carry the running offset, so the
+// particles of cells [a, b] are the slots [cellStart[a], cellStart[b + 1]).
+
+// grid/hash.comp
+#define HEMO_HASH_BINDING_POSITIONS 0
+#define HEMO_HASH_BINDING_PAIRS 1
+#define HEMO_HASH_BINDING_CELL_COUNTS 2
+#define HEMO_HASH_BINDING_COUNTERS 3
+#define HEMO_HASH_BINDING_COUNT 4
+// counters[HEMO_COUNTER_OUTSIDE]: particles outside the grid (clamped into border cells);
+// counters[HEMO_COUNTER_NONFINITE]: particles with a NaN/Inf coordinate (put in cell 0).
+#define HEMO_COUNTER_OUTSIDE 0
+#define HEMO_COUNTER_NONFINITE 1
+#define HEMO_COUNTER_COUNT 4
+
+// grid/reorder.comp: gathers particle data into sorted order and updates id -> slot.
+#define HEMO_REORDER_BINDING_PAIRS 0
+#define HEMO_REORDER_BINDING_POS_IN 1
+#define HEMO_REORDER_BINDING_VEL_IN 2
+#define HEMO_REORDER_BINDING_ID_IN 3
+#define HEMO_REORDER_BINDING_POS_OUT 4
+#define HEMO_REORDER_BINDING_VEL_OUT 5
+#define HEMO_REORDER_BINDING_ID_OUT 6
+#define HEMO_REORDER_BINDING_SLOT_OF_ID 7
+#define HEMO_REORDER_BINDING_COUNT 8
+
+// grid/neighbour_list.comp: every particle's neighbours closer than the radius, as slots of
+// the sorted order, ascending; count may exceed the capacity (then the list is truncated).
+#define HEMO_NLIST_BINDING_POSITIONS 0
+#define HEMO_NLIST_BINDING_CELL_START 1
+#define HEMO_NLIST_BINDING_COUNTS 2
+#define HEMO_NLIST_BINDING_LIST 3
+#define HEMO_NLIST_BINDING_COUNT 4
+
+#endif

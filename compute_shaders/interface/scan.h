@@ -1,0 +1,23 @@
+// Prefix scan and min/max reduction (compute_shaders/scan/). Shared by GLSL and C++.
+#ifndef HEMO_INTERFACE_SCAN_H
+#define HEMO_INTERFACE_SCAN_H
+
+// Elements each invocation scans sequentially; a workgroup covers workgroupSize * this.
+#define HEMO_SCAN_ITEMS 8
+
+// scan/scan_block.comp: in-place exclusive scan of each block, block totals to `sums`.
+// scan/scan_add.comp:   adds the (scanned) block offset sums[block] to every element.
+#define HEMO_SCAN_BINDING_DATA 0
+#define HEMO_SCAN_BINDING_SUMS 1
+#define HEMO_SCAN_BINDING_COUNT 2
+// push constants: uint n  (4 bytes)
+
+// scan/reduce_minmax.comp: per-workgroup (min, max) of floats or of earlier partials.
+#define HEMO_REDUCE_ITEMS 8
+#define HEMO_REDUCE_BINDING_VALUES 0
+#define HEMO_REDUCE_BINDING_PARTIALS_IN 1
+#define HEMO_REDUCE_BINDING_PARTIALS_OUT 2
+#define HEMO_REDUCE_BINDING_COUNT 3
+// push constants: uint n; uint fromPartials  (8 bytes)
+
+#endif

@@ -1,0 +1,29 @@
+#version 450
+// Radix sort pass, step 1 of 3: each invocation counts the digits of its chunk of pairs.
+// Step 2 is an exclusive scan of the bucket-major counts; step 3 is radix_scatter.comp.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/sort.h"
+#include "common/index.glsl"
+
+layout(std430, binding = HEMO_SORT_BINDING_PAIRS_IN) readonly buffer PairsIn { uvec2 pairsIn[]; };
+layout(std430, binding = HEMO_SORT_BINDING_COUNTS) writeonly buffer Counts { uint counts[]; };
+layout(push_constant) uniform Push { uint n; uint shift; uint chunkSize; uint chunkCount; } pc;
+
+void main() {
+  const uint chunk = hemo_global_index();
+  if (chunk >= pc.chunkCount) {
+    return;
+  }
+  uint histogram[HEMO_RADIX_BUCKETS];
+  for (uint b = 0u; b < HEMO_RADIX_BUCKETS; ++b) {
+    histogram[b] = 0u;
+  }
+  const uint first = chunk * pc.chunkSize;
+  const uint last = min(first + pc.chunkSize, pc.n);
+  for (uint i = first; i < last; ++i) {
+    histogram[(pairsIn[i].x >> pc.shift) & uint(HEMO_RADIX_BUCKETS - 1)] += 1u;
+  }
+  for (uint b = 0u; b < HEMO_RADIX_BUCKETS; ++b) {
+    counts[b * pc.chunkCount + chunk] = histogram[b];
+  }
+}

@@ -1,0 +1,181 @@
+#include "hemo/gpu/commands.hpp"
+
+namespace hemo::gpu {
+
+CommandRecorder::CommandRecorder(Context& context) : context_(&context) {
+  VkDevice device = context.device();
+  VkCommandPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  poolInfo.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  poolInfo.queueFamilyIndex = context.queueFamily();
+  check(vkCreateCommandPool(device, &poolInfo, nullptr, &pool_), "vkCreateCommandPool");
+  VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+  alloc.commandPool = pool_;
+  alloc.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+  alloc.commandBufferCount = 1;
+  VkFenceCreateInfo fenceInfo{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+  try {
+    check(vkAllocateCommandBuffers(device, &alloc, &cmd_), "vkAllocateCommandBuffers");
+    check(vkCreateFence(device, &fenceInfo, nullptr, &fence_), "vkCreateFence");
+  } catch (...) {
+    vkDestroyCommandPool(device, pool_, nullptr);
+    throw;
+  }
+}
+
+CommandRecorder::~CommandRecorder() {
+  VkDevice device = context_->device();
+  if (pending_) vkWaitForFences(device, 1, &fence_, VK_TRUE, UINT64_MAX);
+  vkDestroyFence(device, fence_, nullptr);
+  vkDestroyCommandPool(device, pool_, nullptr);
+}
+
+void CommandRecorder::begin() {
+  wait();
+  check(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer");
+  VkCommandBufferBeginInfo info{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+  info.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
+  check(vkBeginCommandBuffer(cmd_, &info), "vkBeginCommandBuffer");
+  dispatches_ = 0;
+}
+
+void CommandRecorder::end() {
+  computeToHost();
+  check(vkEndCommandBuffer(cmd_), "vkEndCommandBuffer");
+}
+
+void CommandRecorder::submit() {
+  check(vkResetFences(context_->device(), 1, &fence_), "vkResetFences");
+  VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+  submit.commandBufferCount = 1;
+  submit.pCommandBuffers = &cmd_;
+  check(vkQueueSubmit(context_->queue(), 1, &submit, fence_), "vkQueueSubmit");
+  pending_ = true;
+}
+
+void CommandRecorder::wait() {
+  if (!pending_) return;
+  const VkResult r = vkWaitForFences(context_->device(), 1, &fence_, VK_TRUE, UINT64_MAX);
+  pending_ = false;
+  check(r, "vkWaitForFences");
+}
+
+void CommandRecorder::dispatch(const ComputePipeline& pipeline, const DescriptorSet& set,
+                               const void* push, std::uint32_t pushBytes, Groups groups) {
+  if (pushBytes != pipeline.pushConstantBytes()) {
+    throw std::invalid_argument("push constants for '" + pipeline.name() + "' are " +
+                                std::to_string(pushBytes) + " bytes; the pipeline expects " +
+                                std::to_string(pipeline.pushConstantBytes()));
+  }
+  if (groups.total() == 0) return;
+  vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+  VkDescriptorSet handle = set.handle();
+  vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1, &handle, 0, nullptr);
+  if (pushBytes) {
+    vkCmdPushConstants(cmd_, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, pushBytes, push);
+  }
+  vkCmdDispatch(cmd_, groups.x, groups.y, 1);
+  ++dispatches_;
+}
+
+void CommandRecorder::barrier(VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst,
+                              VkAccessFlags dstAccess) {
+  VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  b.srcAccessMask = srcAccess;
+  b.dstAccessMask = dstAccess;
+  vkCmdPipelineBarrier(cmd_, src, dst, 0, 1, &b, 0, nullptr, 0, nullptr);
+}
+
+void CommandRecorder::computeToCompute() {
+  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+          VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+}
+
+void CommandRecorder::computeToTransfer() {
+  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_SHADER_READ_BIT,
+          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+}
+
+void CommandRecorder::transferToCompute() {
+  barrier(VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+          VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+}
+
+void CommandRecorder::transferToTransfer() {
+  barrier(VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
+          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+}
+
+void CommandRecorder::computeToIndirect() {
+  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
+          VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT, VK_ACCESS_INDIRECT_COMMAND_READ_BIT);
+}
+
+void CommandRecorder::computeToHost() {
+  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+          VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
+          VK_ACCESS_HOST_READ_BIT);
+}
+
+void CommandRecorder::fill(const Buffer& buffer, std::uint32_t value, VkDeviceSize offset, VkDeviceSize bytes) {
+  if (bytes == 0) return;
+  vkCmdFillBuffer(cmd_, buffer.handle(), offset, bytes, value);
+}
+
+void CommandRecorder::copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, VkDeviceSize srcOffset,
+                           VkDeviceSize dstOffset) {
+  if (bytes == 0) return;
+  VkBufferCopy region{srcOffset, dstOffset, bytes};
+  vkCmdCopyBuffer(cmd_, src.handle(), dst.handle(), 1, &region);
+}
+
+TimestampQueries::TimestampQueries(Context& context, std::uint32_t capacity)
+    : context_(&context), capacity_(capacity) {
+  if (!context.timestampsSupported()) return;
+  VkQueryPoolCreateInfo info{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+  info.queryType = VK_QUERY_TYPE_TIMESTAMP;
+  info.queryCount = capacity;
+  check(vkCreateQueryPool(context.device(), &info, nullptr, &pool_), "vkCreateQueryPool");
+}
+
+TimestampQueries::~TimestampQueries() {
+  if (pool_) vkDestroyQueryPool(context_->device(), pool_, nullptr);
+}
+
+void TimestampQueries::reset(CommandRecorder& rec) {
+  labels_.clear();
+  if (pool_) vkCmdResetQueryPool(rec.handle(), pool_, 0, capacity_);
+}
+
+void TimestampQueries::mark(CommandRecorder& rec, std::string label) {
+  if (labels_.size() >= capacity_) {
+    throw std::length_error("more than " + std::to_string(capacity_) + " timestamps in one recording");
+  }
+  if (pool_) {
+    vkCmdWriteTimestamp(rec.handle(), VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, pool_,
+                        static_cast<std::uint32_t>(labels_.size()));
+  }
+  labels_.push_back(std::move(label));
+}
+
+std::vector<std::pair<std::string, double>> TimestampQueries::stageMs() const {
+  std::vector<std::pair<std::string, double>> out;
+  if (!pool_ || labels_.size() < 2) return out;
+  std::vector<std::uint64_t> ticks(labels_.size());
+  check(vkGetQueryPoolResults(context_->device(), pool_, 0, static_cast<std::uint32_t>(ticks.size()),
+                              ticks.size() * sizeof(std::uint64_t), ticks.data(), sizeof(std::uint64_t),
+                              VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+        "vkGetQueryPoolResults");
+  const double msPerTick = context_->timestampPeriodNs() * 1e-6;
+  for (std::size_t i = 1; i < ticks.size(); ++i) {
+    out.emplace_back(labels_[i], double(ticks[i] - ticks[i - 1]) * msPerTick);
+  }
+  return out;
+}
+
+double TimestampQueries::totalMs() const {
+  double sum = 0.0;
+  for (const auto& [label, ms] : stageMs()) sum += ms;
+  return sum;
+}
+
+}  // namespace hemo::gpu

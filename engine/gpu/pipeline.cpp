@@ -1,0 +1,209 @@
+#include "hemo/gpu/pipeline.hpp"
+
+#include "hemo/shaders.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+#include <utility>
+
+namespace hemo::gpu {
+
+DescriptorSet::~DescriptorSet() { release(); }
+
+DescriptorSet::DescriptorSet(DescriptorSet&& other) noexcept { *this = std::move(other); }
+
+DescriptorSet& DescriptorSet::operator=(DescriptorSet&& other) noexcept {
+  if (this != &other) {
+    release();
+    device_ = std::exchange(other.device_, VK_NULL_HANDLE);
+    pool_ = std::exchange(other.pool_, VK_NULL_HANDLE);
+    set_ = std::exchange(other.set_, VK_NULL_HANDLE);
+  }
+  return *this;
+}
+
+void DescriptorSet::release() {
+  if (pool_) vkDestroyDescriptorPool(device_, pool_, nullptr);  // frees the set too
+  pool_ = VK_NULL_HANDLE;
+  set_ = VK_NULL_HANDLE;
+}
+
+ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
+    : context_(&context),
+      bindingCount_(desc.bindingCount),
+      pushBytes_(desc.pushConstantBytes),
+      workgroupSize_(desc.workgroupSize),
+      name_(desc.shader) {
+  const auto& limits = context.limits();
+  if (workgroupSize_ == 0 || workgroupSize_ > limits.maxComputeWorkGroupSize[0] ||
+      workgroupSize_ > limits.maxComputeWorkGroupInvocations) {
+    throw GpuError("workgroup size " + std::to_string(workgroupSize_) + " for '" + name_ +
+                   "' is outside the device's limits (max " +
+                   std::to_string(limits.maxComputeWorkGroupSize[0]) + ")");
+  }
+  if (pushBytes_ > limits.maxPushConstantsSize) {
+    throw GpuError("push constants of '" + name_ + "' exceed the device's " +
+                   std::to_string(limits.maxPushConstantsSize) + " bytes");
+  }
+  VkDevice device = context.device();
+  const auto words = shaders::spirv(desc.shader);
+  VkShaderModule module = VK_NULL_HANDLE;
+  try {
+    std::vector<VkDescriptorSetLayoutBinding> slots(bindingCount_);
+    for (std::uint32_t i = 0; i < bindingCount_; ++i) {
+      slots[i].binding = i;
+      slots[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      slots[i].descriptorCount = 1;
+      slots[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    }
+    VkDescriptorSetLayoutCreateInfo setInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    setInfo.bindingCount = bindingCount_;
+    setInfo.pBindings = slots.data();
+    check(vkCreateDescriptorSetLayout(device, &setInfo, nullptr, &setLayout_), "vkCreateDescriptorSetLayout");
+
+    VkPushConstantRange push{VK_SHADER_STAGE_COMPUTE_BIT, 0, pushBytes_};
+    VkPipelineLayoutCreateInfo layoutInfo{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    layoutInfo.setLayoutCount = 1;
+    layoutInfo.pSetLayouts = &setLayout_;
+    layoutInfo.pushConstantRangeCount = pushBytes_ ? 1 : 0;
+    layoutInfo.pPushConstantRanges = &push;
+    check(vkCreatePipelineLayout(device, &layoutInfo, nullptr, &layout_), "vkCreatePipelineLayout");
+
+    VkShaderModuleCreateInfo moduleInfo{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    moduleInfo.codeSize = words.size_bytes();
+    moduleInfo.pCode = words.data();
+    check(vkCreateShaderModule(device, &moduleInfo, nullptr, &module), "vkCreateShaderModule");
+
+    std::vector<std::uint32_t> constants;
+    constants.push_back(workgroupSize_);
+    constants.insert(constants.end(), desc.specialization.begin(), desc.specialization.end());
+    std::vector<VkSpecializationMapEntry> entries(constants.size());
+    for (std::uint32_t i = 0; i < constants.size(); ++i) {
+      entries[i] = {i, i * 4u, 4u};
+    }
+    VkSpecializationInfo spec{};
+    spec.mapEntryCount = static_cast<std::uint32_t>(entries.size());
+    spec.pMapEntries = entries.data();
+    spec.dataSize = constants.size() * 4;
+    spec.pData = constants.data();
+
+    VkComputePipelineCreateInfo info{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    info.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    info.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    info.stage.module = module;
+    info.stage.pName = "main";
+    info.stage.pSpecializationInfo = &spec;
+    info.layout = layout_;
+    check(vkCreateComputePipelines(device, VK_NULL_HANDLE, 1, &info, nullptr, &pipeline_),
+          ("vkCreateComputePipelines for '" + name_ + "'").c_str());
+  } catch (...) {
+    if (module) vkDestroyShaderModule(device, module, nullptr);
+    release();
+    throw;
+  }
+  vkDestroyShaderModule(device, module, nullptr);
+}
+
+ComputePipeline::~ComputePipeline() { release(); }
+
+ComputePipeline::ComputePipeline(ComputePipeline&& other) noexcept { *this = std::move(other); }
+
+ComputePipeline& ComputePipeline::operator=(ComputePipeline&& other) noexcept {
+  if (this != &other) {
+    release();
+    context_ = std::exchange(other.context_, nullptr);
+    setLayout_ = std::exchange(other.setLayout_, VK_NULL_HANDLE);
+    layout_ = std::exchange(other.layout_, VK_NULL_HANDLE);
+    pipeline_ = std::exchange(other.pipeline_, VK_NULL_HANDLE);
+    bindingCount_ = other.bindingCount_;
+    pushBytes_ = other.pushBytes_;
+    workgroupSize_ = other.workgroupSize_;
+    name_ = std::move(other.name_);
+  }
+  return *this;
+}
+
+void ComputePipeline::release() {
+  if (!context_) return;
+  VkDevice device = context_->device();
+  if (pipeline_) vkDestroyPipeline(device, pipeline_, nullptr);
+  if (layout_) vkDestroyPipelineLayout(device, layout_, nullptr);
+  if (setLayout_) vkDestroyDescriptorSetLayout(device, setLayout_, nullptr);
+  pipeline_ = VK_NULL_HANDLE;
+  layout_ = VK_NULL_HANDLE;
+  setLayout_ = VK_NULL_HANDLE;
+}
+
+Groups ComputePipeline::groupsFor(std::uint64_t invocations) const {
+  const std::uint64_t groups = (invocations + workgroupSize_ - 1) / workgroupSize_;
+  const std::uint64_t maxX = context_->limits().maxComputeWorkGroupCount[0];
+  const std::uint64_t maxY = context_->limits().maxComputeWorkGroupCount[1];
+  if (groups <= maxX) return {static_cast<std::uint32_t>(groups), 1};
+  const std::uint64_t y = (groups + maxX - 1) / maxX;
+  if (y > maxY) {
+    throw GpuError("dispatch of " + std::to_string(invocations) + " invocations for '" + name_ +
+                   "' exceeds the device's workgroup-count limits");
+  }
+  const std::uint64_t x = (groups + y - 1) / y;
+  return {static_cast<std::uint32_t>(x), static_cast<std::uint32_t>(y)};
+}
+
+Groups ComputePipeline::groupsFor(std::uint64_t items, std::uint32_t itemsPerInvocation) const {
+  return groupsFor((items + itemsPerInvocation - 1) / itemsPerInvocation);
+}
+
+DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) const {
+  std::vector<const Binding*> bySlot(bindingCount_, nullptr);
+  for (const Binding& b : bindings) {
+    if (b.slot >= bindingCount_) {
+      throw std::invalid_argument("'" + name_ + "' has no binding slot " + std::to_string(b.slot));
+    }
+    if (bySlot[b.slot]) {
+      throw std::invalid_argument("'" + name_ + "' binding slot " + std::to_string(b.slot) + " bound twice");
+    }
+    if (!b.buffer || !b.buffer->valid()) {
+      throw std::invalid_argument("'" + name_ + "' binding slot " + std::to_string(b.slot) + " has no buffer");
+    }
+    if (b.buffer->use() != MemoryUse::Device) {
+      throw std::invalid_argument("'" + name_ + "' binding slot " + std::to_string(b.slot) +
+                                  ": buffer '" + b.buffer->name() + "' is not a device buffer");
+    }
+    bySlot[b.slot] = &b;
+  }
+  for (std::uint32_t i = 0; i < bindingCount_; ++i) {
+    if (!bySlot[i]) {
+      throw std::invalid_argument("'" + name_ + "' binding slot " + std::to_string(i) + " is not bound");
+    }
+  }
+
+  DescriptorSet set;
+  set.device_ = context_->device();
+  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(bindingCount_, 1u)};
+  VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+  poolInfo.maxSets = 1;
+  poolInfo.poolSizeCount = 1;
+  poolInfo.pPoolSizes = &size;
+  check(vkCreateDescriptorPool(set.device_, &poolInfo, nullptr, &set.pool_), "vkCreateDescriptorPool");
+  VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+  alloc.descriptorPool = set.pool_;
+  alloc.descriptorSetCount = 1;
+  alloc.pSetLayouts = &setLayout_;
+  check(vkAllocateDescriptorSets(set.device_, &alloc, &set.set_), "vkAllocateDescriptorSets");
+
+  std::vector<VkDescriptorBufferInfo> infos(bindingCount_);
+  std::vector<VkWriteDescriptorSet> writes(bindingCount_);
+  for (std::uint32_t i = 0; i < bindingCount_; ++i) {
+    const Binding& b = *bySlot[i];
+    infos[i] = {b.buffer->handle(), b.offset, b.range};
+    writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+    writes[i].dstSet = set.set_;
+    writes[i].dstBinding = i;
+    writes[i].descriptorCount = 1;
+    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].pBufferInfo = &infos[i];
+  }
+  vkUpdateDescriptorSets(set.device_, bindingCount_, writes.data(), 0, nullptr);
+  return set;
+}
+
+}  // namespace hemo::gpu

@@ -1,0 +1,94 @@
+#pragma once
+// One compute shader with its descriptor layout (storage buffers only), push constants and
+// workgroup size (specialization constant 0). Bindings are addressed by the slot numbers of
+// the shader family's interface header, never by position in a list.
+#include "hemo/gpu/buffer.hpp"
+
+#include <cstdint>
+#include <initializer_list>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace hemo::gpu {
+
+// Workgroup counts of a dispatch. Large 1D work is folded into y when x would exceed
+// maxComputeWorkGroupCount[0]; shaders use hemo_group_index() from common/index.glsl.
+struct Groups {
+  std::uint32_t x = 0;
+  std::uint32_t y = 1;
+  std::uint64_t total() const { return std::uint64_t(x) * y; }
+};
+
+// A buffer (or a byte range of one) bound to one storage-buffer slot.
+struct Binding {
+  std::uint32_t slot = 0;
+  const Buffer* buffer = nullptr;
+  VkDeviceSize offset = 0;
+  VkDeviceSize range = VK_WHOLE_SIZE;
+};
+
+class DescriptorSet {
+ public:
+  DescriptorSet() = default;
+  ~DescriptorSet();
+  DescriptorSet(DescriptorSet&& other) noexcept;
+  DescriptorSet& operator=(DescriptorSet&& other) noexcept;
+  DescriptorSet(const DescriptorSet&) = delete;
+  DescriptorSet& operator=(const DescriptorSet&) = delete;
+  VkDescriptorSet handle() const { return set_; }
+
+ private:
+  friend class ComputePipeline;
+  void release();
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkDescriptorPool pool_ = VK_NULL_HANDLE;
+  VkDescriptorSet set_ = VK_NULL_HANDLE;
+};
+
+struct PipelineDesc {
+  std::string_view shader;             // name in compute_shaders/, e.g. "scan/scan_block"
+  std::uint32_t bindingCount = 0;      // storage buffers at slots 0 .. bindingCount-1
+  std::uint32_t pushConstantBytes = 0;
+  std::uint32_t workgroupSize = 256;   // specialization constant 0
+  std::vector<std::uint32_t> specialization;  // constants 1, 2, ... (uint32 each)
+};
+
+class ComputePipeline {
+ public:
+  ComputePipeline() = default;
+  ComputePipeline(Context& context, const PipelineDesc& desc);
+  ~ComputePipeline();
+  ComputePipeline(ComputePipeline&& other) noexcept;
+  ComputePipeline& operator=(ComputePipeline&& other) noexcept;
+  ComputePipeline(const ComputePipeline&) = delete;
+  ComputePipeline& operator=(const ComputePipeline&) = delete;
+
+  VkPipeline handle() const { return pipeline_; }
+  VkPipelineLayout layout() const { return layout_; }
+  std::uint32_t workgroupSize() const { return workgroupSize_; }
+  std::uint32_t pushConstantBytes() const { return pushBytes_; }
+  const std::string& name() const { return name_; }
+
+  // Workgroups so that `invocations` invocations of one item each are covered. The single
+  // place where host dispatch sizes are derived from the shader's workgroup size.
+  Groups groupsFor(std::uint64_t invocations) const;
+  // Workgroups for shaders whose invocations each handle `itemsPerInvocation` items.
+  Groups groupsFor(std::uint64_t items, std::uint32_t itemsPerInvocation) const;
+
+  // Binds every slot exactly once; throws std::invalid_argument naming the slot otherwise.
+  DescriptorSet makeSet(std::initializer_list<Binding> bindings) const;
+
+ private:
+  void release();
+  Context* context_ = nullptr;
+  VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
+  VkPipelineLayout layout_ = VK_NULL_HANDLE;
+  VkPipeline pipeline_ = VK_NULL_HANDLE;
+  std::uint32_t bindingCount_ = 0;
+  std::uint32_t pushBytes_ = 0;
+  std::uint32_t workgroupSize_ = 0;
+  std::string name_;
+};
+
+}  // namespace hemo::gpu

@@ -1,0 +1,74 @@
+#pragma once
+// Data-parallel building blocks on the GPU: exclusive prefix scan of uint32, min/max
+// reduction of float32 and a stable radix sort of (uint32 key, uint32 value) pairs.
+// Each object is bound to its buffers at construction (descriptor sets are made once) and
+// records its dispatches into a CommandRecorder for any n up to its capacity. Results are
+// deterministic: no float atomics, fixed association order.
+#include "hemo/gpu/commands.hpp"
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+namespace hemo::gpu {
+
+// In-place exclusive prefix sum of data[0, n) (uint32, wrapping on overflow like
+// std::exclusive_scan on uint32_t). Multi-level: one block scan per level, then adds.
+class PrefixScan {
+ public:
+  PrefixScan(Context& context, const Buffer& data, std::uint64_t capacity, VkDeviceSize byteOffset = 0);
+  void record(CommandRecorder& rec, std::uint64_t n) const;
+  std::uint64_t capacity() const { return capacity_; }
+  // Elements one workgroup scans.
+  std::uint64_t blockSize() const;
+
+ private:
+  const ComputePipeline* blockScan_;
+  const ComputePipeline* addOffsets_;
+  std::uint64_t capacity_;
+  std::deque<Buffer> sums_;           // block totals of each level
+  std::vector<DescriptorSet> sets_;   // level k: data_k (user data or sums_{k-1}) with sums_k
+};
+
+// (min, max) of values[0, n) as a vec2 in result() (+inf, -inf for n = 0; NaN, NaN if any
+// value is NaN).
+class MinMaxReduce {
+ public:
+  MinMaxReduce(Context& context, const Buffer& values, std::uint64_t capacity);
+  void record(CommandRecorder& rec, std::uint64_t n) const;
+  const Buffer& result() const { return result_; }
+
+ private:
+  const ComputePipeline* reduce_;
+  std::uint64_t capacity_;
+  std::deque<Buffer> partials_;
+  std::vector<DescriptorSet> sets_;
+  Buffer result_;
+};
+
+// Stable sort of pairs[0, n) (uvec2: x = key, y = value) by key, in place, using keyBits low
+// bits of the key (keys must be < 2^keyBits). LSD radix sort with HEMO_RADIX_BITS per pass.
+class RadixSort {
+ public:
+  RadixSort(Context& context, const Buffer& pairs, std::uint64_t capacity);
+  void record(CommandRecorder& rec, std::uint64_t n, std::uint32_t keyBits = 32) const;
+  static std::uint32_t passesFor(std::uint32_t keyBits);
+
+ private:
+  std::uint64_t chunkCount(std::uint64_t n) const { return (n + chunkSize_ - 1) / chunkSize_; }
+
+  const ComputePipeline* histogram_;
+  const ComputePipeline* scatter_;
+  const Buffer* pairs_;
+  std::uint64_t capacity_;
+  std::uint32_t chunkSize_;
+  Buffer scratch_;
+  Buffer counts_;
+  PrefixScan scan_;
+  DescriptorSet histFromPairs_, histFromScratch_, scatterToScratch_, scatterToPairs_;
+};
+
+// Bits needed to represent every value in [0, maxValue].
+std::uint32_t bitsFor(std::uint64_t maxValue);
+
+}  // namespace hemo::gpu

@@ -1,0 +1,103 @@
+#pragma once
+// Cell-linked-list neighbour search built on the GPU every step:
+//   hash ...... cell of each particle, (cell, slot) pairs, particles per cell
+//   scan ...... exclusive scan of the counts -> cellStart (empty cells carry the offset)
+//   sort ...... stable radix sort of the pairs by cell
+//   reorder ... gather positions/velocities/ids into cell order, id -> slot map
+// The cell size is the support radius (or more); neighbours within it lie in the 27 cells
+// around a particle, scanned as nine contiguous x-rows.
+#include "hemo/gpu/primitives.hpp"
+#include "hemo/sim/particles.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <array>
+#include <cstdint>
+
+namespace hemo::sim {
+
+struct GridSpec {
+  glm::vec3 origin{0.0f};  // m, corner of cell (0,0,0)
+  float cellSize = 0.0f;   // m
+  glm::uvec3 dims{0u};     // cells per axis
+
+  std::uint64_t cellCount() const { return std::uint64_t(dims.x) * dims.y * dims.z; }
+  // Throws std::invalid_argument naming the problem (non-positive or non-finite size,
+  // zero dims, too many cells for 32-bit indices).
+  void validate() const;
+  // The smallest grid of cells of `cellSize` that covers the box [lo, hi].
+  static GridSpec covering(glm::vec3 lo, glm::vec3 hi, float cellSize);
+};
+
+// Counters the hash stage accumulates (read back only when the caller asks).
+struct GridCounters {
+  std::uint32_t outside = 0;    // particles clamped into border cells
+  std::uint32_t nonFinite = 0;  // particles with a NaN or infinite coordinate
+};
+
+class NeighbourGrid {
+ public:
+  NeighbourGrid(gpu::Context& context, const GridSpec& spec, ParticleStore& particles);
+
+  // Records the whole build for the store's first n particles; the sorted data ends up in
+  // the other half and the store flips to it. Counters are reset by resetCounters().
+  void record(gpu::CommandRecorder& rec, std::uint32_t n);
+  void resetCounters(gpu::CommandRecorder& rec);
+
+  const GridSpec& spec() const { return spec_; }
+  const gpu::Buffer& cellStart() const { return cellStart_; }  // cellCount + 1 entries
+  const gpu::Buffer& pairs() const { return pairs_; }          // sorted (cell, old slot)
+  const gpu::Buffer& slotOfId() const { return slotOfId_; }    // id -> slot (ids < capacity)
+  const gpu::Buffer& counters() const { return counters_; }
+  GridCounters readCounters() const;
+
+  struct Push {  // mirrors the push constants of grid/hash.comp
+    float origin[3];
+    float invCellSize;
+    std::uint32_t dims[3];
+    std::uint32_t n;
+  };
+  static_assert(sizeof(Push) == 32);
+  Push push(std::uint32_t n) const;
+
+ private:
+  gpu::Context* context_;
+  GridSpec spec_;
+  ParticleStore* particles_;
+  const gpu::ComputePipeline* hash_;
+  const gpu::ComputePipeline* reorder_;
+  gpu::Buffer pairs_;
+  gpu::Buffer cellStart_;
+  gpu::Buffer counters_;
+  gpu::Buffer slotOfId_;
+  gpu::PrefixScan scan_;
+  gpu::RadixSort sort_;
+  std::array<gpu::DescriptorSet, 2> hashSets_;     // by source parity
+  std::array<gpu::DescriptorSet, 2> reorderSets_;  // source parity -> other half
+};
+
+// Every particle's neighbours closer than `radius` (<= cell size), as ascending slots of the
+// sorted order, up to `maxPerParticle` each; counts() holds the true number (which may exceed
+// the capacity: the caller checks). Reads the store's current half, so record it after the
+// grid build.
+class NeighbourList {
+ public:
+  NeighbourList(gpu::Context& context, const NeighbourGrid& grid, ParticleStore& particles, float radius,
+                std::uint32_t maxPerParticle);
+  void record(gpu::CommandRecorder& rec, std::uint32_t n) const;
+  const gpu::Buffer& counts() const { return counts_; }
+  const gpu::Buffer& list() const { return list_; }
+  std::uint32_t maxPerParticle() const { return maxPerParticle_; }
+
+ private:
+  const NeighbourGrid* grid_;
+  ParticleStore* particles_;
+  const gpu::ComputePipeline* pipeline_;
+  float radius_;
+  std::uint32_t maxPerParticle_;
+  gpu::Buffer counts_;
+  gpu::Buffer list_;
+  std::array<gpu::DescriptorSet, 2> sets_;  // by current parity
+};
+
+}  // namespace hemo::sim

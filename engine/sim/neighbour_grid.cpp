@@ -1,0 +1,163 @@
+#include "hemo/sim/neighbour_grid.hpp"
+
+#include "hemo/gpu/pipeline_cache.hpp"
+#include "interface/grid.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace hemo::sim {
+
+namespace {
+constexpr std::uint32_t kWorkgroup = 256;
+
+struct ReorderPush {
+  std::uint32_t n;
+  std::uint32_t idCapacity;
+};
+static_assert(sizeof(ReorderPush) == 8);
+
+struct NeighbourListPush {
+  NeighbourGrid::Push grid;
+  float radius;
+  std::uint32_t capacity;
+  std::uint32_t pad[2];
+};
+static_assert(sizeof(NeighbourListPush) == 48);
+}  // namespace
+
+void GridSpec::validate() const {
+  if (!std::isfinite(cellSize) || cellSize <= 0.0f) {
+    throw std::invalid_argument("grid cell size must be a positive finite length in m, got " + std::to_string(cellSize));
+  }
+  if (!std::isfinite(origin.x) || !std::isfinite(origin.y) || !std::isfinite(origin.z)) {
+    throw std::invalid_argument("grid origin must be finite");
+  }
+  if (dims.x == 0 || dims.y == 0 || dims.z == 0) {
+    throw std::invalid_argument("grid needs at least one cell per axis");
+  }
+  // cellStart has cellCount + 1 entries and cell indices must fit in uint32.
+  if (cellCount() >= 0xffffffffull) {
+    throw std::invalid_argument("grid of " + std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
+                                std::to_string(dims.z) + " cells is too large for 32-bit cell indices");
+  }
+}
+
+GridSpec GridSpec::covering(glm::vec3 lo, glm::vec3 hi, float cellSize) {
+  GridSpec spec;
+  spec.origin = lo;
+  spec.cellSize = cellSize;
+  if (!(cellSize > 0.0f) || !std::isfinite(cellSize)) {
+    spec.validate();  // throws with the message about the cell size
+  }
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || hi[a] < lo[a]) {
+      throw std::invalid_argument("grid bounds must be finite with min <= max on every axis");
+    }
+    const double cells = std::ceil(double(hi[a] - lo[a]) / cellSize);
+    if (cells > 4.0e9) throw std::invalid_argument("grid bounds span too many cells");
+    spec.dims[a] = static_cast<std::uint32_t>(std::max(1.0, cells));
+  }
+  spec.validate();
+  return spec;
+}
+
+NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, ParticleStore& particles)
+    : context_(&context),
+      spec_(spec),
+      particles_(&particles),
+      pairs_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "grid pairs"),
+      cellStart_(context, (spec.cellCount() + 1) * 4, gpu::MemoryUse::Device, "grid cellStart"),
+      counters_(context, HEMO_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "grid counters"),
+      slotOfId_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "slot of id"),
+      scan_(context, cellStart_, spec.cellCount() + 1),
+      sort_(context, pairs_, particles.capacity()) {
+  spec_.validate();
+  hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}});
+  reorder_ = &context.pipelines().get({"grid/reorder", HEMO_REORDER_BINDING_COUNT, sizeof(ReorderPush), kWorkgroup, {}});
+  for (int p = 0; p < 2; ++p) {
+    const ParticleArrays& src = particles.half(p);
+    const ParticleArrays& dst = particles.half(p ^ 1);
+    hashSets_[p] = hash_->makeSet({{HEMO_HASH_BINDING_POSITIONS, &src.positions},
+                                   {HEMO_HASH_BINDING_PAIRS, &pairs_},
+                                   {HEMO_HASH_BINDING_CELL_COUNTS, &cellStart_},
+                                   {HEMO_HASH_BINDING_COUNTERS, &counters_}});
+    reorderSets_[p] = reorder_->makeSet({{HEMO_REORDER_BINDING_PAIRS, &pairs_},
+                                         {HEMO_REORDER_BINDING_POS_IN, &src.positions},
+                                         {HEMO_REORDER_BINDING_VEL_IN, &src.velocities},
+                                         {HEMO_REORDER_BINDING_ID_IN, &src.ids},
+                                         {HEMO_REORDER_BINDING_POS_OUT, &dst.positions},
+                                         {HEMO_REORDER_BINDING_VEL_OUT, &dst.velocities},
+                                         {HEMO_REORDER_BINDING_ID_OUT, &dst.ids},
+                                         {HEMO_REORDER_BINDING_SLOT_OF_ID, &slotOfId_}});
+  }
+}
+
+NeighbourGrid::Push NeighbourGrid::push(std::uint32_t n) const {
+  return Push{{spec_.origin.x, spec_.origin.y, spec_.origin.z},
+              1.0f / spec_.cellSize,
+              {spec_.dims.x, spec_.dims.y, spec_.dims.z},
+              n};
+}
+
+void NeighbourGrid::resetCounters(gpu::CommandRecorder& rec) {
+  rec.fill(counters_, 0);
+  rec.transferToCompute();
+}
+
+void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n) {
+  if (n > particles_->capacity()) {
+    throw std::invalid_argument("neighbour grid: " + std::to_string(n) + " particles exceed the capacity " +
+                                std::to_string(particles_->capacity()));
+  }
+  const int src = particles_->parity();
+  const std::uint64_t cells = spec_.cellCount();
+  rec.fill(cellStart_, 0);  // counts of every cell, and the final entry
+  rec.transferToCompute();
+  rec.dispatch(*hash_, hashSets_[src], push(n), hash_->groupsFor(n));
+  rec.computeToCompute();
+  scan_.record(rec, cells + 1);
+  sort_.record(rec, n, gpu::bitsFor(cells - 1));
+  rec.dispatch(*reorder_, reorderSets_[src], ReorderPush{n, particles_->capacity()}, reorder_->groupsFor(n));
+  rec.computeToCompute();
+  particles_->flip();
+}
+
+GridCounters NeighbourGrid::readCounters() const {
+  const auto c = counters_.readback<std::uint32_t>(HEMO_COUNTER_COUNT);
+  return GridCounters{c[HEMO_COUNTER_OUTSIDE], c[HEMO_COUNTER_NONFINITE]};
+}
+
+NeighbourList::NeighbourList(gpu::Context& context, const NeighbourGrid& grid, ParticleStore& particles,
+                             float radius, std::uint32_t maxPerParticle)
+    : grid_(&grid),
+      particles_(&particles),
+      radius_(radius),
+      maxPerParticle_(maxPerParticle),
+      counts_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device,
+              "neighbour counts"),
+      list_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * std::max(maxPerParticle, 1u) * 4,
+            gpu::MemoryUse::Device, "neighbour list") {
+  if (!(radius > 0.0f) || radius > grid.spec().cellSize) {
+    throw std::invalid_argument("neighbour radius " + std::to_string(radius) +
+                                " m must be positive and at most the grid cell size " +
+                                std::to_string(grid.spec().cellSize) + " m");
+  }
+  pipeline_ = &context.pipelines().get(
+      {"grid/neighbour_list", HEMO_NLIST_BINDING_COUNT, sizeof(NeighbourListPush), kWorkgroup, {}});
+  for (int p = 0; p < 2; ++p) {
+    sets_[p] = pipeline_->makeSet({{HEMO_NLIST_BINDING_POSITIONS, &particles.half(p).positions},
+                                   {HEMO_NLIST_BINDING_CELL_START, &grid.cellStart()},
+                                   {HEMO_NLIST_BINDING_COUNTS, &counts_},
+                                   {HEMO_NLIST_BINDING_LIST, &list_}});
+  }
+}
+
+void NeighbourList::record(gpu::CommandRecorder& rec, std::uint32_t n) const {
+  const NeighbourListPush push{grid_->push(n), radius_, maxPerParticle_, {0, 0}};
+  rec.dispatch(*pipeline_, sets_[particles_->parity()], push, pipeline_->groupsFor(n));
+  rec.computeToCompute();
+}
+
+}  // namespace hemo::sim

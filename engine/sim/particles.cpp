@@ -1,0 +1,48 @@
+#include "hemo/sim/particles.hpp"
+
+#include <numeric>
+#include <stdexcept>
+#include <string>
+
+namespace hemo::sim {
+
+ParticleStore::ParticleStore(gpu::Context& context, std::uint32_t capacity) : capacity_(capacity) {
+  const VkDeviceSize n = std::max<VkDeviceSize>(capacity, 1);
+  for (int h = 0; h < 2; ++h) {
+    const std::string tag = h == 0 ? " A" : " B";
+    halves_[h].positions = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "positions" + tag);
+    halves_[h].velocities = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "velocities" + tag);
+    halves_[h].ids = gpu::Buffer(context, n * 4, gpu::MemoryUse::Device, "ids" + tag);
+  }
+}
+
+void ParticleStore::upload(const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities,
+                           const std::vector<std::uint32_t>& ids) {
+  if (positions.size() > capacity_) {
+    throw std::invalid_argument(std::to_string(positions.size()) + " particles exceed the store's capacity of " +
+                                std::to_string(capacity_));
+  }
+  if (velocities.size() != positions.size() || (!ids.empty() && ids.size() != positions.size())) {
+    throw std::invalid_argument("particle upload: positions, velocities and ids differ in length");
+  }
+  std::vector<std::uint32_t> idList = ids;
+  if (idList.empty()) {
+    idList.resize(positions.size());
+    std::iota(idList.begin(), idList.end(), 0u);
+  }
+  count_ = static_cast<std::uint32_t>(positions.size());
+  parity_ = 0;
+  halves_[0].positions.upload(positions);
+  halves_[0].velocities.upload(velocities);
+  halves_[0].ids.upload(idList);
+}
+
+std::vector<glm::vec4> ParticleStore::readPositions() const {
+  return current().positions.readback<glm::vec4>(count_);
+}
+std::vector<glm::vec4> ParticleStore::readVelocities() const {
+  return current().velocities.readback<glm::vec4>(count_);
+}
+std::vector<std::uint32_t> ParticleStore::readIds() const { return current().ids.readback<std::uint32_t>(count_); }
+
+}  // namespace hemo::sim

@@ -1,0 +1,146 @@
+// The Vulkan layer itself: device choice, buffers, bindings, timestamps, bad input.
+#include "gpu_test.hpp"
+#include "hemo/gpu/commands.hpp"
+#include "hemo/gpu/pipeline_cache.hpp"
+#include "interface/scan.h"
+
+#include <cstdlib>
+
+namespace hemo::test {
+namespace {
+
+class GpuLayerTest : public GpuTest {};
+
+TEST_F(GpuLayerTest, ListsTheDeviceInUse) {
+  const auto devices = gpu::listDevices();
+  ASSERT_FALSE(devices.empty());
+  bool found = false;
+  for (const auto& d : devices) found = found || d.name == ctx().info().name;
+  EXPECT_TRUE(found);
+  EXPECT_GT(ctx().subgroupSize(), 0u);
+}
+
+TEST_F(GpuLayerTest, UnknownDeviceNameIsAClearError) {
+  gpu::ContextOptions options;
+  options.device = "no-such-gpu-xyz";
+  try {
+    gpu::Context other(options);
+    FAIL() << "expected GpuError";
+  } catch (const gpu::GpuError& e) {
+    EXPECT_NE(std::string(e.what()).find("no-such-gpu-xyz"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(ctx().info().name), std::string::npos) << "lists the devices";
+  }
+  options.device = "97";
+  EXPECT_THROW(gpu::Context{options}, gpu::GpuError);
+}
+
+TEST_F(GpuLayerTest, DeviceCanBeChosenByIndexAndByName) {
+  gpu::ContextOptions byIndex;
+  byIndex.device = std::to_string(ctx().info().index);
+  EXPECT_EQ(gpu::Context(byIndex).info().name, ctx().info().name);
+  gpu::ContextOptions byName;
+  byName.device = ctx().info().name.substr(0, 4);
+  EXPECT_NO_THROW(gpu::Context{byName});
+}
+
+TEST_F(GpuLayerTest, OversizedBufferNamesItselfAndTheLimit) {
+  const VkDeviceSize tooBig = VkDeviceSize(ctx().limits().maxStorageBufferRange) + 64;
+  try {
+    gpu::Buffer b(ctx(), tooBig, gpu::MemoryUse::Device, "huge particle array");
+    FAIL() << "expected GpuError";
+  } catch (const gpu::GpuError& e) {
+    EXPECT_NE(std::string(e.what()).find("huge particle array"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("maxStorageBufferRange"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(GpuLayerTest, UploadReadbackRoundTripAndBounds) {
+  gpu::Buffer b(ctx(), 1000 * 4, gpu::MemoryUse::Device, "roundtrip");
+  std::vector<std::uint32_t> v(1000);
+  for (std::uint32_t i = 0; i < v.size(); ++i) v[i] = i * 2654435761u;
+  b.upload(v);
+  EXPECT_EQ(b.readback<std::uint32_t>(1000), v);
+  EXPECT_EQ(b.readback<std::uint32_t>(10, 40)[0], v[10]);
+  EXPECT_THROW(b.readback<std::uint32_t>(1001), std::out_of_range);
+  EXPECT_THROW(b.upload(std::vector<std::uint32_t>(1001)), std::out_of_range);
+  gpu::Buffer moved = std::move(b);
+  EXPECT_FALSE(b.valid());
+  EXPECT_EQ(moved.readback<std::uint32_t>(1)[0], v[0]);
+}
+
+TEST_F(GpuLayerTest, FillAndCopyThroughTheRecorder) {
+  gpu::Buffer a(ctx(), 256, gpu::MemoryUse::Device, "a");
+  gpu::Buffer b(ctx(), 256, gpu::MemoryUse::Device, "b");
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  rec.fill(a, 0xdeadbeefu);
+  rec.transferToTransfer();
+  rec.copy(a, b, 128, 0, 64);
+  rec.end();
+  rec.submitAndWait();
+  const auto got = b.readback<std::uint32_t>(64);
+  EXPECT_EQ(got[16], 0xdeadbeefu);
+  EXPECT_EQ(got[47], 0xdeadbeefu);
+}
+
+TEST_F(GpuLayerTest, BindingsAreCheckedBySlot) {
+  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}});
+  gpu::Buffer a(ctx(), 64, gpu::MemoryUse::Device, "a");
+  gpu::Buffer staging(ctx(), 64, gpu::MemoryUse::Upload, "staging");
+  EXPECT_THROW(p.makeSet({{HEMO_SCAN_BINDING_DATA, &a}}), std::invalid_argument);  // slot 1 missing
+  EXPECT_THROW(p.makeSet({{0, &a}, {0, &a}}), std::invalid_argument);               // twice
+  EXPECT_THROW(p.makeSet({{0, &a}, {5, &a}}), std::invalid_argument);               // no such slot
+  EXPECT_THROW(p.makeSet({{0, &a}, {1, &staging}}), std::invalid_argument);         // not a device buffer
+  EXPECT_NO_THROW(p.makeSet({{0, &a}, {1, &a}}));
+  // The same description returns the same pipeline object.
+  EXPECT_EQ(&p, &ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}}));
+}
+
+TEST_F(GpuLayerTest, PushConstantSizeMismatchIsRejected) {
+  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}});
+  gpu::Buffer a(ctx(), 64, gpu::MemoryUse::Device, "a");
+  auto set = p.makeSet({{0, &a}, {1, &a}});
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  const std::uint64_t wrong = 0;
+  EXPECT_THROW(rec.dispatch(p, set, wrong, p.groupsFor(1)), std::invalid_argument);
+  rec.end();
+}
+
+TEST_F(GpuLayerTest, GroupsFoldIntoTwoDimensionsPastTheLimit) {
+  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}});
+  const std::uint64_t maxX = ctx().limits().maxComputeWorkGroupCount[0];
+  const auto small = p.groupsFor(1000);
+  EXPECT_EQ(small.x, 4u);
+  EXPECT_EQ(small.y, 1u);
+  const auto big = p.groupsFor((maxX + 10) * 256);
+  EXPECT_GE(big.total(), maxX + 10);
+  EXPECT_LE(big.x, maxX);
+  EXPECT_GT(big.y, 1u);
+  EXPECT_EQ(p.groupsFor(0).total(), 0u);
+}
+
+TEST_F(GpuLayerTest, UnknownShaderNameThrows) {
+  EXPECT_THROW(ctx().pipelines().get({"scan/nope", 1, 0, 64, {}}), std::invalid_argument);
+}
+
+TEST_F(GpuLayerTest, TimestampsMeasureStages) {
+  if (!ctx().timestampsSupported()) GTEST_SKIP() << "device has no timestamps";
+  gpu::Buffer a(ctx(), 1 << 20, gpu::MemoryUse::Device, "a");
+  gpu::TimestampQueries ts(ctx(), 8);
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  ts.reset(rec);
+  ts.mark(rec, "start");
+  rec.fill(a, 7);
+  ts.mark(rec, "fill");
+  rec.end();
+  rec.submitAndWait();
+  const auto stages = ts.stageMs();
+  ASSERT_EQ(stages.size(), 1u);
+  EXPECT_EQ(stages[0].first, "fill");
+  EXPECT_GE(stages[0].second, 0.0);
+}
+
+}  // namespace
+}  // namespace hemo::test

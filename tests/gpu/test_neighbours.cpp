@@ -1,0 +1,215 @@
+// GPU neighbour grid against the CPU twin and an O(N^2) brute force.
+#include "gpu_test.hpp"
+#include "hemo/reference/neighbours.hpp"
+#include "hemo/sim/neighbour_grid.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+namespace hemo::test {
+namespace {
+
+struct Result {
+  std::vector<glm::vec4> positions;  // sorted
+  std::vector<glm::vec4> velocities;
+  std::vector<std::uint32_t> ids;
+  std::vector<std::uint32_t> cellStart;
+  std::vector<std::uint32_t> slotOfId;
+  std::vector<std::uint32_t> counts;
+  std::vector<std::uint32_t> list;
+  sim::GridCounters counters;
+};
+
+class NeighbourTest : public GpuTest {
+ protected:
+  static constexpr std::uint32_t kMaxNeighbours = 256;
+
+  Result run(const sim::GridSpec& spec, const std::vector<glm::vec4>& pos, float radius, int builds = 1) {
+    sim::ParticleStore store(ctx(), static_cast<std::uint32_t>(pos.size()));
+    std::vector<glm::vec4> vel(pos.size());
+    for (std::size_t i = 0; i < pos.size(); ++i) vel[i] = glm::vec4(float(i), -float(i), 0.5f, 1.0f);
+    // ids are a permutation so id != input slot
+    std::vector<std::uint32_t> ids(pos.size());
+    for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(ids.size() - 1 - i);
+    store.upload(pos, vel, ids);
+    sim::NeighbourGrid grid(ctx(), spec, store);
+    sim::NeighbourList nlist(ctx(), grid, store, radius, kMaxNeighbours);
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    grid.resetCounters(rec);
+    for (int b = 0; b < builds; ++b) grid.record(rec, store.count());
+    nlist.record(rec, store.count());
+    rec.end();
+    rec.submitAndWait();
+    Result r;
+    r.positions = store.readPositions();
+    r.velocities = store.readVelocities();
+    r.ids = store.readIds();
+    r.cellStart = grid.cellStart().readback<std::uint32_t>(spec.cellCount() + 1);
+    r.slotOfId = grid.slotOfId().readback<std::uint32_t>(pos.size());
+    r.counts = nlist.counts().readback<std::uint32_t>(pos.size());
+    r.list = nlist.list().readback<std::uint32_t>(pos.size() * kMaxNeighbours);
+    r.counters = grid.readCounters();
+    return r;
+  }
+
+  // Checks the neighbour sets (by input index) against brute force; pairs whose distance is
+  // within float rounding of the radius may go either way.
+  void expectNeighboursMatch(const std::vector<glm::vec4>& pos, float radius, const Result& r) {
+    const std::size_t n = pos.size();
+    std::vector<glm::dvec3> dpos(n);
+    for (std::size_t i = 0; i < n; ++i) dpos[i] = glm::dvec3(pos[i]);
+    const auto brute = reference::neighboursBruteForce(dpos, radius);
+    // ids[slot] = n - 1 - input index
+    auto inputOf = [&](std::uint32_t slot) { return static_cast<std::uint32_t>(n - 1 - r.ids[slot]); };
+    std::size_t checked = 0;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = inputOf(slot);
+      ASSERT_LE(r.counts[slot], kMaxNeighbours) << "test set too dense for the list capacity";
+      std::set<std::uint32_t> got;
+      for (std::uint32_t k = 0; k < r.counts[slot]; ++k) {
+        const std::uint32_t j = r.list[slot * kMaxNeighbours + k];
+        if (k > 0) {
+          ASSERT_LT(r.list[slot * kMaxNeighbours + k - 1], j) << "list not ascending";
+        }
+        got.insert(inputOf(j));
+      }
+      const std::set<std::uint32_t> want(brute[i].begin(), brute[i].end());
+      std::vector<std::uint32_t> diff;
+      std::set_symmetric_difference(got.begin(), got.end(), want.begin(), want.end(), std::back_inserter(diff));
+      for (std::uint32_t j : diff) {
+        const double d = glm::length(dpos[i] - dpos[j]);
+        EXPECT_NEAR(d, radius, 1e-5 * radius) << "particle " << i << " neighbour " << j << " differs";
+      }
+      checked += want.size();
+    }
+    EXPECT_GT(checked, 0u);
+  }
+
+  // Sorted order = stable sort of the input by reference cell (ties at cell faces excepted),
+  // data moved with it, slotOfId consistent, cellStart matching.
+  void expectGridMatchesReference(const sim::GridSpec& spec, const std::vector<glm::vec4>& pos, const Result& r) {
+    const std::size_t n = pos.size();
+    reference::Grid g{glm::dvec3(spec.origin), spec.cellSize, spec.dims};
+    std::vector<glm::dvec3> dpos(n);
+    for (std::size_t i = 0; i < n; ++i) dpos[i] = glm::dvec3(pos[i]);
+    const auto ref = reference::buildGrid(dpos, g);
+    EXPECT_EQ(r.counters.outside, ref.outside);
+    EXPECT_EQ(r.counters.nonFinite, 0u);
+    EXPECT_EQ(r.cellStart.size(), ref.cellStart.size());
+    EXPECT_EQ(r.cellStart, ref.cellStart);
+    std::vector<bool> seen(n, false);
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = static_cast<std::uint32_t>(n - 1 - r.ids[slot]);
+      ASSERT_LT(i, n);
+      EXPECT_FALSE(seen[i]) << "input particle " << i << " appears twice";
+      seen[i] = true;
+      EXPECT_EQ(r.positions[slot], pos[i]);
+      EXPECT_EQ(r.velocities[slot], glm::vec4(float(i), -float(i), 0.5f, 1.0f));
+      EXPECT_EQ(r.slotOfId[r.ids[slot]], slot);
+      EXPECT_EQ(ref.order[slot], i) << "sorted slot " << slot;
+    }
+  }
+};
+
+std::vector<glm::vec4> uniformBox(std::mt19937_64& rng, std::size_t n, glm::vec3 lo, glm::vec3 hi) {
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::vector<glm::vec4> p(n);
+  for (auto& x : p) x = glm::vec4(lo + (hi - lo) * glm::vec3(u(rng), u(rng), u(rng)), 1.0f);
+  return p;
+}
+
+// Coordinates snapped to multiples of 1/4096 m and cell sizes that are powers of two, so the
+// cell of every particle is exact in float (GPU) and double (reference) alike.
+std::vector<glm::vec4> snapped(std::vector<glm::vec4> p) {
+  for (auto& x : p) x = glm::vec4(glm::round(glm::vec3(x) * 4096.0f) / 4096.0f, 1.0f);
+  return p;
+}
+
+TEST_F(NeighbourTest, UniformParticlesMatchBruteForceAndReference) {
+  auto rng = rngFor();
+  const float h = 0.0625f;
+  const auto spec = sim::GridSpec::covering({0, 0, 0}, {1.0f, 0.625f, 0.375f}, h);
+  const auto pos = snapped(uniformBox(rng, 6000, {0, 0, 0}, {1.0f, 0.625f, 0.375f}));
+  const Result r = run(spec, pos, h);
+  expectGridMatchesReference(spec, pos, r);
+  expectNeighboursMatch(pos, h, r);
+}
+
+TEST_F(NeighbourTest, ClusteredParticlesMatchBruteForce) {
+  auto rng = rngFor();
+  const float h = 0.125f;
+  const auto spec = sim::GridSpec::covering({-1, -1, -1}, {1, 1, 1}, h);
+  std::vector<glm::vec4> pos;
+  std::normal_distribution<float> g(0.0f, 0.08f);
+  for (int c = 0; c < 5; ++c) {
+    const glm::vec3 centre(-0.6f + 0.3f * c, 0.1f * c - 0.2f, 0.0f);
+    for (int k = 0; k < 300; ++k) pos.emplace_back(centre + glm::vec3(g(rng), g(rng), g(rng)), 1.0f);
+  }
+  pos = snapped(pos);
+  const Result r = run(spec, pos, h * 0.9f);
+  expectGridMatchesReference(spec, pos, r);
+  expectNeighboursMatch(pos, h * 0.9f, r);
+}
+
+TEST_F(NeighbourTest, AllParticlesInOneCell) {
+  auto rng = rngFor();
+  const float h = 1.0f;
+  const auto spec = sim::GridSpec::covering({0, 0, 0}, {8, 8, 8}, h);
+  const auto pos = snapped(uniformBox(rng, 90, {3.1f, 3.1f, 3.1f}, {3.9f, 3.9f, 3.9f}));
+  const Result r = run(spec, pos, h);
+  expectGridMatchesReference(spec, pos, r);
+  expectNeighboursMatch(pos, h, r);
+  const std::uint32_t cell = 3 + 8 * (3 + 8 * 3);
+  EXPECT_EQ(r.cellStart[cell + 1] - r.cellStart[cell], 90u);
+}
+
+TEST_F(NeighbourTest, ParticlesOutsideTheGridAreClampedAndCounted) {
+  auto rng = rngFor();
+  const float h = 0.125f;
+  const auto spec = sim::GridSpec::covering({0, 0, 0}, {1, 1, 1}, h);
+  auto pos = uniformBox(rng, 3000, {-0.3f, -0.2f, -0.25f}, {1.3f, 1.2f, 1.1f});
+  pos.emplace_back(1e30f, -1e30f, 5.0f, 1.0f);  // far away: must not overflow anything
+  pos = snapped(pos);
+  const Result r = run(spec, pos, h);
+  expectGridMatchesReference(spec, pos, r);
+  expectNeighboursMatch(pos, h, r);
+  EXPECT_GT(r.counters.outside, 100u);
+}
+
+TEST_F(NeighbourTest, NonFiniteParticlesAreCountedNotWrittenOutOfBounds) {
+  const auto spec = sim::GridSpec::covering({0, 0, 0}, {1, 1, 1}, 0.25f);
+  std::vector<glm::vec4> pos = {{0.1f, 0.1f, 0.1f, 1}, {NAN, 0.5f, 0.5f, 1}, {0.5f, INFINITY, 0.5f, 1}, {0.9f, 0.9f, 0.9f, 1}};
+  const Result r = run(spec, pos, 0.25f);
+  EXPECT_EQ(r.counters.nonFinite, 2u);
+  EXPECT_EQ(r.cellStart.back(), 4u);
+}
+
+TEST_F(NeighbourTest, RepeatedBuildsAreBitIdentical) {
+  auto rng = rngFor();
+  const float h = 0.05f;
+  const auto spec = sim::GridSpec::covering({0, 0, 0}, {0.5f, 0.5f, 0.5f}, h);
+  const auto pos = uniformBox(rng, 20000, {0, 0, 0}, {0.5f, 0.5f, 0.5f});
+  const Result a = run(spec, pos, h);
+  const Result b = run(spec, pos, h);
+  EXPECT_EQ(a.ids, b.ids);
+  EXPECT_EQ(a.counts, b.counts);
+  EXPECT_EQ(a.list, b.list);
+  // Building again from already-sorted data keeps the order (stable sort of sorted data).
+  const Result twice = run(spec, pos, h, 2);
+  EXPECT_EQ(twice.ids, a.ids);
+  EXPECT_EQ(twice.positions, a.positions);
+}
+
+TEST_F(NeighbourTest, RejectsARadiusLargerThanTheCell) {
+  const auto spec = sim::GridSpec::covering({0, 0, 0}, {1, 1, 1}, 0.1f);
+  sim::ParticleStore store(ctx(), 10);
+  sim::NeighbourGrid grid(ctx(), spec, store);
+  EXPECT_THROW(sim::NeighbourList(ctx(), grid, store, 0.2f, 8), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hemo::test

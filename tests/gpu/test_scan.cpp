@@ -1,0 +1,78 @@
+// Exclusive prefix scan and min/max reduction against the standard library.
+#include "gpu_test.hpp"
+#include "hemo/gpu/primitives.hpp"
+
+#include <limits>
+#include <numeric>
+
+namespace hemo::test {
+namespace {
+
+class ScanTest : public GpuTest {
+ protected:
+  std::vector<std::uint32_t> gpuScan(const std::vector<std::uint32_t>& input) {
+    gpu::Buffer data(ctx(), input.size() * 4, gpu::MemoryUse::Device, "scan data");
+    data.upload(input);
+    gpu::PrefixScan scan(ctx(), data, input.size());
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    scan.record(rec, input.size());
+    rec.end();
+    rec.submitAndWait();
+    return data.readback<std::uint32_t>(input.size());
+  }
+  static std::vector<std::uint32_t> cpuScan(const std::vector<std::uint32_t>& input) {
+    std::vector<std::uint32_t> out(input.size());
+    std::exclusive_scan(input.begin(), input.end(), out.begin(), 0u);
+    return out;
+  }
+};
+
+TEST_F(ScanTest, MatchesStdExclusiveScanOnAwkwardSizes) {
+  auto rng = rngFor();
+  std::uniform_int_distribution<std::uint32_t> small(0, 1000);
+  for (std::size_t n : {0u, 1u, 2u, 7u, 63u, 64u, 65u, 255u, 256u, 257u, 2047u, 2048u, 2049u, 4097u, 100003u,
+                        524289u, 2048u * 2048u + 3u}) {
+    std::vector<std::uint32_t> input(n);
+    for (auto& v : input) v = small(rng);
+    EXPECT_EQ(gpuScan(input), cpuScan(input)) << "n = " << n;
+  }
+}
+
+TEST_F(ScanTest, WrapsLikeUint32AtTheMaximum) {
+  std::vector<std::uint32_t> input(5000, std::numeric_limits<std::uint32_t>::max());
+  input[17] = 3;
+  EXPECT_EQ(gpuScan(input), cpuScan(input));
+}
+
+TEST_F(ScanTest, SixteenMillionElementsUseThreeLevels) {
+  const std::size_t n = (1u << 24) + 12345;  // more than 2048^2: three levels of blocks
+  std::vector<std::uint32_t> input(n);
+  auto rng = rngFor();
+  for (auto& v : input) v = static_cast<std::uint32_t>(rng() & 3u);
+  EXPECT_EQ(gpuScan(input), cpuScan(input));
+}
+
+TEST_F(ScanTest, RecordsForAnyCountUpToItsCapacity) {
+  std::vector<std::uint32_t> input(10000);
+  auto rng = rngFor();
+  for (auto& v : input) v = static_cast<std::uint32_t>(rng() % 50);
+  gpu::Buffer data(ctx(), input.size() * 4, gpu::MemoryUse::Device, "scan data");
+  gpu::PrefixScan scan(ctx(), data, input.size());
+  gpu::CommandRecorder rec(ctx());
+  for (std::size_t n : {10000u, 3000u, 1u, 2049u}) {
+    data.upload(input);
+    rec.begin();
+    scan.record(rec, n);
+    rec.end();
+    rec.submitAndWait();
+    auto got = data.readback<std::uint32_t>(input.size());
+    std::vector<std::uint32_t> expect(input);
+    std::exclusive_scan(input.begin(), input.begin() + n, expect.begin(), 0u);
+    EXPECT_EQ(got, expect) << "n = " << n << " (elements past n must stay untouched)";
+  }
+  EXPECT_THROW(scan.record(rec, 10001), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hemo::test
