@@ -3,7 +3,7 @@
 #define HEMO_INTERFACE_SCAN_H
 
 // Elements each invocation scans sequentially; a workgroup covers workgroupSize * this.
-#define HEMO_SCAN_ITEMS 8
+#define HEMO_SCAN_ITEMS 16
 
 // scan/scan_block.comp: in-place exclusive scan of each block, block totals to `sums`.
 // scan/scan_add.comp:   adds the (scanned) block offset sums[block] to every element.

@@ -7,23 +7,25 @@
 
 layout(std430, binding = HEMO_SORT_BINDING_PAIRS_IN) readonly buffer PairsIn { uvec2 pairsIn[]; };
 layout(std430, binding = HEMO_SORT_BINDING_COUNTS) writeonly buffer Counts { uint counts[]; };
-layout(push_constant) uniform Push { uint n; uint shift; uint chunkSize; uint chunkCount; } pc;
+layout(push_constant) uniform Push { uint n; uint shift; uint chunkSize; uint chunkCount; uint digitBits; } pc;
 
 void main() {
   const uint chunk = hemo_global_index();
   if (chunk >= pc.chunkCount) {
     return;
   }
+  const uint buckets = 1u << pc.digitBits;  // digitBits <= HEMO_RADIX_BITS
+  const uint mask = buckets - 1u;
   uint histogram[HEMO_RADIX_BUCKETS];
-  for (uint b = 0u; b < HEMO_RADIX_BUCKETS; ++b) {
+  for (uint b = 0u; b < buckets; ++b) {
     histogram[b] = 0u;
   }
   const uint first = chunk * pc.chunkSize;
   const uint last = min(first + pc.chunkSize, pc.n);
   for (uint i = first; i < last; ++i) {
-    histogram[(pairsIn[i].x >> pc.shift) & uint(HEMO_RADIX_BUCKETS - 1)] += 1u;
+    histogram[(pairsIn[i].x >> pc.shift) & mask] += 1u;
   }
-  for (uint b = 0u; b < HEMO_RADIX_BUCKETS; ++b) {
+  for (uint b = 0u; b < buckets; ++b) {
     counts[b * pc.chunkCount + chunk] = histogram[b];
   }
 }

@@ -9,22 +9,24 @@
 layout(std430, binding = HEMO_SORT_BINDING_PAIRS_IN) readonly buffer PairsIn { uvec2 pairsIn[]; };
 layout(std430, binding = HEMO_SORT_BINDING_COUNTS) readonly buffer Offsets { uint offsets[]; };
 layout(std430, binding = HEMO_SORT_BINDING_PAIRS_OUT) writeonly buffer PairsOut { uvec2 pairsOut[]; };
-layout(push_constant) uniform Push { uint n; uint shift; uint chunkSize; uint chunkCount; } pc;
+layout(push_constant) uniform Push { uint n; uint shift; uint chunkSize; uint chunkCount; uint digitBits; } pc;
 
 void main() {
   const uint chunk = hemo_global_index();
   if (chunk >= pc.chunkCount) {
     return;
   }
+  const uint buckets = 1u << pc.digitBits;  // digitBits <= HEMO_RADIX_BITS
+  const uint mask = buckets - 1u;
   uint next[HEMO_RADIX_BUCKETS];
-  for (uint b = 0u; b < HEMO_RADIX_BUCKETS; ++b) {
+  for (uint b = 0u; b < buckets; ++b) {
     next[b] = offsets[b * pc.chunkCount + chunk];
   }
   const uint first = chunk * pc.chunkSize;
   const uint last = min(first + pc.chunkSize, pc.n);
   for (uint i = first; i < last; ++i) {
     const uvec2 p = pairsIn[i];
-    const uint b = (p.x >> pc.shift) & uint(HEMO_RADIX_BUCKETS - 1);
+    const uint b = (p.x >> pc.shift) & mask;
     pairsOut[next[b]] = p;
     next[b] += 1u;
   }

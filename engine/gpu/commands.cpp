@@ -36,6 +36,8 @@ void CommandRecorder::begin() {
   info.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   check(vkBeginCommandBuffer(cmd_, &info), "vkBeginCommandBuffer");
   dispatches_ = 0;
+  boundPipeline_ = VK_NULL_HANDLE;
+  boundSet_ = VK_NULL_HANDLE;
 }
 
 void CommandRecorder::end() {
@@ -67,9 +69,17 @@ void CommandRecorder::dispatch(const ComputePipeline& pipeline, const Descriptor
                                 std::to_string(pipeline.pushConstantBytes()));
   }
   if (groups.total() == 0) return;
-  vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+  // Rebind only what changed (lavapipe pays for every bind when the command buffer runs).
+  if (pipeline.handle() != boundPipeline_) {
+    vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
+    boundPipeline_ = pipeline.handle();
+    boundSet_ = VK_NULL_HANDLE;
+  }
   VkDescriptorSet handle = set.handle();
-  vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1, &handle, 0, nullptr);
+  if (handle != boundSet_) {
+    vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.layout(), 0, 1, &handle, 0, nullptr);
+    boundSet_ = handle;
+  }
   if (pushBytes) {
     vkCmdPushConstants(cmd_, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, pushBytes, push);
   }

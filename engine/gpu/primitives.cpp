@@ -25,8 +25,9 @@ struct SortPush {
   std::uint32_t shift;
   std::uint32_t chunkSize;
   std::uint32_t chunkCount;
+  std::uint32_t digitBits;
 };
-static_assert(sizeof(SortPush) == 16);
+static_assert(sizeof(SortPush) == 20);
 
 std::uint64_t ceilDiv(std::uint64_t a, std::uint64_t b) { return (a + b - 1) / b; }
 
@@ -141,7 +142,7 @@ void MinMaxReduce::record(CommandRecorder& rec, std::uint64_t n) const {
 
 // ---------------------------------------------------------------------------------------------
 namespace {
-constexpr std::uint32_t kSortChunk = 256;
+constexpr std::uint32_t kSortChunk = 512;  // pairs per invocation (tuned on lavapipe, see docs/benchmarks.md)
 }
 
 RadixSort::RadixSort(Context& context, const Buffer& pairs, std::uint64_t capacity)
@@ -183,14 +184,17 @@ void RadixSort::record(CommandRecorder& rec, std::uint64_t n, std::uint32_t keyB
   checkCount(n, capacity_, "RadixSort");
   if (n <= 1) return;
   const std::uint32_t passes = passesFor(keyBits);
+  if (passes == 0) return;  // all keys are 0: already sorted
+  const std::uint32_t digitBits = (std::min<std::uint32_t>(keyBits, 32) + passes - 1) / passes;
   const std::uint64_t chunks = chunkCount(n);
+  const std::uint64_t buckets = std::uint64_t(1) << digitBits;
   for (std::uint32_t pass = 0; pass < passes; ++pass) {
     const bool fromPairs = pass % 2 == 0;
-    const SortPush push{static_cast<std::uint32_t>(n), pass * HEMO_RADIX_BITS, chunkSize_,
-                        static_cast<std::uint32_t>(chunks)};
+    const SortPush push{static_cast<std::uint32_t>(n), pass * digitBits, chunkSize_,
+                        static_cast<std::uint32_t>(chunks), digitBits};
     rec.dispatch(*histogram_, fromPairs ? histFromPairs_ : histFromScratch_, push, histogram_->groupsFor(chunks));
     rec.computeToCompute();
-    scan_.record(rec, HEMO_RADIX_BUCKETS * chunks);
+    scan_.record(rec, buckets * chunks);
     rec.dispatch(*scatter_, fromPairs ? scatterToScratch_ : scatterToPairs_, push, scatter_->groupsFor(chunks));
     rec.computeToCompute();
   }

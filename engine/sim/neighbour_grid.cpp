@@ -106,7 +106,10 @@ void NeighbourGrid::resetCounters(gpu::CommandRecorder& rec) {
   rec.transferToCompute();
 }
 
-void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n) {
+void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps) {
+  auto mark = [&](const char* stage) {
+    if (timestamps) timestamps->mark(rec, stage);
+  };
   if (n > particles_->capacity()) {
     throw std::invalid_argument("neighbour grid: " + std::to_string(n) + " particles exceed the capacity " +
                                 std::to_string(particles_->capacity()));
@@ -117,10 +120,14 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n) {
   rec.transferToCompute();
   rec.dispatch(*hash_, hashSets_[src], push(n), hash_->groupsFor(n));
   rec.computeToCompute();
+  mark("hash");
   scan_.record(rec, cells + 1);
+  mark("cell scan");
   sort_.record(rec, n, gpu::bitsFor(cells - 1));
+  mark("sort");
   rec.dispatch(*reorder_, reorderSets_[src], ReorderPush{n, particles_->capacity()}, reorder_->groupsFor(n));
   rec.computeToCompute();
+  mark("reorder");
   particles_->flip();
 }
 

@@ -144,3 +144,52 @@ TEST_F(GpuLayerTest, TimestampsMeasureStages) {
 
 }  // namespace
 }  // namespace hemo::test
+
+namespace hemo::test {
+namespace {
+
+// Guards the guard: the validation layer is really on and its messages are counted.
+TEST_F(GpuLayerTest, ValidationLayerReportsMisuse) {
+  ASSERT_TRUE(ctx().validationEnabled());
+  const std::uint64_t before = ctx().validationMessageCount();
+  VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+  info.size = 0;  // invalid: VUID-VkBufferCreateInfo-size-00912
+  info.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+  VkBuffer buffer = VK_NULL_HANDLE;
+  vkCreateBuffer(ctx().device(), &info, nullptr, &buffer);
+  if (buffer) vkDestroyBuffer(ctx().device(), buffer, nullptr);
+  EXPECT_GT(ctx().validationMessageCount(), before);
+  const auto messages = ctx().takeValidationMessages();  // expected here; not a failure
+  ASSERT_FALSE(messages.empty());
+  EXPECT_NE(messages[0].find("00912"), std::string::npos) << messages[0];
+}
+
+}  // namespace
+}  // namespace hemo::test
+
+namespace hemo::test {
+namespace {
+
+// A requested validation layer that the loader cannot find is a clear error, not a crash.
+TEST_F(GpuLayerTest, MissingValidationLayerIsAClearError) {
+  const char* old = std::getenv("VK_LAYER_PATH");
+  const std::string saved = old ? old : "";
+  ::setenv("VK_LAYER_PATH", "/nonexistent-hemo-layer-dir", 1);
+  gpu::ContextOptions options;
+  options.validation = true;
+  std::string message;
+  try {
+    gpu::Context other(options);
+  } catch (const gpu::GpuError& e) {
+    message = e.what();
+  }
+  if (old) {
+    ::setenv("VK_LAYER_PATH", saved.c_str(), 1);
+  } else {
+    ::unsetenv("VK_LAYER_PATH");
+  }
+  EXPECT_NE(message.find("VK_LAYER_KHRONOS_validation"), std::string::npos) << "got: " << message;
+}
+
+}  // namespace
+}  // namespace hemo::test

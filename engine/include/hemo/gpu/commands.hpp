@@ -62,6 +62,8 @@ class CommandRecorder {
   VkCommandBuffer cmd_ = VK_NULL_HANDLE;
   VkFence fence_ = VK_NULL_HANDLE;
   bool pending_ = false;
+  VkPipeline boundPipeline_ = VK_NULL_HANDLE;
+  VkDescriptorSet boundSet_ = VK_NULL_HANDLE;
   std::uint64_t dispatches_ = 0;
 };
 

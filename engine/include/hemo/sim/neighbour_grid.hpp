@@ -41,7 +41,8 @@ class NeighbourGrid {
 
   // Records the whole build for the store's first n particles; the sorted data ends up in
   // the other half and the store flips to it. Counters are reset by resetCounters().
-  void record(gpu::CommandRecorder& rec, std::uint32_t n);
+  // With `timestamps`, marks "hash", "cell scan", "sort" and "reorder" after each stage.
+  void record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps = nullptr);
   void resetCounters(gpu::CommandRecorder& rec);
 
   const GridSpec& spec() const { return spec_; }

@@ -1,0 +1,27 @@
+# The two quick-start commands (see README.md). Both install missing Debian packages,
+# configure once, build incrementally, then run.
+#   make run    the main job (for now: the GPU neighbour-search demo), headless
+#   make test   the whole test suite (ctest), every GPU test with the validation layer on
+PRESET ?= release
+BUILD := build/$(PRESET)
+
+.PHONY: run test build deps bench clean
+
+run: build
+	$(BUILD)/apps/hemo-neighbours
+
+test: build
+	ctest --test-dir $(BUILD) --output-on-failure
+
+bench: build
+	$(BUILD)/apps/hemo-bench primitives --json $(BUILD)/bench-primitives.json
+
+build: deps
+	@if [ ! -f $(BUILD)/CMakeCache.txt ]; then cmake --preset $(PRESET); fi
+	cmake --build $(BUILD)
+
+deps:
+	@.ci/install-deps.sh
+
+clean:
+	rm -rf build

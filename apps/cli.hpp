@@ -1,0 +1,65 @@
+#pragma once
+// Minimal command-line parsing shared by the hemo apps: positional arguments and
+// "--name value" options, with errors that name the argument.
+#include <cstdint>
+#include <map>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hemo::cli {
+
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Args {
+  std::vector<std::string> positional;
+  std::map<std::string, std::string> options;  // "--json" -> "file.json"
+
+  bool has(const std::string& name) const { return options.count(name) != 0; }
+  std::string text(const std::string& name, const std::string& fallback = "") const {
+    auto it = options.find(name);
+    return it == options.end() ? fallback : it->second;
+  }
+  std::uint64_t count(const std::string& name, std::uint64_t fallback, std::uint64_t min, std::uint64_t max) const {
+    auto it = options.find(name);
+    if (it == options.end()) return fallback;
+    const std::string& v = it->second;
+    std::size_t used = 0;
+    unsigned long long x = 0;
+    try {
+      if (v.empty() || v[0] == '-') throw std::invalid_argument(v);
+      x = std::stoull(v, &used);
+    } catch (const std::exception&) {
+      throw UsageError(name + " expects a whole number, got '" + v + "'");
+    }
+    if (used != v.size()) throw UsageError(name + " expects a whole number, got '" + v + "'");
+    if (x < min || x > max) {
+      throw UsageError(name + " must be between " + std::to_string(min) + " and " + std::to_string(max) +
+                       ", got " + v);
+    }
+    return x;
+  }
+};
+
+// Parses argv; every option takes exactly one value and must be in `known`.
+inline Args parse(int argc, char** argv, const std::set<std::string>& known) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    std::string s = argv[i];
+    if (s.rfind("--", 0) == 0) {
+      if (!known.count(s)) throw UsageError("unknown option " + s);
+      if (i + 1 >= argc) throw UsageError(s + " needs a value");
+      if (a.options.count(s)) throw UsageError(s + " given twice");
+      a.options[s] = argv[++i];
+    } else {
+      a.positional.push_back(s);
+    }
+  }
+  return a;
+}
+
+}  // namespace hemo::cli

@@ -1,0 +1,227 @@
+// hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N]
+// Benchmarks (not tests): GPU times from timestamp queries, medians over repeated runs after a
+// warm-up. Suites: primitives (this build); accuracy, table1 and render arrive with the
+// simulation, wall and rendering stages.
+#include "cli.hpp"
+#include "hemo/gpu/pipeline_cache.hpp"
+#include "hemo/gpu/primitives.hpp"
+#include "hemo/sim/neighbour_grid.hpp"
+
+#include "interface/scan.h"
+
+#include <nlohmann/json.hpp>
+
+#include <glm/vec2.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <random>
+
+namespace {
+
+using hemo::gpu::CommandRecorder;
+using hemo::gpu::Context;
+using hemo::gpu::TimestampQueries;
+using Json = nlohmann::json;
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t m = v.size() / 2;
+  return v.size() % 2 ? v[m] : 0.5 * (v[m - 1] + v[m]);
+}
+
+// Runs `record` (one measured region between two timestamps) repeat times after one warm-up;
+// returns the median GPU milliseconds. `prepare` runs on the host before every repetition.
+template <class Prepare, class Record>
+double timeGpu(Context& ctx, int repeat, Prepare prepare, Record record) {
+  CommandRecorder rec(ctx);
+  TimestampQueries ts(ctx, 2);
+  std::vector<double> ms;
+  for (int r = 0; r <= repeat; ++r) {
+    prepare();
+    rec.begin();
+    ts.reset(rec);
+    ts.mark(rec, "start");
+    record(rec);
+    ts.mark(rec, "end");
+    rec.end();
+    rec.submitAndWait();
+    if (r > 0) ms.push_back(ts.totalMs());
+  }
+  return median(ms);
+}
+
+Json primitives(Context& ctx, int repeat) {
+  Json rows = Json::array();
+  std::mt19937_64 rng(12345);
+  auto row = [&](const std::string& op, std::uint64_t n, double ms, Json extra = Json::object()) {
+    Json r = {{"op", op}, {"n", n}, {"ms", ms}};
+    r.update(extra);
+    std::printf("%-16s %10llu %10.3f ms  %8.2f ns/item  %s\n", op.c_str(), static_cast<unsigned long long>(n), ms,
+                n ? ms * 1e6 / double(n) : 0.0, extra.empty() ? "" : extra.dump().c_str());
+    std::fflush(stdout);
+    rows.push_back(r);
+  };
+  std::printf("%-16s %10s %13s\n", "op", "n", "median GPU");
+
+  // Empty submit + fence wait: a host round trip, measured on the host clock.
+  {
+    CommandRecorder rec(ctx);
+    std::vector<double> ms;
+    for (int r = 0; r <= 50; ++r) {
+      rec.begin();
+      rec.end();
+      const auto t0 = std::chrono::steady_clock::now();
+      rec.submitAndWait();
+      const auto t1 = std::chrono::steady_clock::now();
+      if (r > 0) ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    }
+    row("empty_submit", 0, median(ms), {{"clock", "host"}});
+  }
+  // The fixed cost of one dispatch plus a barrier: 1000 one-workgroup dispatches of a shader
+  // without workgroup barriers (scan/scan_add on 64 elements) in one command buffer.
+  {
+    hemo::gpu::Buffer data(ctx, 64 * 4, hemo::gpu::MemoryUse::Device, "dispatch probe");
+    const auto& probe = ctx.pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}});
+    const auto set = probe.makeSet({{HEMO_SCAN_BINDING_DATA, &data}, {HEMO_SCAN_BINDING_SUMS, &data}});
+    const int k = 1000;
+    const std::uint32_t n = 64;
+    const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+      for (int i = 0; i < k; ++i) {
+        rec.dispatch(probe, set, n, probe.groupsFor(n, HEMO_SCAN_ITEMS));
+        rec.computeToCompute();
+      }
+    });
+    row("dispatch", 1, ms / k, {{"clock", "gpu"}, {"dispatches_timed", k}});
+  }
+
+  for (std::uint64_t n : {10000ull, 100000ull, 1000000ull, 16000000ull}) {
+    std::vector<std::uint32_t> v(n);
+    for (auto& x : v) x = static_cast<std::uint32_t>(rng() & 0xff);
+    hemo::gpu::Buffer data(ctx, n * 4, hemo::gpu::MemoryUse::Device, "scan data");
+    hemo::gpu::PrefixScan scan(ctx, data, n);
+    data.upload(v);
+    const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) { scan.record(rec, n); });
+    row("scan", n, ms);
+  }
+
+  for (std::uint32_t keyBits : {16u, 32u}) {
+    for (std::uint64_t n : {10000ull, 100000ull, 1000000ull}) {
+      std::vector<glm::uvec2> v(n);
+      for (std::uint64_t i = 0; i < n; ++i) {
+        v[i] = {static_cast<std::uint32_t>(rng()) & static_cast<std::uint32_t>((1ull << keyBits) - 1),
+                static_cast<std::uint32_t>(i)};
+      }
+      hemo::gpu::Buffer pairs(ctx, n * 8, hemo::gpu::MemoryUse::Device, "sort pairs");
+      hemo::gpu::RadixSort sort(ctx, pairs, n);
+      const double ms = timeGpu(ctx, repeat, [&] { pairs.upload(v); },
+                                [&](CommandRecorder& rec) { sort.record(rec, n, keyBits); });
+      row("sort", n, ms, {{"key_bits", keyBits}});
+    }
+  }
+
+  // Full neighbour structure (hash, scan of cell counts, sort, reorder) for a jittered
+  // lattice of spacing dp with cells of 2 dp (8 particles per cell on average), as SPH uses it.
+  for (std::uint64_t n : {10000ull, 100000ull, 1000000ull}) {
+    const float dp = 0.01f;
+    const auto side = static_cast<std::uint32_t>(std::ceil(std::cbrt(double(n))));
+    std::vector<glm::vec4> pos(n), vel(n, glm::vec4(0.0f));
+    std::uniform_real_distribution<float> jitter(-0.25f * dp, 0.25f * dp);
+    for (std::uint64_t i = 0; i < n; ++i) {
+      const float x = float(i % side), y = float((i / side) % side), z = float(i / (side * side));
+      // shuffle-free but not cell-ordered: z-major lattice order, jittered
+      pos[i] = glm::vec4((x + 0.5f) * dp + jitter(rng), (y + 0.5f) * dp + jitter(rng), (z + 0.5f) * dp + jitter(rng), 1.0f);
+    }
+    std::shuffle(pos.begin(), pos.end(), rng);  // worst case: no locality from the last step
+    hemo::sim::ParticleStore store(ctx, static_cast<std::uint32_t>(n));
+    const auto spec = hemo::sim::GridSpec::covering({0, 0, 0}, glm::vec3(float(side) * dp), 2.0f * dp);
+    hemo::sim::NeighbourGrid grid(ctx, spec, store);
+    for (const bool presorted : {false, true}) {
+      // Shuffled input is the worst case; "previous_step" is the steady state of a simulation,
+      // where the particles are still in the cell order of the last step.
+      CommandRecorder rec(ctx);
+      TimestampQueries ts(ctx, 8);
+      std::vector<double> total;
+      std::map<std::string, std::vector<double>> stages;
+      for (int r = 0; r <= repeat; ++r) {
+        if (!presorted || r == 0) store.upload(pos, vel);
+        rec.begin();
+        ts.reset(rec);
+        ts.mark(rec, "start");
+        grid.record(rec, static_cast<std::uint32_t>(n), &ts);
+        rec.end();
+        rec.submitAndWait();
+        if (r == 0) continue;  // warm-up (first use compiles the shaders on some drivers)
+        total.push_back(ts.totalMs());
+        for (const auto& [stage, ms] : ts.stageMs()) stages[stage].push_back(ms);
+      }
+      Json stageMs = Json::object();
+      for (const auto& [stage, ms] : stages) stageMs[stage] = median(ms);
+      row("neighbour_build", n, median(total),
+          {{"cells", spec.cellCount()}, {"order", presorted ? "previous_step" : "shuffled"}, {"stage_ms", stageMs}});
+    }
+  }
+  return rows;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const char* usage =
+      "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N]\n"
+      "  SUITE: primitives | accuracy | table1 | render\n";
+  hemo::cli::Args args;
+  try {
+    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat"});
+    if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SUITE");
+  } catch (const hemo::cli::UsageError& e) {
+    std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
+    return 1;
+  }
+  const std::string suite = args.positional[0];
+  try {
+    const int repeat = static_cast<int>(args.count("--repeat", 9, 1, 1000));
+    if (suite != "primitives") {
+      if (suite == "accuracy" || suite == "table1" || suite == "render") {
+        std::cerr << "hemo-bench: suite '" << suite
+                  << "' needs the simulation stages that are not in this build yet\n";
+      } else {
+        std::cerr << "hemo-bench: unknown suite '" << suite << "'\n" << usage;
+      }
+      return 1;
+    }
+    hemo::gpu::ContextOptions options;
+    options.device = args.text("--device");
+    Context ctx(options);
+    std::printf("device: %s (%s)\n", ctx.info().name.c_str(), ctx.info().typeName().c_str());
+    if (!ctx.timestampsSupported()) {
+      std::cerr << "hemo-bench: the device has no timestamp queries; GPU times are unavailable\n";
+      return 3;
+    }
+    const Json rows = primitives(ctx, repeat);
+    if (args.has("--json")) {
+      const std::string path = args.text("--json");
+      std::ofstream out(path);
+      if (!out) {
+        std::cerr << "hemo-bench: cannot write --json file '" << path << "'\n";
+        return 1;
+      }
+      out << Json{{"suite", suite}, {"device", ctx.info().name}, {"rows", rows}}.dump(2) << "\n";
+    }
+  } catch (const hemo::cli::UsageError& e) {
+    std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
+    return 1;
+  } catch (const hemo::gpu::GpuError& e) {
+    std::cerr << "hemo-bench: GPU error: " << e.what() << "\n";
+    return 3;
+  } catch (const std::exception& e) {
+    std::cerr << "hemo-bench: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
