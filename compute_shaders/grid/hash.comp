@@ -1,6 +1,5 @@
 #version 450
-// Neighbour grid, step 1: the cell of every particle as a (cell, slot) pair for the sort, and
-// the particle count of every cell (integer atomics: the counts do not depend on order).
+// Neighbour grid, step 1: the cell of every particle as a (cell, slot) pair for the sort.
 // Particles outside the grid are clamped into the border cells and counted; a particle with
 // a non-finite coordinate goes to cell 0 and is counted separately so the caller can stop.
 #extension GL_GOOGLE_include_directive : require
@@ -10,7 +9,6 @@
 
 layout(std430, binding = HEMO_HASH_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_HASH_BINDING_PAIRS) writeonly buffer Pairs { uvec2 pairs[]; };
-layout(std430, binding = HEMO_HASH_BINDING_CELL_COUNTS) buffer CellCounts { uint cellCounts[]; };
 layout(std430, binding = HEMO_HASH_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(push_constant) uniform Push { vec4 originInvCell; uvec4 dimsN; } pc;
 
@@ -32,5 +30,4 @@ void main() {
     }
   }
   pairs[i] = uvec2(cell, i);
-  atomicAdd(cellCounts[cell], 1u);
 }

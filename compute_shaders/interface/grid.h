@@ -10,14 +10,18 @@
 // grid/hash.comp
 #define HEMO_HASH_BINDING_POSITIONS 0
 #define HEMO_HASH_BINDING_PAIRS 1
-#define HEMO_HASH_BINDING_CELL_COUNTS 2
-#define HEMO_HASH_BINDING_COUNTERS 3
-#define HEMO_HASH_BINDING_COUNT 4
+#define HEMO_HASH_BINDING_COUNTERS 2
+#define HEMO_HASH_BINDING_COUNT 3
 // counters[HEMO_COUNTER_OUTSIDE]: particles outside the grid (clamped into border cells);
 // counters[HEMO_COUNTER_NONFINITE]: particles with a NaN/Inf coordinate (put in cell 0).
 #define HEMO_COUNTER_OUTSIDE 0
 #define HEMO_COUNTER_NONFINITE 1
 #define HEMO_COUNTER_COUNT 4
+
+// grid/cell_ranges.comp: cellStart from the sorted pairs (no atomics, no scan).
+#define HEMO_RANGES_BINDING_PAIRS 0
+#define HEMO_RANGES_BINDING_CELL_START 1
+#define HEMO_RANGES_BINDING_COUNT 2
 
 // grid/reorder.comp: gathers particle data into sorted order and updates id -> slot.
 #define HEMO_REORDER_BINDING_PAIRS 0

@@ -12,6 +12,12 @@ namespace hemo::sim {
 namespace {
 constexpr std::uint32_t kWorkgroup = 256;
 
+struct RangesPush {
+  std::uint32_t n;
+  std::uint32_t cellCount;
+};
+static_assert(sizeof(RangesPush) == 8);
+
 struct ReorderPush {
   std::uint32_t n;
   std::uint32_t idCapacity;
@@ -71,17 +77,17 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
       cellStart_(context, (spec.cellCount() + 1) * 4, gpu::MemoryUse::Device, "grid cellStart"),
       counters_(context, HEMO_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "grid counters"),
       slotOfId_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "slot of id"),
-      scan_(context, cellStart_, spec.cellCount() + 1),
       sort_(context, pairs_, particles.capacity()) {
   spec_.validate();
   hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}});
+  ranges_ = &context.pipelines().get({"grid/cell_ranges", HEMO_RANGES_BINDING_COUNT, sizeof(RangesPush), kWorkgroup, {}});
+  rangesSet_ = ranges_->makeSet({{HEMO_RANGES_BINDING_PAIRS, &pairs_}, {HEMO_RANGES_BINDING_CELL_START, &cellStart_}});
   reorder_ = &context.pipelines().get({"grid/reorder", HEMO_REORDER_BINDING_COUNT, sizeof(ReorderPush), kWorkgroup, {}});
   for (int p = 0; p < 2; ++p) {
     const ParticleArrays& src = particles.half(p);
     const ParticleArrays& dst = particles.half(p ^ 1);
     hashSets_[p] = hash_->makeSet({{HEMO_HASH_BINDING_POSITIONS, &src.positions},
                                    {HEMO_HASH_BINDING_PAIRS, &pairs_},
-                                   {HEMO_HASH_BINDING_CELL_COUNTS, &cellStart_},
                                    {HEMO_HASH_BINDING_COUNTERS, &counters_}});
     reorderSets_[p] = reorder_->makeSet({{HEMO_REORDER_BINDING_PAIRS, &pairs_},
                                          {HEMO_REORDER_BINDING_POS_IN, &src.positions},
@@ -116,15 +122,14 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
   }
   const int src = particles_->parity();
   const std::uint64_t cells = spec_.cellCount();
-  rec.fill(cellStart_, 0);  // counts of every cell, and the final entry
-  rec.transferToCompute();
   rec.dispatch(*hash_, hashSets_[src], push(n), hash_->groupsFor(n));
   rec.computeToCompute();
   mark("hash");
-  scan_.record(rec, cells + 1);
-  mark("cell scan");
   sort_.record(rec, n, gpu::bitsFor(cells - 1));
   mark("sort");
+  rec.dispatch(*ranges_, rangesSet_, RangesPush{n, static_cast<std::uint32_t>(cells)}, ranges_->groupsFor(n + 1));
+  rec.computeToCompute();
+  mark("cell ranges");
   rec.dispatch(*reorder_, reorderSets_[src], ReorderPush{n, particles_->capacity()}, reorder_->groupsFor(n));
   rec.computeToCompute();
   mark("reorder");

@@ -31,7 +31,7 @@ class ScanTest : public GpuTest {
 TEST_F(ScanTest, MatchesStdExclusiveScanOnAwkwardSizes) {
   auto rng = rngFor();
   std::uniform_int_distribution<std::uint32_t> small(0, 1000);
-  for (std::size_t n : {0u, 1u, 2u, 7u, 63u, 64u, 65u, 255u, 256u, 257u, 2047u, 2048u, 2049u, 4097u, 100003u,
+  for (std::size_t n : {0u, 1u, 2u, 7u, 63u, 64u, 65u, 255u, 256u, 257u, 2047u, 2048u, 2049u, 4095u, 4096u, 4097u, 8193u, 100003u,
                         524289u, 2048u * 2048u + 3u}) {
     std::vector<std::uint32_t> input(n);
     for (auto& v : input) v = small(rng);
@@ -46,7 +46,7 @@ TEST_F(ScanTest, WrapsLikeUint32AtTheMaximum) {
 }
 
 TEST_F(ScanTest, SixteenMillionElementsUseThreeLevels) {
-  const std::size_t n = (1u << 24) + 12345;  // more than 2048^2: three levels of blocks
+  const std::size_t n = (1u << 24) + 12345;  // more than 4096^2: three levels of 4096-element blocks
   std::vector<std::uint32_t> input(n);
   auto rng = rngFor();
   for (auto& v : input) v = static_cast<std::uint32_t>(rng() & 3u);

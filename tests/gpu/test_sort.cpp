@@ -39,7 +39,7 @@ class SortTest : public GpuTest {
 
 TEST_F(SortTest, MatchesStableSortOnAwkwardSizes) {
   auto rng = rngFor();
-  for (std::size_t n : {0u, 1u, 2u, 63u, 64u, 65u, 255u, 256u, 257u, 1000u, 65537u, 100001u, 1048583u}) {
+  for (std::size_t n : {0u, 1u, 2u, 63u, 64u, 65u, 255u, 256u, 257u, 511u, 512u, 513u, 1000u, 65537u, 100001u, 1048583u}) {
     std::vector<std::uint32_t> keys(n);
     for (auto& k : keys) k = static_cast<std::uint32_t>(rng());
     const Pairs input = withIndexValues(keys);

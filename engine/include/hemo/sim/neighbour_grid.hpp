@@ -1,9 +1,9 @@
 #pragma once
 // Cell-linked-list neighbour search built on the GPU every step:
-//   hash ...... cell of each particle, (cell, slot) pairs, particles per cell
-//   scan ...... exclusive scan of the counts -> cellStart (empty cells carry the offset)
-//   sort ...... stable radix sort of the pairs by cell
-//   reorder ... gather positions/velocities/ids into cell order, id -> slot map
+//   hash ........ cell of each particle as (cell, slot) pairs
+//   sort ........ stable radix sort of the pairs by cell
+//   cell ranges . cellStart from the sorted keys (empty cells carry the running offset)
+//   reorder ..... gather positions/velocities/ids into cell order, id -> slot map
 // The cell size is the support radius (or more); neighbours within it lie in the 27 cells
 // around a particle, scanned as nine contiguous x-rows.
 #include "hemo/gpu/primitives.hpp"
@@ -41,7 +41,7 @@ class NeighbourGrid {
 
   // Records the whole build for the store's first n particles; the sorted data ends up in
   // the other half and the store flips to it. Counters are reset by resetCounters().
-  // With `timestamps`, marks "hash", "cell scan", "sort" and "reorder" after each stage.
+  // With `timestamps`, marks "hash", "sort", "cell ranges" and "reorder" after each stage.
   void record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps = nullptr);
   void resetCounters(gpu::CommandRecorder& rec);
 
@@ -66,14 +66,15 @@ class NeighbourGrid {
   GridSpec spec_;
   ParticleStore* particles_;
   const gpu::ComputePipeline* hash_;
+  const gpu::ComputePipeline* ranges_;
   const gpu::ComputePipeline* reorder_;
   gpu::Buffer pairs_;
   gpu::Buffer cellStart_;
   gpu::Buffer counters_;
   gpu::Buffer slotOfId_;
-  gpu::PrefixScan scan_;
   gpu::RadixSort sort_;
   std::array<gpu::DescriptorSet, 2> hashSets_;     // by source parity
+  gpu::DescriptorSet rangesSet_;
   std::array<gpu::DescriptorSet, 2> reorderSets_;  // source parity -> other half
 };
 
