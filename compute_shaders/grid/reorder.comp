@@ -1,6 +1,7 @@
 #version 450
 // Neighbour grid, step 4 (after the sort and the scan of the cell counts): gathers particle
-// data into cell order and records where each particle id now lives.
+// data (positions, velocities, normals, ids) into cell order and records where each particle
+// id now lives.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/grid.h"
 #include "common/index.glsl"
@@ -13,6 +14,8 @@ layout(std430, binding = HEMO_REORDER_BINDING_POS_OUT) writeonly buffer PosOut {
 layout(std430, binding = HEMO_REORDER_BINDING_VEL_OUT) writeonly buffer VelOut { vec4 velOut[]; };
 layout(std430, binding = HEMO_REORDER_BINDING_ID_OUT) writeonly buffer IdOut { uint idOut[]; };
 layout(std430, binding = HEMO_REORDER_BINDING_SLOT_OF_ID) writeonly buffer SlotOfId { uint slotOfId[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_NORMAL_IN) readonly buffer NormalIn { vec4 normalIn[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_NORMAL_OUT) writeonly buffer NormalOut { vec4 normalOut[]; };
 layout(push_constant) uniform Push { uint n; uint idCapacity; } pc;
 
 void main() {
@@ -23,6 +26,7 @@ void main() {
   const uint src = pairs[i].y;
   posOut[i] = posIn[src];
   velOut[i] = velIn[src];
+  normalOut[i] = normalIn[src];
   const uint id = idIn[src];
   idOut[i] = id;
   if (id < pc.idCapacity) {

@@ -32,7 +32,9 @@
 #define HEMO_REORDER_BINDING_VEL_OUT 5
 #define HEMO_REORDER_BINDING_ID_OUT 6
 #define HEMO_REORDER_BINDING_SLOT_OF_ID 7
-#define HEMO_REORDER_BINDING_COUNT 8
+#define HEMO_REORDER_BINDING_NORMAL_IN 8
+#define HEMO_REORDER_BINDING_NORMAL_OUT 9
+#define HEMO_REORDER_BINDING_COUNT 10
 
 // grid/neighbour_list.comp: every particle's neighbours closer than the radius, as slots of
 // the sorted order, ascending; count may exceed the capacity (then the list is truncated).

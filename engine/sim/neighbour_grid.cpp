@@ -96,7 +96,9 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
                                          {HEMO_REORDER_BINDING_POS_OUT, &dst.positions},
                                          {HEMO_REORDER_BINDING_VEL_OUT, &dst.velocities},
                                          {HEMO_REORDER_BINDING_ID_OUT, &dst.ids},
-                                         {HEMO_REORDER_BINDING_SLOT_OF_ID, &slotOfId_}});
+                                         {HEMO_REORDER_BINDING_SLOT_OF_ID, &slotOfId_},
+                                         {HEMO_REORDER_BINDING_NORMAL_IN, &src.normals},
+                                         {HEMO_REORDER_BINDING_NORMAL_OUT, &dst.normals}});
   }
 }
 

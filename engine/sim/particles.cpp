@@ -12,18 +12,20 @@ ParticleStore::ParticleStore(gpu::Context& context, std::uint32_t capacity) : ca
     const std::string tag = h == 0 ? " A" : " B";
     halves_[h].positions = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "positions" + tag);
     halves_[h].velocities = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "velocities" + tag);
+    halves_[h].normals = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "normals" + tag);
     halves_[h].ids = gpu::Buffer(context, n * 4, gpu::MemoryUse::Device, "ids" + tag);
   }
 }
 
 void ParticleStore::upload(const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities,
-                           const std::vector<std::uint32_t>& ids) {
+                           const std::vector<std::uint32_t>& ids, const std::vector<glm::vec4>& normals) {
   if (positions.size() > capacity_) {
     throw std::invalid_argument(std::to_string(positions.size()) + " particles exceed the store's capacity of " +
                                 std::to_string(capacity_));
   }
-  if (velocities.size() != positions.size() || (!ids.empty() && ids.size() != positions.size())) {
-    throw std::invalid_argument("particle upload: positions, velocities and ids differ in length");
+  if (velocities.size() != positions.size() || (!ids.empty() && ids.size() != positions.size()) ||
+      (!normals.empty() && normals.size() != positions.size())) {
+    throw std::invalid_argument("particle upload: positions, velocities, normals and ids differ in length");
   }
   std::vector<std::uint32_t> idList = ids;
   if (idList.empty()) {
@@ -35,6 +37,7 @@ void ParticleStore::upload(const std::vector<glm::vec4>& positions, const std::v
   halves_[0].positions.upload(positions);
   halves_[0].velocities.upload(velocities);
   halves_[0].ids.upload(idList);
+  halves_[0].normals.upload(normals.empty() ? std::vector<glm::vec4>(positions.size(), glm::vec4(0.0f)) : normals);
 }
 
 std::vector<glm::vec4> ParticleStore::readPositions() const {
@@ -42,6 +45,9 @@ std::vector<glm::vec4> ParticleStore::readPositions() const {
 }
 std::vector<glm::vec4> ParticleStore::readVelocities() const {
   return current().velocities.readback<glm::vec4>(count_);
+}
+std::vector<glm::vec4> ParticleStore::readNormals() const {
+  return current().normals.readback<glm::vec4>(count_);
 }
 std::vector<std::uint32_t> ParticleStore::readIds() const { return current().ids.readback<std::uint32_t>(count_); }
 

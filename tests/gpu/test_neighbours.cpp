@@ -15,6 +15,7 @@ namespace {
 struct Result {
   std::vector<glm::vec4> positions;  // sorted
   std::vector<glm::vec4> velocities;
+  std::vector<glm::vec4> normals;
   std::vector<std::uint32_t> ids;
   std::vector<std::uint32_t> cellStart;
   std::vector<std::uint32_t> slotOfId;
@@ -34,7 +35,9 @@ class NeighbourTest : public GpuTest {
     // ids are a permutation so id != input slot
     std::vector<std::uint32_t> ids(pos.size());
     for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(ids.size() - 1 - i);
-    store.upload(pos, vel, ids);
+    std::vector<glm::vec4> normals(pos.size());
+    for (std::size_t i = 0; i < pos.size(); ++i) normals[i] = glm::vec4(0.0f, float(i), 1.0f, -float(i));
+    store.upload(pos, vel, ids, normals);
     sim::NeighbourGrid grid(ctx(), spec, store);
     sim::NeighbourList nlist(ctx(), grid, store, radius, kMaxNeighbours);
     gpu::CommandRecorder rec(ctx());
@@ -47,6 +50,7 @@ class NeighbourTest : public GpuTest {
     Result r;
     r.positions = store.readPositions();
     r.velocities = store.readVelocities();
+    r.normals = store.readNormals();
     r.ids = store.readIds();
     r.cellStart = grid.cellStart().readback<std::uint32_t>(spec.cellCount() + 1);
     r.slotOfId = grid.slotOfId().readback<std::uint32_t>(pos.size());
@@ -109,6 +113,7 @@ class NeighbourTest : public GpuTest {
       seen[i] = true;
       EXPECT_EQ(r.positions[slot], pos[i]);
       EXPECT_EQ(r.velocities[slot], glm::vec4(float(i), -float(i), 0.5f, 1.0f));
+      EXPECT_EQ(r.normals[slot], glm::vec4(0.0f, float(i), 1.0f, -float(i)));
       EXPECT_EQ(r.slotOfId[r.ids[slot]], slot);
       EXPECT_EQ(ref.order[slot], i) << "sorted slot " << slot;
     }
