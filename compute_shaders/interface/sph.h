@@ -1,0 +1,75 @@
+// Weakly compressible SPH (compute_shaders/sph/). Shared by GLSL and C++.
+#ifndef HEMO_INTERFACE_SPH_H
+#define HEMO_INTERFACE_SPH_H
+
+// Particle kinds, stored as a float in velocities[i].w (exact small integers).
+#define HEMO_KIND_FLUID 0
+#define HEMO_KIND_BOUNDARY 1  // rigid: fixed position, counts in density, viscosity, repulsion
+
+// Layout of the params storage buffer (std430), mirrored by hemo::sim::SphParams in C++.
+//   vec4  gravity            xyz: gravity + body force (m/s^2)
+//   float h                  smoothing length (m)
+//   float supportRadius      kernel support 2h (m)
+//   float listRadius         neighbour-list radius = support * (1 + skin) (m) = cell size
+//   float kernelNorm         Wendland C2 (3D): 21 / (16 pi h^3)  (1/m^3)
+//   float rho0               rest density (kg/m^3)
+//   float taitB              Tait stiffness B = c0^2 rho0 / 7 (Pa)
+//   float mu                 dynamic viscosity (Pa s)
+//   float etaSq              regulariser of the viscous term, 0.01 h^2 (m^2)
+//   float psi                repulsion strength Psi (m/s^2)
+//   float repulsionCutoff    D (m): no repulsion beyond this normal distance
+//   float wallSpacing        spacing of boundary particles (m): width of T(y)
+//   float cflAcoustic        C_a in dt <= C_a h / (c0 + |v|)
+//   float cflForce           C_f in dt <= C_f sqrt(h / |a|)
+//   float dtViscous          viscous limit 0.125 h^2 rho0 / mu (s)
+//   float dtMax              upper bound of the time step (s)
+//   float c0                 speed of sound (m/s)
+//   uint  clampNegativePressure
+//   uint  neighbourCapacity  entries per particle in the neighbour list
+//   uint  pad0, pad1
+
+// sph/density.comp: summation density, Tait pressure, neighbour list.
+#define HEMO_DENSITY_BINDING_POSITIONS 0
+#define HEMO_DENSITY_BINDING_VELOCITIES 1
+#define HEMO_DENSITY_BINDING_CELL_START 2
+#define HEMO_DENSITY_BINDING_PARAMS 3
+#define HEMO_DENSITY_BINDING_STATE 4
+#define HEMO_DENSITY_BINDING_NCOUNT 5
+#define HEMO_DENSITY_BINDING_NLIST 6
+#define HEMO_DENSITY_BINDING_STATUS 7
+#define HEMO_DENSITY_BINDING_COUNT 8
+
+// sph/forces.comp: pressure, viscosity, repulsion, gravity; per-particle time-step limit.
+#define HEMO_FORCES_BINDING_POSITIONS 0
+#define HEMO_FORCES_BINDING_VELOCITIES 1
+#define HEMO_FORCES_BINDING_NORMALS 2
+#define HEMO_FORCES_BINDING_PARAMS 3
+#define HEMO_FORCES_BINDING_STATE 4
+#define HEMO_FORCES_BINDING_NCOUNT 5
+#define HEMO_FORCES_BINDING_NLIST 6
+#define HEMO_FORCES_BINDING_ACCEL 7
+#define HEMO_FORCES_BINDING_DT_LIMIT 8
+#define HEMO_FORCES_BINDING_COUNT 9
+
+// sph/integrate.comp: symplectic Euler with the GPU-reduced time step, clock, status.
+#define HEMO_INTEGRATE_BINDING_POSITIONS 0
+#define HEMO_INTEGRATE_BINDING_VELOCITIES 1
+#define HEMO_INTEGRATE_BINDING_ACCEL 2
+#define HEMO_INTEGRATE_BINDING_PARAMS 3
+#define HEMO_INTEGRATE_BINDING_DT 4
+#define HEMO_INTEGRATE_BINDING_CLOCK 5
+#define HEMO_INTEGRATE_BINDING_STATUS 6
+#define HEMO_INTEGRATE_BINDING_LOG 7
+#define HEMO_INTEGRATE_BINDING_COUNT 8
+
+// Clock buffer (std430): float time; float compensation (Kahan); float lastDt; uint steps.
+// Step log: vec2 (time after the step, dt) per step of the current batch.
+
+// Status buffer (uint[8]).
+#define HEMO_STATUS_FIRST_BAD_STEP 0      // first step with a non-finite particle (init ~0u)
+#define HEMO_STATUS_NONFINITE 1           // particle updates that produced NaN/Inf
+#define HEMO_STATUS_NEIGHBOUR_OVERFLOW 2  // particles whose neighbours exceeded the capacity
+#define HEMO_STATUS_MAX_NEIGHBOURS 3      // most neighbours any particle had
+#define HEMO_STATUS_COUNT 8
+
+#endif

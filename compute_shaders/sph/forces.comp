@@ -1,0 +1,102 @@
+#version 450
+// Accelerations of fluid particles from their neighbour list:
+//  pressure   a -= m_j (p_i + p_j) / (2 rho_i rho_j) gradW_ij       (Mueller et al. 2003's
+//             symmetric force divided by rho_i: pairwise forces are equal and opposite)
+//  viscosity  a += m_j 2 mu / (rho_i rho_j) (x_ij . gradW_ij) / (r^2 + eta^2) v_ij
+//             (laminar term of Morris et al. 1997 / Lo & Shao 2002)
+//  boundary   neighbours take part with rho0, their own velocity (no-slip) and the fluid
+//             particle's pressure (mirrored), and repel: F = n N(x) T(y) with
+//             N(x) = Psi (1 - r) / sqrt(r), r = x / 2h, for 0 < x < D (normal distance),
+//             T(y) = 1 - y / dp for tangential distance y < dp; the summed force is divided
+//             by max(sum T, 1), so it stays constant while a particle slides along a wall.
+//  gravity and body force.
+// Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc).
+#extension GL_GOOGLE_include_directive : require
+#include "interface/sph.h"
+#include "common/index.glsl"
+#include "common/kernel.glsl"
+#include "common/sph_params.glsl"
+
+layout(std430, binding = HEMO_FORCES_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+layout(std430, binding = HEMO_FORCES_BINDING_STATE) readonly buffer State { vec4 state[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_ACCEL) writeonly buffer Accel { vec4 accel[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_DT_LIMIT) writeonly buffer DtLimit { float dtLimit[]; };
+layout(push_constant) uniform Push { uint n; } pc;
+
+const float kNoLimit = 3.0e38;
+
+void main() {
+  const uint i = hemo_global_index();
+  if (i >= pc.n) {
+    return;
+  }
+  const vec4 vi = velocities[i];
+  if (uint(vi.w) != HEMO_KIND_FLUID) {
+    accel[i] = vec4(0.0);
+    dtLimit[i] = kNoLimit;
+    return;
+  }
+  const vec3 xi = positions[i].xyz;
+  const vec2 si = state[i].xy;  // rho, p
+  const float h = params.h;
+  const float support2 = params.supportRadius * params.supportRadius;
+  const float twoMu = 2.0 * params.mu;
+
+  vec3 a = vec3(0.0);
+  vec3 repulsion = vec3(0.0);
+  float repulsionWeight = 0.0;
+  const uint count = neighbourCount[i];
+  const uint listBase = i * params.neighbourCapacity;
+  for (uint k = 0u; k < count; ++k) {
+    const uint j = neighbourList[listBase + k];
+    const vec4 pj = positions[j];
+    const vec3 d = xi - pj.xyz;
+    const float r2 = dot(d, d);
+    if (r2 >= support2 || r2 == 0.0) {
+      continue;  // outside the support (list skin), or coincident: no defined direction
+    }
+    const float r = sqrt(r2);
+    const vec3 gradW = d * (hemo_kernel_dwdr(r, h, params.kernelNorm) / r);
+    const vec4 vj = velocities[j];
+    const bool fluidJ = uint(vj.w) == HEMO_KIND_FLUID;
+    float rhoJ = params.rho0;
+    float pJ = si.y;
+    if (fluidJ) {
+      const vec2 sj = state[j].xy;
+      rhoJ = sj.x;
+      pJ = sj.y;
+    }
+    const float invRhoIJ = 1.0 / (si.x * rhoJ);
+    a -= (pj.w * 0.5 * (si.y + pJ) * invRhoIJ) * gradW;
+    a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + params.etaSq)) * (vi.xyz - vj.xyz);
+    if (!fluidJ) {
+      const vec3 nrm = normals[j].xyz;
+      const float x = dot(d, nrm);
+      const float y = length(d - x * nrm);
+      if (x < params.repulsionCutoff && y < params.wallSpacing) {
+        const float w = 1.0 - y / params.wallSpacing;
+        // r = x / 2h, kept >= 1e-3 so a particle at (or behind) the wall plane is pushed out
+        // with a large but finite force.
+        const float q = max(x / (2.0 * h), 1.0e-3);
+        repulsion += nrm * (params.psi * (1.0 - q) / sqrt(q) * w);
+        repulsionWeight += w;
+      }
+    }
+  }
+  a += repulsion / max(repulsionWeight, 1.0);
+  a += params.gravity.xyz;
+  accel[i] = vec4(a, 0.0);
+
+  const float speed = length(vi.xyz);
+  const float accelMag = length(a);
+  float limit = min(params.cflAcoustic * h / (params.c0 + speed), params.dtViscous);
+  if (accelMag > 0.0) {
+    limit = min(limit, params.cflForce * sqrt(h / accelMag));
+  }
+  dtLimit[i] = limit;  // NaN if anything went non-finite: the reduction propagates it
+}

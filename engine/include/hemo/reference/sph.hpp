@@ -1,0 +1,45 @@
+#pragma once
+// CPU double-precision twin of the SPH stages (sph/density.comp, sph/forces.comp,
+// sph/integrate.comp), by brute force over all particle pairs. For tests and validation.
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include <vector>
+
+namespace hemo::reference {
+
+struct SphParticle {
+  glm::dvec3 x{0.0};
+  glm::dvec3 v{0.0};
+  glm::dvec3 normal{0.0};  // boundary particles: unit normal into the fluid
+  double mass = 0.0;
+  int kind = 0;  // 0 fluid, 1 boundary
+};
+
+struct SphModel {
+  glm::dvec3 gravity{0.0};  // gravity + body force (m/s^2)
+  double h = 0.0;
+  double rho0 = 1000.0;
+  double taitB = 0.0;
+  double mu = 0.0;
+  double psi = 0.0;
+  double repulsionCutoff = 0.0;
+  double wallSpacing = 0.0;
+  bool clampNegativePressure = true;
+};
+
+// Wendland C2 in 3D with support 2h.
+double kernelW(double r, double h);
+double kernelDwdr(double r, double h);
+
+// (rho, p) per particle; boundary particles get (rho0, 0).
+std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particles, const SphModel& model);
+
+// Acceleration per particle (zero for boundary particles).
+std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
+                                      const std::vector<glm::dvec2>& densityPressure, const SphModel& model);
+
+// Total linear momentum of the fluid particles.
+glm::dvec3 fluidMomentum(const std::vector<SphParticle>& particles);
+
+}  // namespace hemo::reference

@@ -1,0 +1,126 @@
+#pragma once
+// Weakly compressible SPH on the GPU: one step is
+//   neighbour grid (hash, sort, cell ranges, reorder)
+//   density ... summation density (fluid + boundary), Tait pressure, neighbour list
+//   forces .... pressure, laminar viscosity, boundary repulsion, gravity; dt limit per particle
+//   dt ........ min reduction of the limits (stays on the GPU)
+//   integrate . symplectic Euler with that dt; clock, step log and status on the GPU
+// Sources: Monaghan (1994) for WCSPH and the Tait equation, Mueller et al. (2003) for the
+// symmetric pressure force, Morris et al. (1997) for laminar viscosity, Wendland (1995)
+// for the kernel; docs/physics.md.
+#include "hemo/gpu/primitives.hpp"
+#include "hemo/sim/neighbour_grid.hpp"
+#include "hemo/sim/particles.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <string>
+
+namespace hemo::sim {
+
+enum class ParticleKind : std::uint32_t { Fluid = 0, Boundary = 1 };
+
+// Physical and numerical settings (SI units).
+struct SphSettings {
+  float spacing = 0.0f;             // initial particle spacing dp (m)
+  float smoothingRatio = 1.3f;      // h / dp
+  float restDensity = 1000.0f;      // rho0 (kg/m^3)
+  float viscosity = 1.0e-3f;        // dynamic viscosity mu (Pa s)
+  float soundSpeed = 0.0f;          // c0 (m/s)
+  glm::vec3 gravity{0.0f, 0.0f, -9.81f};  // m/s^2
+  glm::vec3 bodyForce{0.0f};        // extra uniform acceleration (m/s^2)
+  float repulsionScale = 0.01f;     // Psi = scale * c0^2 / (2h)
+  float repulsionCutoffRatio = 1.0f;  // D = ratio * dp
+  float cflAcoustic = 0.3f;
+  float cflForce = 0.25f;
+  float maxTimeStep = 1.0e-3f;      // s
+  bool clampNegativePressure = true;
+  std::uint32_t neighbourCapacity = 128;
+  float listSkin = 0.1f;            // neighbour-list radius = 2h (1 + skin)
+
+  float h() const { return smoothingRatio * spacing; }
+  float supportRadius() const { return 2.0f * h(); }
+  float listRadius() const { return supportRadius() * (1.0f + listSkin); }
+  float particleMass() const { return restDensity * spacing * spacing * spacing; }
+  // Throws std::invalid_argument naming the offending setting.
+  void validate() const;
+};
+
+// Mirror of the GLSL SphParams block (interface/sph.h).
+struct SphParams {
+  float gravity[4];
+  float h, supportRadius, listRadius, kernelNorm;
+  float rho0, taitB, mu, etaSq;
+  float psi, repulsionCutoff, wallSpacing, cflAcoustic;
+  float cflForce, dtViscous, dtMax, c0;
+  std::uint32_t clampNegativePressure, neighbourCapacity, pad0, pad1;
+};
+static_assert(sizeof(SphParams) == 96);
+
+SphParams makeParams(const SphSettings& s);
+
+struct SphStatus {
+  std::uint32_t firstBadStep = 0xffffffffu;  // none
+  std::uint32_t nonFinite = 0;
+  std::uint32_t neighbourOverflow = 0;
+  std::uint32_t maxNeighbours = 0;
+};
+
+struct SphClock {
+  double time = 0.0;  // s
+  float lastDt = 0.0f;
+  std::uint32_t steps = 0;
+};
+
+class SphSolver {
+ public:
+  // `domain` is the region the grid covers (its cell size is replaced by the list radius);
+  // particles outside it still interact correctly but are counted as outside.
+  SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 domainMin, glm::vec3 domainMax,
+            const SphSettings& settings, std::uint32_t maxStepsPerBatch = 256);
+
+  // Records one whole step. `step` is the global step index, `logIndex` its slot in the step
+  // log of the current batch (< maxStepsPerBatch).
+  void recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex,
+                  gpu::TimestampQueries* timestamps = nullptr);
+  // Stages on their own, for tests: neighbours must have been built first.
+  void recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
+  void recordDensity(gpu::CommandRecorder& rec);
+  void recordForces(gpu::CommandRecorder& rec);
+  void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex);
+
+  // Resets clock, status and counters (set-up; records transfer commands).
+  void recordReset(gpu::CommandRecorder& rec);
+
+  const SphSettings& settings() const { return settings_; }
+  const SphParams& params() const { return params_; }
+  const NeighbourGrid& grid() const { return grid_; }
+  const gpu::Buffer& state() const { return state_; }     // vec4 (rho, p, 0, 0) per slot
+  const gpu::Buffer& accel() const { return accel_; }     // vec4 (a, 0) per slot
+  const gpu::Buffer& dtLimits() const { return dtLimit_; }
+  const gpu::Buffer& neighbourCounts() const { return ncount_; }
+  const gpu::Buffer& neighbourList() const { return nlist_; }
+  const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
+
+  SphStatus readStatus() const;
+  SphClock readClock() const;
+
+ private:
+  gpu::Context* context_;
+  ParticleStore* particles_;
+  SphSettings settings_;
+  SphParams params_;
+  std::uint32_t maxStepsPerBatch_;
+  NeighbourGrid grid_;
+  gpu::Buffer paramsBuffer_;
+  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_;
+  gpu::Buffer clock_, status_, log_;
+  gpu::MinMaxReduce dtReduce_;
+  const gpu::ComputePipeline* density_;
+  const gpu::ComputePipeline* forces_;
+  const gpu::ComputePipeline* integrate_;
+  std::array<gpu::DescriptorSet, 2> densitySets_, forcesSets_, integrateSets_;  // by parity
+};
+
+}  // namespace hemo::sim

@@ -1,0 +1,91 @@
+#include "hemo/reference/sph.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+namespace hemo::reference {
+
+double kernelW(double r, double h) {
+  const double q = r / h;
+  if (q >= 2.0) return 0.0;
+  const double t = 1.0 - 0.5 * q;
+  return 21.0 / (16.0 * std::numbers::pi * h * h * h) * t * t * t * t * (2.0 * q + 1.0);
+}
+
+double kernelDwdr(double r, double h) {
+  const double q = r / h;
+  if (q >= 2.0) return 0.0;
+  const double t = 1.0 - 0.5 * q;
+  return 21.0 / (16.0 * std::numbers::pi * h * h * h) * (-5.0 * q * t * t * t) / h;
+}
+
+std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particles, const SphModel& m) {
+  std::vector<glm::dvec2> out(particles.size());
+  const double support = 2.0 * m.h;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (particles[i].kind != 0) {
+      out[i] = {m.rho0, 0.0};
+      continue;
+    }
+    double rho = 0.0;
+    for (const auto& pj : particles) {
+      const double r = glm::length(particles[i].x - pj.x);
+      if (r < support) rho += pj.mass * kernelW(r, m.h);
+    }
+    double p = m.taitB * (std::pow(rho / m.rho0, 7.0) - 1.0);
+    if (m.clampNegativePressure) p = std::max(p, 0.0);
+    out[i] = {rho, p};
+  }
+  return out;
+}
+
+std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp,
+                                      const SphModel& m) {
+  std::vector<glm::dvec3> out(particles.size(), glm::dvec3(0.0));
+  const double support = 2.0 * m.h;
+  const double etaSq = 0.01 * m.h * m.h;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const SphParticle& pi = particles[i];
+    if (pi.kind != 0) continue;
+    glm::dvec3 a(0.0), repulsion(0.0);
+    double weight = 0.0;
+    for (std::size_t j = 0; j < particles.size(); ++j) {
+      if (j == i) continue;
+      const SphParticle& pj = particles[j];
+      const glm::dvec3 d = pi.x - pj.x;
+      const double r = glm::length(d);
+      if (r >= support || r == 0.0) continue;
+      const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
+      const bool fluidJ = pj.kind == 0;
+      const double rhoJ = fluidJ ? rp[j].x : m.rho0;
+      const double pJ = fluidJ ? rp[j].y : rp[i].y;
+      a -= pj.mass * 0.5 * (rp[i].y + pJ) / (rp[i].x * rhoJ) * gradW;
+      a += pj.mass * 2.0 * m.mu / (rp[i].x * rhoJ) * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - pj.v);
+      if (!fluidJ) {
+        const double x = glm::dot(d, pj.normal);
+        const double y = glm::length(d - x * pj.normal);
+        if (x < m.repulsionCutoff && y < m.wallSpacing) {
+          const double w = 1.0 - y / m.wallSpacing;
+          const double q = std::max(x / (2.0 * m.h), 1.0e-3);
+          repulsion += pj.normal * (m.psi * (1.0 - q) / std::sqrt(q) * w);
+          weight += w;
+        }
+      }
+    }
+    out[i] = a + repulsion / std::max(weight, 1.0) + m.gravity;
+  }
+  return out;
+}
+
+glm::dvec3 fluidMomentum(const std::vector<SphParticle>& particles) {
+  glm::dvec3 p(0.0);
+  for (const auto& q : particles) {
+    if (q.kind == 0) p += q.mass * q.v;
+  }
+  return p;
+}
+
+}  // namespace hemo::reference

@@ -1,0 +1,206 @@
+#include "hemo/sim/sph.hpp"
+
+#include "hemo/gpu/pipeline_cache.hpp"
+#include "interface/sph.h"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+
+namespace hemo::sim {
+
+namespace {
+constexpr std::uint32_t kWorkgroup = 256;
+
+struct CountPush {
+  std::uint32_t n;
+};
+struct IntegratePush {
+  std::uint32_t n, step, logIndex, pad;
+};
+static_assert(sizeof(IntegratePush) == 16);
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+bool finitePositive(float x) { return std::isfinite(x) && x > 0.0f; }
+}  // namespace
+
+void SphSettings::validate() const {
+  require(finitePositive(spacing), "particle spacing must be a positive length in m");
+  require(std::isfinite(smoothingRatio) && smoothingRatio >= 0.5f && smoothingRatio <= 3.0f,
+          "smoothing ratio h/dp must be between 0.5 and 3");
+  require(finitePositive(restDensity), "rest density must be positive (kg/m^3)");
+  require(std::isfinite(viscosity) && viscosity >= 0.0f, "viscosity must be >= 0 (Pa s)");
+  require(finitePositive(soundSpeed), "speed of sound must be positive (m/s)");
+  for (int a = 0; a < 3; ++a) {
+    require(std::isfinite(gravity[a]) && std::isfinite(bodyForce[a]), "gravity and body force must be finite");
+  }
+  require(std::isfinite(repulsionScale) && repulsionScale >= 0.0f, "repulsion scale must be >= 0");
+  require(std::isfinite(repulsionCutoffRatio) && repulsionCutoffRatio > 0.0f && repulsionCutoffRatio <= 2.0f * smoothingRatio,
+          "repulsion cutoff D must be positive and at most the kernel support");
+  require(finitePositive(cflAcoustic) && cflAcoustic <= 1.0f, "acoustic CFL number must be in (0, 1]");
+  require(finitePositive(cflForce) && cflForce <= 1.0f, "force CFL number must be in (0, 1]");
+  require(finitePositive(maxTimeStep), "maximum time step must be positive (s)");
+  require(neighbourCapacity >= 8 && neighbourCapacity <= 1024, "neighbour capacity must be in [8, 1024]");
+  require(std::isfinite(listSkin) && listSkin >= 0.0f && listSkin <= 1.0f, "neighbour-list skin must be in [0, 1]");
+}
+
+SphParams makeParams(const SphSettings& s) {
+  s.validate();
+  SphParams p{};
+  const glm::vec3 g = s.gravity + s.bodyForce;
+  p.gravity[0] = g.x;
+  p.gravity[1] = g.y;
+  p.gravity[2] = g.z;
+  p.gravity[3] = 0.0f;
+  const double h = s.h();
+  p.h = float(h);
+  p.supportRadius = s.supportRadius();
+  p.listRadius = s.listRadius();
+  p.kernelNorm = float(21.0 / (16.0 * std::numbers::pi * h * h * h));
+  p.rho0 = s.restDensity;
+  p.taitB = float(double(s.soundSpeed) * s.soundSpeed * s.restDensity / 7.0);
+  p.mu = s.viscosity;
+  p.etaSq = float(0.01 * h * h);
+  p.psi = float(s.repulsionScale * double(s.soundSpeed) * s.soundSpeed / (2.0 * h));
+  p.repulsionCutoff = s.repulsionCutoffRatio * s.spacing;
+  p.wallSpacing = s.spacing;
+  p.cflAcoustic = s.cflAcoustic;
+  p.cflForce = s.cflForce;
+  p.dtViscous = s.viscosity > 0.0f ? float(0.125 * h * h * s.restDensity / s.viscosity) : 3.0e38f;
+  p.dtMax = s.maxTimeStep;
+  p.c0 = s.soundSpeed;
+  p.clampNegativePressure = s.clampNegativePressure ? 1u : 0u;
+  p.neighbourCapacity = s.neighbourCapacity;
+  return p;
+}
+
+namespace {
+GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
+  s.validate();
+  return GridSpec::covering(lo, hi, s.listRadius());
+}
+}  // namespace
+
+SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 domainMin, glm::vec3 domainMax,
+                     const SphSettings& settings, std::uint32_t maxStepsPerBatch)
+    : context_(&context),
+      particles_(&particles),
+      settings_(settings),
+      params_(makeParams(settings)),
+      maxStepsPerBatch_(std::max(maxStepsPerBatch, 1u)),
+      grid_(context, gridFor(domainMin, domainMax, settings), particles),
+      paramsBuffer_(context, sizeof(SphParams), gpu::MemoryUse::Device, "sph params"),
+      state_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "sph state"),
+      accel_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "sph accel"),
+      dtLimit_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "sph dt limits"),
+      ncount_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "neighbour counts"),
+      nlist_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * settings.neighbourCapacity * 4,
+             gpu::MemoryUse::Device, "neighbour list"),
+      clock_(context, 16, gpu::MemoryUse::Device, "sph clock"),
+      status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
+      log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
+      dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)) {
+  paramsBuffer_.upload(std::vector<SphParams>{params_});
+  auto& cache = context.pipelines();
+  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
+  forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
+  for (int p = 0; p < 2; ++p) {
+    const ParticleArrays& a = particles.half(p);
+    densitySets_[p] = density_->makeSet({{HEMO_DENSITY_BINDING_POSITIONS, &a.positions},
+                                         {HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities},
+                                         {HEMO_DENSITY_BINDING_CELL_START, &grid_.cellStart()},
+                                         {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
+                                         {HEMO_DENSITY_BINDING_STATE, &state_},
+                                         {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
+                                         {HEMO_DENSITY_BINDING_NLIST, &nlist_},
+                                         {HEMO_DENSITY_BINDING_STATUS, &status_}});
+    forcesSets_[p] = forces_->makeSet({{HEMO_FORCES_BINDING_POSITIONS, &a.positions},
+                                       {HEMO_FORCES_BINDING_VELOCITIES, &a.velocities},
+                                       {HEMO_FORCES_BINDING_NORMALS, &a.normals},
+                                       {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
+                                       {HEMO_FORCES_BINDING_STATE, &state_},
+                                       {HEMO_FORCES_BINDING_NCOUNT, &ncount_},
+                                       {HEMO_FORCES_BINDING_NLIST, &nlist_},
+                                       {HEMO_FORCES_BINDING_ACCEL, &accel_},
+                                       {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_}});
+    integrateSets_[p] = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
+                                             {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
+                                             {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},
+                                             {HEMO_INTEGRATE_BINDING_PARAMS, &paramsBuffer_},
+                                             {HEMO_INTEGRATE_BINDING_DT, &dtReduce_.result()},
+                                             {HEMO_INTEGRATE_BINDING_CLOCK, &clock_},
+                                             {HEMO_INTEGRATE_BINDING_STATUS, &status_},
+                                             {HEMO_INTEGRATE_BINDING_LOG, &log_}});
+  }
+}
+
+void SphSolver::recordReset(gpu::CommandRecorder& rec) {
+  rec.fill(clock_, 0);
+  rec.fill(status_, 0);
+  rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
+  grid_.resetCounters(rec);
+  rec.transferToCompute();
+}
+
+void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
+  grid_.record(rec, particles_->count(), timestamps);
+}
+
+void SphSolver::recordDensity(gpu::CommandRecorder& rec) {
+  const std::uint32_t n = particles_->count();
+  rec.dispatch(*density_, densitySets_[particles_->parity()], grid_.push(n), density_->groupsFor(n));
+  rec.computeToCompute();
+}
+
+void SphSolver::recordForces(gpu::CommandRecorder& rec) {
+  const std::uint32_t n = particles_->count();
+  rec.dispatch(*forces_, forcesSets_[particles_->parity()], CountPush{n}, forces_->groupsFor(n));
+  rec.computeToCompute();
+}
+
+void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex) {
+  if (logIndex >= maxStepsPerBatch_) {
+    throw std::out_of_range("step log index " + std::to_string(logIndex) + " exceeds the batch capacity " +
+                            std::to_string(maxStepsPerBatch_));
+  }
+  const std::uint32_t n = particles_->count();
+  dtReduce_.record(rec, n);
+  // At least one workgroup: invocation 0 advances the clock even with no particles.
+  rec.dispatch(*integrate_, integrateSets_[particles_->parity()], IntegratePush{n, step, logIndex, 0},
+               integrate_->groupsFor(std::max(n, 1u)));
+  rec.computeToCompute();
+}
+
+void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex,
+                           gpu::TimestampQueries* timestamps) {
+  auto mark = [&](const char* stage) {
+    if (timestamps) timestamps->mark(rec, stage);
+  };
+  recordNeighbours(rec, timestamps);
+  recordDensity(rec);
+  mark("density");
+  recordForces(rec);
+  mark("forces");
+  recordIntegrate(rec, step, logIndex);
+  mark("integrate");
+}
+
+SphStatus SphSolver::readStatus() const {
+  const auto s = status_.readback<std::uint32_t>(HEMO_STATUS_COUNT);
+  return SphStatus{s[HEMO_STATUS_FIRST_BAD_STEP], s[HEMO_STATUS_NONFINITE], s[HEMO_STATUS_NEIGHBOUR_OVERFLOW],
+                   s[HEMO_STATUS_MAX_NEIGHBOURS]};
+}
+
+SphClock SphSolver::readClock() const {
+  struct Raw {
+    float time, compensation, lastDt;
+    std::uint32_t steps;
+  };
+  const Raw r = clock_.readback<Raw>(1)[0];
+  return SphClock{double(r.time) - double(r.compensation), r.lastDt, r.steps};
+}
+
+}  // namespace hemo::sim
