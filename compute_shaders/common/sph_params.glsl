@@ -19,6 +19,6 @@ struct SphParams {
   float c0;
   uint clampNegativePressure;
   uint neighbourCapacity;
-  uint pad0;
-  uint pad1;
+  float dampingRate;
+  float dampingUntil;
 };

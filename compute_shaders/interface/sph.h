@@ -26,7 +26,8 @@
 //   float c0                 speed of sound (m/s)
 //   uint  clampNegativePressure
 //   uint  neighbourCapacity  entries per particle in the neighbour list
-//   uint  pad0, pad1
+//   float dampingRate        settling damping xi (1/s): v <- v / (1 + xi dt) while t < dampingUntil
+//   float dampingUntil       end of the settling phase (s); 0: no damping
 
 // sph/density.comp: summation density, Tait pressure, neighbour list.
 #define HEMO_DENSITY_BINDING_POSITIONS 0
@@ -38,6 +39,16 @@
 #define HEMO_DENSITY_BINDING_NLIST 6
 #define HEMO_DENSITY_BINDING_STATUS 7
 #define HEMO_DENSITY_BINDING_COUNT 8
+
+// sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
+// their fluid neighbours (Adami, Hu & Adams 2012).
+#define HEMO_BPRESSURE_BINDING_POSITIONS 0
+#define HEMO_BPRESSURE_BINDING_VELOCITIES 1
+#define HEMO_BPRESSURE_BINDING_PARAMS 2
+#define HEMO_BPRESSURE_BINDING_STATE 3
+#define HEMO_BPRESSURE_BINDING_NCOUNT 4
+#define HEMO_BPRESSURE_BINDING_NLIST 5
+#define HEMO_BPRESSURE_BINDING_COUNT 6
 
 // sph/forces.comp: pressure, viscosity, repulsion, gravity; per-particle time-step limit.
 #define HEMO_FORCES_BINDING_POSITIONS 0
@@ -62,7 +73,8 @@
 #define HEMO_INTEGRATE_BINDING_LOG 7
 #define HEMO_INTEGRATE_BINDING_COUNT 8
 
-// Clock buffer (std430): float time; float compensation (Kahan); float lastDt; uint steps.
+// Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
+// uint steps}, read and written alternately (see sph/integrate.comp).
 // Step log: vec2 (time after the step, dt) per step of the current batch.
 
 // Status buffer (uint[8]).

@@ -5,7 +5,8 @@
 // so the force pass and later stages of a step can reuse it).
 //   rho_i = sum_j m_j W(|x_i - x_j|, h)   (j includes i)
 //   p_i   = B ((rho_i / rho0)^7 - 1),  B = c0^2 rho0 / 7,  optionally clamped at 0
-// Non-fluid particles get rho0, p = 0 and an empty list.
+// Boundary particles get a list of their fluid neighbours only (for boundary_pressure.comp,
+// which then sets their state).
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -28,11 +29,7 @@ void main() {
   if (i >= pc.dimsN.w) {
     return;
   }
-  if (uint(velocities[i].w) != HEMO_KIND_FLUID) {
-    state[i] = vec4(params.rho0, 0.0, 0.0, 0.0);
-    neighbourCount[i] = 0u;
-    return;
-  }
+  const bool fluidI = uint(velocities[i].w) == HEMO_KIND_FLUID;
   const vec4 pi = positions[i];
   const float h = params.h;
   const float support2 = params.supportRadius * params.supportRadius;
@@ -55,7 +52,7 @@ void main() {
         const vec4 pj = positions[j];
         const vec3 d = pi.xyz - pj.xyz;
         const float r2 = dot(d, d);
-        if (j != i && r2 < list2) {
+        if (j != i && r2 < list2 && (fluidI || uint(velocities[j].w) == HEMO_KIND_FLUID)) {
           if (count < capacity) {
             neighbourList[listBase + count] = j;
           }
@@ -72,6 +69,10 @@ void main() {
     atomicAdd(status[HEMO_STATUS_NEIGHBOUR_OVERFLOW], 1u);
   }
   atomicMax(status[HEMO_STATUS_MAX_NEIGHBOURS], count);
+  if (!fluidI) {
+    state[i] = vec4(params.rho0, 0.0, 0.0, 0.0);  // replaced by boundary_pressure.comp
+    return;
+  }
 
   const float ratio = rho / params.rho0;
   const float r2 = ratio * ratio;

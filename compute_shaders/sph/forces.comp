@@ -1,11 +1,13 @@
 #version 450
 // Accelerations of fluid particles from their neighbour list:
-//  pressure   a -= m_j (p_i + p_j) / (2 rho_i rho_j) gradW_ij       (Mueller et al. 2003's
-//             symmetric force divided by rho_i: pairwise forces are equal and opposite)
+//  pressure   a -= m_j (p_i / rho_i^2 + p_j / rho_j^2) gradW_ij     (Monaghan 1992; pairwise
+//             forces are equal and opposite. Mueller et al. 2003's (p_i + p_j) / (2 rho_j) is
+//             the same symmetrisation but approximates only half of grad p for a smooth field,
+//             see docs/physics.md)
 //  viscosity  a += m_j 2 mu / (rho_i rho_j) (x_ij . gradW_ij) / (r^2 + eta^2) v_ij
 //             (laminar term of Morris et al. 1997 / Lo & Shao 2002)
-//  boundary   neighbours take part with rho0, their own velocity (no-slip) and the fluid
-//             particle's pressure (mirrored), and repel: F = n N(x) T(y) with
+//  boundary   neighbours take part with the pressure and density extrapolated to them from
+//             the fluid (boundary_pressure.comp), their own velocity (no-slip), and repel: F = n N(x) T(y) with
 //             N(x) = Psi (1 - r) / sqrt(r), r = x / 2h, for 0 < x < D (normal distance),
 //             T(y) = 1 - y / dp for tangential distance y < dp; the summed force is divided
 //             by max(sum T, 1), so it stays constant while a particle slides along a wall.
@@ -46,6 +48,7 @@ void main() {
   const float h = params.h;
   const float support2 = params.supportRadius * params.supportRadius;
   const float twoMu = 2.0 * params.mu;
+  const float pOverRho2I = si.y / (si.x * si.x);
 
   vec3 a = vec3(0.0);
   vec3 repulsion = vec3(0.0);
@@ -64,15 +67,11 @@ void main() {
     const vec3 gradW = d * (hemo_kernel_dwdr(r, h, params.kernelNorm) / r);
     const vec4 vj = velocities[j];
     const bool fluidJ = uint(vj.w) == HEMO_KIND_FLUID;
-    float rhoJ = params.rho0;
-    float pJ = si.y;
-    if (fluidJ) {
-      const vec2 sj = state[j].xy;
-      rhoJ = sj.x;
-      pJ = sj.y;
-    }
+    const vec2 sj = state[j].xy;
+    const float rhoJ = sj.x;
+    const float pOverRho2J = sj.y / (sj.x * sj.x);
     const float invRhoIJ = 1.0 / (si.x * rhoJ);
-    a -= (pj.w * 0.5 * (si.y + pJ) * invRhoIJ) * gradW;
+    a -= (pj.w * (pOverRho2I + pOverRho2J)) * gradW;
     a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + params.etaSq)) * (vi.xyz - vj.xyz);
     if (!fluidJ) {
       const vec3 nrm = normals[j].xyz;

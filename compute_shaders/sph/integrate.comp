@@ -1,6 +1,8 @@
 #version 450
 // Symplectic Euler: v += a dt, x += v dt for fluid particles, with dt = min(reduced
-// per-particle limits, dtMax) read from the GPU (the host never sees dt inside a batch).
+// per-particle limits, dtMax, endTime - t) read from the GPU (the host never sees dt inside a
+// batch). Once the clock reaches endTime, steps change nothing (dt = 0, not counted).
+// While t < dampingUntil the velocity is damped (a settling phase for validation scenes).
 // Invocation 0 advances the clock (Kahan-compensated float sum) and logs (t, dt).
 // A particle that becomes non-finite records the step in the status buffer.
 #extension GL_GOOGLE_include_directive : require
@@ -13,22 +15,39 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_VELOCITIES) buffer Velocities { 
 layout(std430, binding = HEMO_INTEGRATE_BINDING_ACCEL) readonly buffer Accel { vec4 accel[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_PARAMS) readonly buffer Params { SphParams params; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_DT) readonly buffer Dt { vec2 dtMinMax; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_CLOCK) buffer Clock { float time; float compensation; float lastDt; uint steps; } clock;
+// Two clock records: this step reads clocks[in] and invocation 0 writes clocks[1 - in], so no
+// invocation can see a half-advanced clock (workgroups run in any order).
+struct ClockRecord {
+  float time;
+  float compensation;
+  float lastDt;
+  uint steps;
+};
+layout(std430, binding = HEMO_INTEGRATE_BINDING_CLOCK) buffer Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STATUS) buffer Status { uint status[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_LOG) writeonly buffer Log { vec2 stepLog[]; };
-layout(push_constant) uniform Push { uint n; uint step; uint logIndex; uint pad; } pc;
+layout(push_constant) uniform Push { uint n; uint step; uint logIndex; float endTime; uint clockIn; } pc;
 
 void main() {
   const uint i = hemo_global_index();
-  const float dt = min(dtMinMax.x, params.dtMax);
+  const ClockRecord clock = clocks[pc.clockIn];
+  const float remaining = pc.endTime - (clock.time - clock.compensation);
+  const float dt = min(min(dtMinMax.x, params.dtMax), max(remaining, 0.0));
+  const bool running = dt > 0.0 || isnan(dt);  // false once the end time is reached
   if (i == 0u) {
-    const float y = dt - clock.compensation;
-    const float t = clock.time + y;
-    clock.compensation = (t - clock.time) - y;
-    clock.time = t;
-    clock.lastDt = dt;
-    clock.steps += 1u;
-    stepLog[pc.logIndex] = vec2(t, dt);
+    ClockRecord next = clock;
+    if (running) {
+      const float y = dt - clock.compensation;
+      next.time = clock.time + y;
+      next.compensation = (next.time - clock.time) - y;
+      next.lastDt = dt;
+      next.steps = clock.steps + 1u;
+    }
+    clocks[1u - pc.clockIn] = next;
+    stepLog[pc.logIndex] = vec2(next.time, running ? dt : 0.0);
+  }
+  if (!running) {
+    return;
   }
   if (i >= pc.n) {
     return;
@@ -39,6 +58,9 @@ void main() {
   }
   vec4 x = positions[i];
   v.xyz += accel[i].xyz * dt;
+  if (clock.time < params.dampingUntil) {
+    v.xyz /= 1.0 + params.dampingRate * dt;  // settling phase only (implicit, so never unstable)
+  }
   x.xyz += v.xyz * dt;
   if (any(isnan(x.xyz)) || any(isinf(x.xyz)) || any(isnan(v.xyz)) || any(isinf(v.xyz))) {
     atomicMin(status[HEMO_STATUS_FIRST_BAD_STEP], pc.step);

@@ -26,10 +26,7 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
   std::vector<glm::dvec2> out(particles.size());
   const double support = 2.0 * m.h;
   for (std::size_t i = 0; i < particles.size(); ++i) {
-    if (particles[i].kind != 0) {
-      out[i] = {m.rho0, 0.0};
-      continue;
-    }
+    if (particles[i].kind != 0) continue;
     double rho = 0.0;
     for (const auto& pj : particles) {
       const double r = glm::length(particles[i].x - pj.x);
@@ -38,6 +35,29 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
     double p = m.taitB * (std::pow(rho / m.rho0, 7.0) - 1.0);
     if (m.clampNegativePressure) p = std::max(p, 0.0);
     out[i] = {rho, p};
+  }
+  // Boundary particles: pressure extrapolated from the fluid (Adami et al. 2012).
+  for (std::size_t b = 0; b < particles.size(); ++b) {
+    if (particles[b].kind == 0) continue;
+    double sumW = 0.0, sumP = 0.0;
+    glm::dvec3 sumRhoR(0.0);
+    for (std::size_t f = 0; f < particles.size(); ++f) {
+      if (particles[f].kind != 0) continue;
+      const glm::dvec3 d = particles[b].x - particles[f].x;
+      const double r = glm::length(d);
+      if (r >= support) continue;
+      const double w = kernelW(r, m.h);
+      sumW += w;
+      sumP += out[f].y * w;
+      sumRhoR += out[f].x * d * w;
+    }
+    if (sumW <= 0.0) {
+      out[b] = {m.rho0, 0.0};
+      continue;
+    }
+    double p = (sumP + glm::dot(m.gravity, sumRhoR)) / sumW;
+    if (m.clampNegativePressure) p = std::max(p, 0.0);
+    out[b] = {m.rho0 * std::pow(std::max(p / m.taitB + 1.0, 1e-6), 1.0 / 7.0), p};
   }
   return out;
 }
@@ -60,9 +80,10 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
       if (r >= support || r == 0.0) continue;
       const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
       const bool fluidJ = pj.kind == 0;
-      const double rhoJ = fluidJ ? rp[j].x : m.rho0;
-      const double pJ = fluidJ ? rp[j].y : rp[i].y;
-      a -= pj.mass * 0.5 * (rp[i].y + pJ) / (rp[i].x * rhoJ) * gradW;
+      const double rhoJ = rp[j].x;
+      const double pOverRho2I = rp[i].y / (rp[i].x * rp[i].x);
+      const double pOverRho2J = rp[j].y / (rp[j].x * rp[j].x);
+      a -= pj.mass * (pOverRho2I + pOverRho2J) * gradW;
       a += pj.mass * 2.0 * m.mu / (rp[i].x * rhoJ) * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - pj.v);
       if (!fluidJ) {
         const double x = glm::dot(d, pj.normal);

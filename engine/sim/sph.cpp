@@ -1,6 +1,7 @@
 #include "hemo/sim/sph.hpp"
 
 #include "hemo/gpu/pipeline_cache.hpp"
+#include "hemo/reference/sph.hpp"
 #include "interface/sph.h"
 
 #include <cmath>
@@ -16,9 +17,11 @@ struct CountPush {
   std::uint32_t n;
 };
 struct IntegratePush {
-  std::uint32_t n, step, logIndex, pad;
+  std::uint32_t n, step, logIndex;
+  float endTime;
+  std::uint32_t clockIn;
 };
-static_assert(sizeof(IntegratePush) == 16);
+static_assert(sizeof(IntegratePush) == 20);
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
@@ -44,6 +47,20 @@ void SphSettings::validate() const {
   require(finitePositive(maxTimeStep), "maximum time step must be positive (s)");
   require(neighbourCapacity >= 8 && neighbourCapacity <= 1024, "neighbour capacity must be in [8, 1024]");
   require(std::isfinite(listSkin) && listSkin >= 0.0f && listSkin <= 1.0f, "neighbour-list skin must be in [0, 1]");
+  require(std::isfinite(dampingRate) && dampingRate >= 0.0f, "settling damping rate must be >= 0 (1/s)");
+  require(std::isfinite(dampingUntil) && dampingUntil >= 0.0f, "settling time must be >= 0 (s)");
+}
+
+float SphSettings::particleMass() const {
+  const double dp = spacing, hh = h();
+  const int reach = int(std::ceil(2.0 * hh / dp)) + 1;
+  double sum = 0.0;
+  for (int a = -reach; a <= reach; ++a)
+    for (int b = -reach; b <= reach; ++b)
+      for (int c = -reach; c <= reach; ++c) {
+        sum += reference::kernelW(dp * std::sqrt(double(a * a + b * b + c * c)), hh);
+      }
+  return float(restDensity / sum);
 }
 
 SphParams makeParams(const SphSettings& s) {
@@ -73,6 +90,8 @@ SphParams makeParams(const SphSettings& s) {
   p.c0 = s.soundSpeed;
   p.clampNegativePressure = s.clampNegativePressure ? 1u : 0u;
   p.neighbourCapacity = s.neighbourCapacity;
+  p.dampingRate = s.dampingRate;
+  p.dampingUntil = s.dampingUntil;
   return p;
 }
 
@@ -98,13 +117,14 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       ncount_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "neighbour counts"),
       nlist_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * settings.neighbourCapacity * 4,
              gpu::MemoryUse::Device, "neighbour list"),
-      clock_(context, 16, gpu::MemoryUse::Device, "sph clock"),
+      clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)) {
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   auto& cache = context.pipelines();
   density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
+  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
   for (int p = 0; p < 2; ++p) {
@@ -117,6 +137,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                          {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
                                          {HEMO_DENSITY_BINDING_NLIST, &nlist_},
                                          {HEMO_DENSITY_BINDING_STATUS, &status_}});
+    boundarySets_[p] = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
+                                                   {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
+                                                   {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
+                                                   {HEMO_BPRESSURE_BINDING_STATE, &state_},
+                                                   {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
+                                                   {HEMO_BPRESSURE_BINDING_NLIST, &nlist_}});
     forcesSets_[p] = forces_->makeSet({{HEMO_FORCES_BINDING_POSITIONS, &a.positions},
                                        {HEMO_FORCES_BINDING_VELOCITIES, &a.velocities},
                                        {HEMO_FORCES_BINDING_NORMALS, &a.normals},
@@ -139,6 +165,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
 
 void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rec.fill(clock_, 0);
+  clockParity_ = 0;
   rec.fill(status_, 0);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
   grid_.resetCounters(rec);
@@ -153,6 +180,8 @@ void SphSolver::recordDensity(gpu::CommandRecorder& rec) {
   const std::uint32_t n = particles_->count();
   rec.dispatch(*density_, densitySets_[particles_->parity()], grid_.push(n), density_->groupsFor(n));
   rec.computeToCompute();
+  rec.dispatch(*boundaryPressure_, boundarySets_[particles_->parity()], CountPush{n}, boundaryPressure_->groupsFor(n));
+  rec.computeToCompute();
 }
 
 void SphSolver::recordForces(gpu::CommandRecorder& rec) {
@@ -161,7 +190,7 @@ void SphSolver::recordForces(gpu::CommandRecorder& rec) {
   rec.computeToCompute();
 }
 
-void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex) {
+void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime) {
   if (logIndex >= maxStepsPerBatch_) {
     throw std::out_of_range("step log index " + std::to_string(logIndex) + " exceeds the batch capacity " +
                             std::to_string(maxStepsPerBatch_));
@@ -169,12 +198,13 @@ void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, s
   const std::uint32_t n = particles_->count();
   dtReduce_.record(rec, n);
   // At least one workgroup: invocation 0 advances the clock even with no particles.
-  rec.dispatch(*integrate_, integrateSets_[particles_->parity()], IntegratePush{n, step, logIndex, 0},
-               integrate_->groupsFor(std::max(n, 1u)));
+  rec.dispatch(*integrate_, integrateSets_[particles_->parity()],
+               IntegratePush{n, step, logIndex, endTime, clockParity_}, integrate_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
+  clockParity_ ^= 1u;
 }
 
-void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex,
+void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
                            gpu::TimestampQueries* timestamps) {
   auto mark = [&](const char* stage) {
     if (timestamps) timestamps->mark(rec, stage);
@@ -184,7 +214,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   mark("density");
   recordForces(rec);
   mark("forces");
-  recordIntegrate(rec, step, logIndex);
+  recordIntegrate(rec, step, logIndex, endTime);
   mark("integrate");
 }
 
@@ -199,7 +229,7 @@ SphClock SphSolver::readClock() const {
     float time, compensation, lastDt;
     std::uint32_t steps;
   };
-  const Raw r = clock_.readback<Raw>(1)[0];
+  const Raw r = clock_.readback<Raw>(2)[clockParity_];
   return SphClock{double(r.time) - double(r.compensation), r.lastDt, r.steps};
 }
 

@@ -109,11 +109,14 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
     double accelScale = 0.0;
     for (const auto& a : acc) accelScale = std::max(accelScale, glm::length(a));
     ASSERT_GT(accelScale, 10.0);
-    std::size_t fluid = 0, positive = 0, negative = 0;
+    std::size_t fluid = 0, positive = 0, negative = 0, boundaryWithPressure = 0;
     for (std::uint32_t slot = 0; slot < n; ++slot) {
       const std::uint32_t i = slotIds[slot];
       if (c.ref[i].kind != 0) {
-        EXPECT_EQ(state[slot].x, s.restDensity);
+        // Extrapolated boundary pressure (Adami et al. 2012) and its Tait density.
+        EXPECT_NEAR(state[slot].y, rp[i].y, 7.0 * model.taitB * 4e-6 + 1e-5 * std::abs(rp[i].y)) << "boundary pressure " << i;
+        EXPECT_NEAR(state[slot].x, rp[i].x, 2e-6 * rp[i].x) << "boundary density " << i;
+        boundaryWithPressure += rp[i].y > 0.0;
         EXPECT_EQ(glm::vec3(accel[slot]), glm::vec3(0.0f));
         continue;
       }
@@ -127,6 +130,7 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
       EXPECT_LT(err, 2e-4 * accelScale) << "acceleration of particle " << i << " (|a| = " << glm::length(acc[i]) << ")";
     }
     EXPECT_GT(fluid, 400u);
+    EXPECT_GT(boundaryWithPressure, 50u);
     EXPECT_GT(positive, 50u) << "the case must exercise positive pressure";
     if (!clamp) {
       EXPECT_GT(negative, 10u) << "the free surface must give negative pressure without clamping";

@@ -32,7 +32,8 @@ struct SphModel {
 double kernelW(double r, double h);
 double kernelDwdr(double r, double h);
 
-// (rho, p) per particle; boundary particles get (rho0, 0).
+// (rho, p) per particle; boundary particles get the pressure extrapolated from their fluid
+// neighbours (Adami et al. 2012) and the matching Tait density.
 std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particles, const SphModel& model);
 
 // Acceleration per particle (zero for boundary particles).

@@ -2,6 +2,7 @@
 // Weakly compressible SPH on the GPU: one step is
 //   neighbour grid (hash, sort, cell ranges, reorder)
 //   density ... summation density (fluid + boundary), Tait pressure, neighbour list
+//   boundary .. boundary-particle pressure extrapolated from the fluid (Adami et al. 2012)
 //   forces .... pressure, laminar viscosity, boundary repulsion, gravity; dt limit per particle
 //   dt ........ min reduction of the limits (stays on the GPU)
 //   integrate . symplectic Euler with that dt; clock, step log and status on the GPU
@@ -31,18 +32,23 @@ struct SphSettings {
   glm::vec3 gravity{0.0f, 0.0f, -9.81f};  // m/s^2
   glm::vec3 bodyForce{0.0f};        // extra uniform acceleration (m/s^2)
   float repulsionScale = 0.01f;     // Psi = scale * c0^2 / (2h)
-  float repulsionCutoffRatio = 1.0f;  // D = ratio * dp
+  float repulsionCutoffRatio = 0.5f;  // D = ratio * dp
   float cflAcoustic = 0.3f;
   float cflForce = 0.25f;
   float maxTimeStep = 1.0e-3f;      // s
   bool clampNegativePressure = true;
   std::uint32_t neighbourCapacity = 128;
   float listSkin = 0.1f;            // neighbour-list radius = 2h (1 + skin)
+  float dampingRate = 0.0f;         // settling phase: v <- v / (1 + rate dt) (1/s) ...
+  float dampingUntil = 0.0f;        // ... while t < this (s)
 
   float h() const { return smoothingRatio * spacing; }
   float supportRadius() const { return 2.0f * h(); }
   float listRadius() const { return supportRadius() * (1.0f + listSkin); }
-  float particleMass() const { return restDensity * spacing * spacing * spacing; }
+  // Mass per particle such that summation density on the initial cubic lattice equals rho0
+  // exactly: m = rho0 / sum_j W(|x_j|) (the kernel sum is 1/dp^3 only to within ~0.2% at
+  // h/dp = 1.3, which would otherwise add a uniform 7 B 0.002 to the pressure).
+  float particleMass() const;
   // Throws std::invalid_argument naming the offending setting.
   void validate() const;
 };
@@ -54,7 +60,8 @@ struct SphParams {
   float rho0, taitB, mu, etaSq;
   float psi, repulsionCutoff, wallSpacing, cflAcoustic;
   float cflForce, dtViscous, dtMax, c0;
-  std::uint32_t clampNegativePressure, neighbourCapacity, pad0, pad1;
+  std::uint32_t clampNegativePressure, neighbourCapacity;
+  float dampingRate, dampingUntil;
 };
 static_assert(sizeof(SphParams) == 96);
 
@@ -81,14 +88,15 @@ class SphSolver {
             const SphSettings& settings, std::uint32_t maxStepsPerBatch = 256);
 
   // Records one whole step. `step` is the global step index, `logIndex` its slot in the step
-  // log of the current batch (< maxStepsPerBatch).
-  void recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex,
+  // log of the current batch (< maxStepsPerBatch). Steps after the clock reaches `endTime` (s)
+  // change nothing.
+  void recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f,
                   gpu::TimestampQueries* timestamps = nullptr);
   // Stages on their own, for tests: neighbours must have been built first.
   void recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   void recordDensity(gpu::CommandRecorder& rec);
   void recordForces(gpu::CommandRecorder& rec);
-  void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex);
+  void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f);
 
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);
@@ -112,15 +120,17 @@ class SphSolver {
   SphSettings settings_;
   SphParams params_;
   std::uint32_t maxStepsPerBatch_;
+  std::uint32_t clockParity_ = 0;  // which clock record holds the current time
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_;
   gpu::Buffer clock_, status_, log_;
   gpu::MinMaxReduce dtReduce_;
   const gpu::ComputePipeline* density_;
+  const gpu::ComputePipeline* boundaryPressure_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_;
-  std::array<gpu::DescriptorSet, 2> densitySets_, forcesSets_, integrateSets_;  // by parity
+  std::array<gpu::DescriptorSet, 2> densitySets_, boundarySets_, forcesSets_, integrateSets_;  // by parity
 };
 
 }  // namespace hemo::sim

@@ -1,0 +1,59 @@
+#version 450
+// Boundary particles take the pressure the fluid next to them implies (Adami, Hu & Adams
+// 2012, "A generalized wall boundary condition for SPH", eq. 27), for a rigid wall at rest:
+//   p_b = ( sum_f p_f W_bf + g . sum_f rho_f (x_b - x_f) W_bf ) / sum_f W_bf
+// with g the gravity + body force, and the density from the inverse Tait equation,
+//   rho_b = rho0 (p_b / B + 1)^(1/7).
+// A boundary particle without fluid neighbours keeps (rho0, 0). The force pass then treats
+// boundary particles like fluid ones in the symmetric pressure term, which holds a fluid
+// column at the hydrostatic pressure without the wall having to be penetrated.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/sph.h"
+#include "common/index.glsl"
+#include "common/kernel.glsl"
+#include "common/sph_params.glsl"
+
+layout(std430, binding = HEMO_BPRESSURE_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_STATE) buffer State { vec4 state[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(push_constant) uniform Push { uint n; } pc;
+
+void main() {
+  const uint b = hemo_global_index();
+  if (b >= pc.n || uint(velocities[b].w) == HEMO_KIND_FLUID) {
+    return;
+  }
+  const vec3 xb = positions[b].xyz;
+  const float support2 = params.supportRadius * params.supportRadius;
+  float sumW = 0.0;
+  float sumP = 0.0;
+  vec3 sumRhoR = vec3(0.0);
+  const uint count = neighbourCount[b];
+  const uint listBase = b * params.neighbourCapacity;
+  for (uint k = 0u; k < count; ++k) {
+    const uint f = neighbourList[listBase + k];  // fluid neighbours only
+    const vec3 d = xb - positions[f].xyz;
+    const float r2 = dot(d, d);
+    if (r2 >= support2) {
+      continue;
+    }
+    const float w = hemo_kernel_w(sqrt(r2), params.h, params.kernelNorm);
+    const vec2 sf = state[f].xy;
+    sumW += w;
+    sumP += sf.y * w;
+    sumRhoR += sf.x * d * w;
+  }
+  if (sumW <= 0.0) {
+    state[b] = vec4(params.rho0, 0.0, 0.0, 0.0);
+    return;
+  }
+  float p = (sumP + dot(params.gravity.xyz, sumRhoR)) / sumW;
+  if (params.clampNegativePressure != 0u) {
+    p = max(p, 0.0);
+  }
+  const float rho = params.rho0 * pow(max(p / params.taitB + 1.0, 1.0e-6), 1.0 / 7.0);
+  state[b] = vec4(rho, p, 0.0, 0.0);
+}

@@ -1,0 +1,28 @@
+#pragma once
+// Geometry builders: turn a Scene into particles on the dp lattice.
+#include "hemo/scene/scene.hpp"
+
+#include <glm/vec4.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace hemo::scene {
+
+// Particle arrays in the layout of sim::ParticleStore and the SPH solver:
+// positions (xyz m, w mass kg), velocities (xyz m/s, w kind), normals (xyz, boundary only).
+struct ParticleSet {
+  std::vector<glm::vec4> positions;
+  std::vector<glm::vec4> velocities;
+  std::vector<glm::vec4> normals;
+  std::vector<std::uint32_t> ids;
+  std::uint32_t fluid = 0;
+  std::uint32_t boundary = 0;
+  std::uint32_t size() const { return static_cast<std::uint32_t>(positions.size()); }
+};
+
+// Particle count the scene will produce, without building (for memory checks).
+std::uint64_t countParticles(const Scene& scene);
+ParticleSet buildParticles(const Scene& scene);
+
+}  // namespace hemo::scene

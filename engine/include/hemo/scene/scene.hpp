@@ -1,0 +1,71 @@
+#pragma once
+// Scene files: JSON with named sections and SI units in the key names. One table
+// (sceneSchema()) lists every parameter with its unit, range, default and description; it
+// drives loading, validation and docs/scene-format.md.
+#include "hemo/sim/sph.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace hemo::scene {
+
+// Bad scene input (hemo-run exit code 1). The message names the file, the field and the problem.
+class SceneError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Box {
+  glm::vec3 min{0.0f};  // m
+  glm::vec3 max{0.0f};  // m
+};
+
+struct FluidBlock {
+  Box box;
+  glm::vec3 velocity{0.0f};  // m/s
+};
+
+// A rigid container: `layers` layers of boundary particles just outside the box, on every
+// face except the top (+z) when openTop.
+struct Tank {
+  Box box;
+  std::uint32_t layers = 3;
+  bool openTop = true;
+};
+
+enum class Integrator { SymplecticEuler };
+
+struct Scene {
+  std::string name;
+  std::string description;
+  sim::SphSettings sph;
+  float expectedMaxSpeed = 0.0f;  // m/s (c0 = 10x this unless given)
+  std::vector<FluidBlock> blocks;
+  std::vector<Tank> tanks;
+  Box domain;
+  Integrator integrator = Integrator::SymplecticEuler;
+  double endTime = 1.0;             // s
+  std::uint32_t stepsPerBatch = 64;  // steps recorded per submit
+};
+
+Scene parseScene(const std::string& jsonText, const std::string& sourceName);
+Scene loadScene(const std::filesystem::path& path);
+
+// One row per parameter, for docs and tools.
+struct FieldDoc {
+  std::string path;  // e.g. "fluid.blocks[].min_m"
+  std::string type;
+  std::string unit;
+  std::string range;
+  std::string defaultValue;
+  std::string description;
+};
+std::vector<FieldDoc> sceneSchema();
+// docs/scene-format.md's table, generated from sceneSchema().
+std::string schemaMarkdown();
+
+}  // namespace hemo::scene

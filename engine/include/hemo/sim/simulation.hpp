@@ -1,0 +1,87 @@
+#pragma once
+// A scene on the GPU: builds its particles, assembles the step from what the scene needs,
+// and runs it in batches of many steps per submit. The host waits once per batch (to read
+// the clock and the status), never per step.
+#include "hemo/scene/builders.hpp"
+#include "hemo/sim/sph.hpp"
+
+#include <glm/vec2.hpp>
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace hemo::sim {
+
+// The simulation became non-finite or unstable (hemo-run exit code 2).
+class SimulationError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct Progress {
+  std::uint64_t steps = 0;
+  double time = 0.0;       // simulated s
+  double endTime = 0.0;    // s (0 when running a fixed number of steps)
+  std::uint64_t targetSteps = 0;
+  double wallSeconds = 0.0;
+};
+
+struct RunOptions {
+  std::optional<std::uint64_t> steps;  // run this many steps ...
+  std::optional<double> until;         // ... or until this simulated time (s); default: scene end time
+  std::uint32_t outputEvery = 0;       // call onOutput every N steps (0: never)
+  std::function<void(const Progress&)> onBatch;
+  std::function<void(const Progress&)> onOutput;
+};
+
+struct RunResult {
+  std::uint64_t steps = 0;
+  double simTime = 0.0;     // s
+  double wallSeconds = 0.0;
+  bool finite = true;
+};
+
+// Fluid state in input (id) order, for output and tests.
+struct Snapshot {
+  std::vector<glm::vec4> positions;   // xyz m, w mass
+  std::vector<glm::vec4> velocities;  // xyz m/s, w kind
+  std::vector<glm::vec2> densityPressure;  // kg/m^3, Pa (of the last density pass)
+  std::vector<std::uint32_t> ids;
+};
+
+class Simulation {
+ public:
+  // Throws scene::SceneError if the scene does not fit the device (names the field).
+  Simulation(gpu::Context& context, const scene::Scene& scene);
+
+  // Runs; throws SimulationError (with step, time and particle) if the state becomes
+  // non-finite or a particle's neighbours exceed the capacity.
+  RunResult run(const RunOptions& options);
+
+  Snapshot snapshot() const;
+  const scene::Scene& scene() const { return scene_; }
+  std::uint32_t fluidParticles() const { return fluid_; }
+  std::uint32_t boundaryParticles() const { return boundary_; }
+  std::uint64_t steps() const { return steps_; }
+  double time() const;
+  // Fluid particles outside the scene's domain now.
+  std::uint32_t escapedParticles() const;
+  ParticleStore& store() { return *store_; }
+  SphSolver& solver() { return *solver_; }
+
+ private:
+  void checkStatus(std::uint64_t batchFirstStep);
+
+  gpu::Context* context_;
+  scene::Scene scene_;
+  std::uint32_t fluid_ = 0;
+  std::uint32_t boundary_ = 0;
+  std::unique_ptr<ParticleStore> store_;
+  std::unique_ptr<SphSolver> solver_;
+  std::unique_ptr<gpu::CommandRecorder> recorder_;
+  std::uint64_t steps_ = 0;
+};
+
+}  // namespace hemo::sim

@@ -1,0 +1,362 @@
+#include "hemo/scene/scene.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <sstream>
+
+namespace hemo::scene {
+
+using Json = nlohmann::json;
+
+namespace {
+
+enum class Kind { Number, Integer, Bool, String, Vec3, Choice, Objects, Section };
+
+struct Field {
+  std::string key;
+  Kind kind;
+  std::string unit;
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+  bool minExclusive = false;
+  Json def;  // null: required
+  std::string description;
+  std::vector<std::string> choices = {};
+  std::vector<Field> items = {};  // Objects: fields of each element; Section: fields
+};
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The whole scene format, in one place.
+const std::vector<Field>& schema() {
+  static const std::vector<Field> fields = {
+      {"scene", Kind::String, "", 0, 0, false, nullptr, "Scene name, reported in outputs."},
+      {"description", Kind::String, "", 0, 0, false, "", "Free text."},
+      {"particles", Kind::Section, "", 0, 0, false, nullptr, "Particle resolution.", {},
+       {
+           {"spacing_m", Kind::Number, "m", 0, 10, true, nullptr, "Initial particle spacing dp (fluid and boundary lattice)."},
+           {"smoothing_ratio", Kind::Number, "1", 0.5, 3, false, 1.3, "Smoothing length h / dp; the kernel support is 2h."},
+           {"neighbour_capacity", Kind::Integer, "1", 8, 1024, false, 128, "Neighbour-list entries per particle; exceeding it stops the run."},
+           {"list_skin", Kind::Number, "1", 0, 1, false, 0.1, "Neighbour-list radius = 2h (1 + skin)."},
+       }},
+      {"fluid", Kind::Section, "", 0, 0, false, nullptr, "The fluid (blood defaults are density 1060, viscosity 3.5e-3).", {},
+       {
+           {"density_kg_m3", Kind::Number, "kg/m^3", 1, 1e5, false, 1000.0, "Rest density rho0."},
+           {"viscosity_pa_s", Kind::Number, "Pa s", 0, 100, false, 1e-3, "Dynamic viscosity mu (laminar term)."},
+           {"speed_of_sound_m_s", Kind::Number, "m/s", 0, 1e5, false, 0.0, "Speed of sound c0; 0 derives 10 x expected_max_speed_m_s."},
+           {"expected_max_speed_m_s", Kind::Number, "m/s", 0, 1e4, true, nullptr, "Largest flow speed expected; sets c0 unless given."},
+           {"clamp_negative_pressure", Kind::Bool, "", 0, 0, false, true, "Clamp Tait pressure at 0 (free surfaces)."},
+           {"blocks", Kind::Objects, "", 1, kInf, false, nullptr, "Boxes filled with fluid particles on the dp lattice.", {},
+            {
+                {"min_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Lower corner."},
+                {"max_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Upper corner."},
+                {"velocity_m_s", Kind::Vec3, "m/s", -1e4, 1e4, false, Json::array({0.0, 0.0, 0.0}), "Initial velocity."},
+            }},
+       }},
+      {"boundary", Kind::Section, "", 0, 0, false, Json::object(), "Rigid boundaries.", {},
+       {
+           {"tanks", Kind::Objects, "", 0, kInf, false, Json::array(), "Rigid boxes made of boundary particles outside each face.", {},
+            {
+                {"min_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Inner lower corner."},
+                {"max_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Inner upper corner."},
+                {"layers", Kind::Integer, "1", 1, 8, false, 3, "Layers of boundary particles (enough to fill the kernel support: >= 2h/dp)."},
+                {"open_top", Kind::Bool, "", 0, 0, false, true, "No wall on the +z face."},
+            }},
+           {"repulsion_scale", Kind::Number, "1", 0, 10, false, 0.01, "Psi = scale c0^2 / (2h): strength of the repulsive boundary force."},
+           {"repulsion_cutoff_ratio", Kind::Number, "1", 0, 6, true, 0.5, "D = ratio x dp: no repulsion beyond this normal distance (at most 2h/dp). Below the rest spacing (1) so it guards against penetration without carrying the fluid at rest."},
+       }},
+      {"forces", Kind::Section, "", 0, 0, false, Json::object(), "Body forces.", {},
+       {
+           {"gravity_m_s2", Kind::Vec3, "m/s^2", -1e4, 1e4, false, Json::array({0.0, 0.0, -9.81}), "Gravity."},
+           {"body_force_m_s2", Kind::Vec3, "m/s^2", -1e4, 1e4, false, Json::array({0.0, 0.0, 0.0}), "Extra uniform acceleration (drives channel flows)."},
+       }},
+      {"time", Kind::Section, "", 0, 0, false, Json::object(), "Time stepping.", {},
+       {
+           {"integrator", Kind::Choice, "", 0, 0, false, "symplectic_euler", "Time integration scheme.", {"symplectic_euler"}},
+           {"cfl_acoustic", Kind::Number, "1", 0, 1, true, 0.3, "C_a in dt <= C_a h / (c0 + |v|)."},
+           {"cfl_force", Kind::Number, "1", 0, 1, true, 0.25, "C_f in dt <= C_f sqrt(h / |a|)."},
+           {"max_dt_s", Kind::Number, "s", 0, 1, true, 1e-3, "Upper bound of the time step."},
+           {"end_time_s", Kind::Number, "s", 0, 1e6, false, 1.0, "Simulated time of a run (hemo-run --until overrides)."},
+           {"steps_per_batch", Kind::Integer, "1", 1, 4096, false, 64, "Steps recorded into one command buffer per submit."},
+           {"settle_damping_1_s", Kind::Number, "1/s", 0, 1e6, false, 0.0, "Velocity damping xi of a settling phase: v <- v / (1 + xi dt)."},
+           {"settle_until_s", Kind::Number, "s", 0, 1e6, false, 0.0, "The settling phase lasts while t < this (0: none)."},
+       }},
+      {"domain", Kind::Section, "", 0, 0, false, nullptr, "Region covered by the neighbour grid; particles that leave it are counted as escaped.", {},
+       {
+           {"min_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Lower corner."},
+           {"max_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Upper corner."},
+       }},
+  };
+  return fields;
+}
+
+std::string kindName(Kind k) {
+  switch (k) {
+    case Kind::Number: return "number";
+    case Kind::Integer: return "integer";
+    case Kind::Bool: return "boolean";
+    case Kind::String: return "string";
+    case Kind::Vec3: return "array of 3 numbers";
+    case Kind::Choice: return "string";
+    case Kind::Objects: return "array of objects";
+    case Kind::Section: return "object";
+  }
+  return "?";
+}
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+class Checker {
+ public:
+  explicit Checker(std::string source) : source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const std::string& path, const std::string& problem) const {
+    throw SceneError(source_ + ": " + (path.empty() ? "" : path + ": ") + problem);
+  }
+
+  void checkNumber(const std::string& path, const Json& v, const Field& f) const {
+    if (!v.is_number()) fail(path, "expected a " + kindName(f.kind) + (f.unit.empty() ? "" : " (" + f.unit + ")") + ", got " + v.dump());
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) fail(path, "must be finite, got " + v.dump());
+    if (f.kind == Kind::Integer && (!v.is_number_integer() || x != std::floor(x))) fail(path, "expected a whole number, got " + v.dump());
+    const bool belowMin = f.minExclusive ? x <= f.min : x < f.min;
+    if (belowMin || x > f.max) {
+      fail(path, "must be in " + std::string(f.minExclusive ? "(" : "[") + fmt(f.min) + ", " + fmt(f.max) + "]" +
+                     (f.unit.empty() || f.unit == "1" ? "" : " " + f.unit) + ", got " + v.dump());
+    }
+  }
+
+  Json object(const std::string& path, const Json& in, const std::vector<Field>& fields) const {
+    if (!in.is_object()) fail(path, "expected an object, got " + in.dump());
+    for (auto it = in.begin(); it != in.end(); ++it) {
+      bool known = false;
+      for (const auto& f : fields) known = known || f.key == it.key();
+      if (!known) {
+        std::string names;
+        for (const auto& f : fields) names += (names.empty() ? "" : ", ") + f.key;
+        fail(join(path, it.key()), "unknown key (expected one of: " + names + ")");
+      }
+    }
+    Json out = Json::object();
+    for (const auto& f : fields) {
+      const std::string p = join(path, f.key);
+      if (!in.contains(f.key)) {
+        if (f.def.is_null()) fail(p, "is required");
+        out[f.key] = f.kind == Kind::Section ? object(p, f.def, f.items) : f.def;
+        continue;
+      }
+      out[f.key] = value(p, in.at(f.key), f);
+    }
+    return out;
+  }
+
+ private:
+  static std::string join(const std::string& path, const std::string& key) { return path.empty() ? key : path + "." + key; }
+
+  Json value(const std::string& p, const Json& v, const Field& f) const {
+    switch (f.kind) {
+      case Kind::Number:
+      case Kind::Integer:
+        checkNumber(p, v, f);
+        return v;
+      case Kind::Bool:
+        if (!v.is_boolean()) fail(p, "expected true or false, got " + v.dump());
+        return v;
+      case Kind::String:
+        if (!v.is_string()) fail(p, "expected a string, got " + v.dump());
+        return v;
+      case Kind::Choice: {
+        if (!v.is_string()) fail(p, "expected a string, got " + v.dump());
+        std::string all;
+        for (const auto& c : f.choices) {
+          if (c == v.get<std::string>()) return v;
+          all += (all.empty() ? "" : ", ") + ("\"" + c + "\"");
+        }
+        fail(p, "unknown value " + v.dump() + " (expected one of: " + all + ")");
+      }
+      case Kind::Vec3: {
+        if (!v.is_array() || v.size() != 3) fail(p, "expected an array of 3 numbers (" + f.unit + "), got " + v.dump());
+        for (std::size_t k = 0; k < 3; ++k) checkNumber(p + "[" + std::to_string(k) + "]", v[k], Field{"", Kind::Number, f.unit, f.min, f.max});
+        return v;
+      }
+      case Kind::Objects: {
+        if (!v.is_array()) fail(p, "expected an array of objects, got " + v.dump());
+        if (double(v.size()) < f.min) fail(p, "needs at least " + fmt(f.min) + " entr" + (f.min == 1 ? "y" : "ies"));
+        Json out = Json::array();
+        for (std::size_t k = 0; k < v.size(); ++k) out.push_back(object(p + "[" + std::to_string(k) + "]", v[k], f.items));
+        return out;
+      }
+      case Kind::Section:
+        return object(p, v, f.items);
+    }
+    return v;
+  }
+
+  std::string source_;
+};
+
+glm::vec3 vec3(const Json& v) { return {v[0].get<float>(), v[1].get<float>(), v[2].get<float>()}; }
+
+Box box(const Checker& c, const std::string& path, const Json& obj) {
+  Box b{vec3(obj["min_m"]), vec3(obj["max_m"])};
+  for (int a = 0; a < 3; ++a) {
+    if (!(b.min[a] < b.max[a])) {
+      c.fail(path, "min_m must be below max_m on every axis (axis " + std::string(1, "xyz"[a]) + ": " + fmt(b.min[a]) +
+                       " >= " + fmt(b.max[a]) + ")");
+    }
+  }
+  return b;
+}
+
+bool inside(const Box& inner, const Box& outer, float slack) {
+  for (int a = 0; a < 3; ++a) {
+    if (inner.min[a] < outer.min[a] - slack || inner.max[a] > outer.max[a] + slack) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Scene parseScene(const std::string& text, const std::string& source) {
+  Json raw;
+  try {
+    raw = Json::parse(text);
+  } catch (const Json::parse_error& e) {
+    throw SceneError(source + ": not valid JSON: " + e.what());
+  }
+  const Checker c(source);
+  const Json j = c.object("", raw, schema());
+
+  Scene s;
+  s.name = j["scene"].get<std::string>();
+  if (s.name.empty()) c.fail("scene", "must not be empty");
+  s.description = j["description"].get<std::string>();
+
+  const Json& part = j["particles"];
+  s.sph.spacing = part["spacing_m"].get<float>();
+  s.sph.smoothingRatio = part["smoothing_ratio"].get<float>();
+  s.sph.neighbourCapacity = part["neighbour_capacity"].get<std::uint32_t>();
+  s.sph.listSkin = part["list_skin"].get<float>();
+
+  const Json& fluid = j["fluid"];
+  s.sph.restDensity = fluid["density_kg_m3"].get<float>();
+  s.sph.viscosity = fluid["viscosity_pa_s"].get<float>();
+  s.expectedMaxSpeed = fluid["expected_max_speed_m_s"].get<float>();
+  const float c0 = fluid["speed_of_sound_m_s"].get<float>();
+  s.sph.soundSpeed = c0 > 0.0f ? c0 : 10.0f * s.expectedMaxSpeed;
+  s.sph.clampNegativePressure = fluid["clamp_negative_pressure"].get<bool>();
+  for (std::size_t k = 0; k < fluid["blocks"].size(); ++k) {
+    const std::string p = "fluid.blocks[" + std::to_string(k) + "]";
+    const Json& b = fluid["blocks"][k];
+    s.blocks.push_back({box(c, p, b), vec3(b["velocity_m_s"])});
+  }
+
+  const Json& boundary = j["boundary"];
+  for (std::size_t k = 0; k < boundary["tanks"].size(); ++k) {
+    const std::string p = "boundary.tanks[" + std::to_string(k) + "]";
+    const Json& t = boundary["tanks"][k];
+    s.tanks.push_back({box(c, p, t), t["layers"].get<std::uint32_t>(), t["open_top"].get<bool>()});
+  }
+  s.sph.repulsionScale = boundary["repulsion_scale"].get<float>();
+  s.sph.repulsionCutoffRatio = boundary["repulsion_cutoff_ratio"].get<float>();
+  if (s.sph.repulsionCutoffRatio > 2.0f * s.sph.smoothingRatio) {
+    c.fail("boundary.repulsion_cutoff_ratio", "D must not exceed the kernel support 2h/dp = " + fmt(2.0 * s.sph.smoothingRatio));
+  }
+
+  s.sph.gravity = vec3(j["forces"]["gravity_m_s2"]);
+  s.sph.bodyForce = vec3(j["forces"]["body_force_m_s2"]);
+
+  const Json& time = j["time"];
+  s.integrator = Integrator::SymplecticEuler;
+  s.sph.cflAcoustic = time["cfl_acoustic"].get<float>();
+  s.sph.cflForce = time["cfl_force"].get<float>();
+  s.sph.maxTimeStep = time["max_dt_s"].get<float>();
+  s.endTime = time["end_time_s"].get<double>();
+  s.stepsPerBatch = time["steps_per_batch"].get<std::uint32_t>();
+  s.sph.dampingRate = time["settle_damping_1_s"].get<float>();
+  s.sph.dampingUntil = time["settle_until_s"].get<float>();
+
+  s.domain = box(c, "domain", j["domain"]);
+  const float slack = 1e-6f * s.sph.spacing;
+  for (std::size_t k = 0; k < s.blocks.size(); ++k) {
+    if (!inside(s.blocks[k].box, s.domain, slack)) {
+      c.fail("fluid.blocks[" + std::to_string(k) + "]", "lies (partly) outside the domain");
+    }
+  }
+  for (std::size_t k = 0; k < s.tanks.size(); ++k) {
+    const float reach = float(s.tanks[k].layers) * s.sph.spacing;
+    const Box outer{s.tanks[k].box.min - glm::vec3(reach), s.tanks[k].box.max + glm::vec3(reach)};
+    Box need = outer;
+    if (s.tanks[k].openTop) need.max.z = s.tanks[k].box.max.z;
+    if (!inside(need, s.domain, slack)) {
+      c.fail("boundary.tanks[" + std::to_string(k) + "]",
+             "its " + std::to_string(s.tanks[k].layers) + " layers of boundary particles reach outside the domain");
+    }
+  }
+  try {
+    s.sph.validate();
+  } catch (const std::invalid_argument& e) {
+    throw SceneError(source + ": " + e.what());
+  }
+  return s;
+}
+
+Scene loadScene(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path.string() + ": cannot open the scene file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseScene(text.str(), path.string());
+}
+
+namespace {
+void collect(const std::vector<Field>& fields, const std::string& prefix, std::vector<FieldDoc>& out) {
+  for (const auto& f : fields) {
+    const std::string path = prefix.empty() ? f.key : prefix + "." + f.key;
+    FieldDoc d;
+    d.path = path;
+    d.type = f.kind == Kind::Choice ? "one of " + [&] {
+      std::string s;
+      for (const auto& ch : f.choices) s += (s.empty() ? "" : ", ") + ("\"" + ch + "\"");
+      return s;
+    }() : kindName(f.kind);
+    d.unit = f.unit == "1" ? "-" : f.unit;
+    if (f.kind == Kind::Number || f.kind == Kind::Integer || f.kind == Kind::Vec3) {
+      d.range = std::string(f.minExclusive ? "(" : "[") + fmt(f.min) + ", " + fmt(f.max) + "]";
+    } else if (f.kind == Kind::Objects) {
+      d.range = ">= " + fmt(f.min) + " entries";
+    }
+    d.defaultValue = f.def.is_null() ? "required" : f.def.dump();
+    if (f.kind == Kind::Section || f.kind == Kind::Objects) d.defaultValue = f.def.is_null() ? "required" : "optional";
+    d.description = f.description;
+    out.push_back(d);
+    if (f.kind == Kind::Section) collect(f.items, path, out);
+    if (f.kind == Kind::Objects) collect(f.items, path + "[]", out);
+  }
+}
+}  // namespace
+
+std::vector<FieldDoc> sceneSchema() {
+  std::vector<FieldDoc> out;
+  collect(schema(), "", out);
+  return out;
+}
+
+std::string schemaMarkdown() {
+  std::ostringstream s;
+  s << "| key | type | unit | range | default | description |\n|---|---|---|---|---|---|\n";
+  for (const auto& d : sceneSchema()) {
+    s << "| `" << d.path << "` | " << d.type << " | " << d.unit << " | " << d.range << " | " << d.defaultValue << " | "
+      << d.description << " |\n";
+  }
+  return s.str();
+}
+
+}  // namespace hemo::scene

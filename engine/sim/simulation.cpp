@@ -1,0 +1,159 @@
+#include "hemo/sim/simulation.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace hemo::sim {
+
+namespace {
+std::string mib(std::uint64_t bytes) { return std::to_string(bytes / (1024 * 1024)) + " MiB"; }
+}  // namespace
+
+Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : context_(&context), scene_(scene) {
+  // Fit check before building anything: the largest per-particle buffer is the neighbour list.
+  const std::uint64_t count = scene::countParticles(scene);
+  const std::uint64_t listBytes = count * scene.sph.neighbourCapacity * 4;
+  const std::uint64_t limit = context.limits().maxStorageBufferRange;
+  if (count > 0xffffffffull / 2 || listBytes > limit) {
+    std::ostringstream msg;
+    msg << "particles.spacing_m: " << scene.sph.spacing << " m gives " << count << " particles; their neighbour list ("
+        << scene.sph.neighbourCapacity << " entries each) needs " << mib(listBytes) << " but the device allows "
+        << mib(limit) << " per buffer (increase the spacing or lower particles.neighbour_capacity)";
+    throw scene::SceneError(scene.name + ": " + msg.str());
+  }
+  const scene::ParticleSet set = scene::buildParticles(scene);
+  if (set.fluid == 0) throw scene::SceneError(scene.name + ": fluid.blocks: the blocks hold no particles");
+  fluid_ = set.fluid;
+  boundary_ = set.boundary;
+  store_ = std::make_unique<ParticleStore>(context, set.size());
+  store_->upload(set.positions, set.velocities, set.ids, set.normals);
+  solver_ = std::make_unique<SphSolver>(context, *store_, scene.domain.min, scene.domain.max, scene.sph,
+                                        scene.stepsPerBatch);
+  recorder_ = std::make_unique<gpu::CommandRecorder>(context);
+  recorder_->begin();
+  solver_->recordReset(*recorder_);
+  recorder_->end();
+  recorder_->submitAndWait();
+}
+
+double Simulation::time() const { return solver_->readClock().time; }
+
+RunResult Simulation::run(const RunOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const double endTime = options.steps ? 3.0e38 : options.until.value_or(scene_.endTime);
+  const std::uint64_t targetSteps = options.steps.value_or(~0ull);
+  const std::uint64_t firstStep = steps_;
+  SphClock clock = solver_->readClock();
+  auto progress = [&]() {
+    Progress p;
+    p.steps = steps_;
+    p.time = clock.time;
+    p.endTime = options.steps ? 0.0 : endTime;
+    p.targetSteps = options.steps ? firstStep + *options.steps : 0;
+    p.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return p;
+  };
+  while (steps_ - firstStep < targetSteps && (options.steps || clock.time < endTime)) {
+    std::uint64_t batch = scene_.stepsPerBatch;
+    if (options.steps) batch = std::min<std::uint64_t>(batch, firstStep + *options.steps - steps_);
+    if (options.outputEvery) batch = std::min<std::uint64_t>(batch, options.outputEvery - steps_ % options.outputEvery);
+    const std::uint64_t before = clock.steps;
+    recorder_->begin();
+    for (std::uint64_t k = 0; k < batch; ++k) {
+      solver_->recordStep(*recorder_, static_cast<std::uint32_t>(steps_ + k), static_cast<std::uint32_t>(k),
+                          static_cast<float>(endTime));
+    }
+    recorder_->end();
+    recorder_->submitAndWait();
+    clock = solver_->readClock();
+    checkStatus(steps_);
+    // Steps after the end time change nothing and are not counted.
+    steps_ += std::min<std::uint64_t>(batch, clock.steps - before);
+    if (clock.steps - before < batch && !options.steps) {
+      clock.time = std::max(clock.time, endTime);  // reached the end inside the batch
+    }
+    if (options.onBatch) options.onBatch(progress());
+    if (options.outputEvery && steps_ % options.outputEvery == 0 && options.onOutput) options.onOutput(progress());
+    if (clock.steps - before < batch) break;
+  }
+  RunResult r;
+  r.steps = steps_ - firstStep;
+  r.simTime = solver_->readClock().time;
+  r.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.finite = true;
+  return r;
+}
+
+void Simulation::checkStatus(std::uint64_t batchFirstStep) {
+  const SphStatus status = solver_->readStatus();
+  if (status.neighbourOverflow > 0) {
+    std::ostringstream msg;
+    msg << "a particle had " << status.maxNeighbours << " neighbours, more than particles.neighbour_capacity = "
+        << scene_.sph.neighbourCapacity << " (in the batch from step " << batchFirstStep << ", t = " << time()
+        << " s): the fluid is compressed far beyond its rest density, or the capacity is too small";
+    throw SimulationError(msg.str());
+  }
+  if (status.nonFinite == 0) return;
+  // Find where: the step from the status, its time from the step log, the particle from the state.
+  const auto log = solver_->stepLog().readback<glm::vec2>(scene_.stepsPerBatch);
+  const std::uint64_t bad = status.firstBadStep;
+  const double t = bad >= batchFirstStep && bad - batchFirstStep < log.size() ? log[bad - batchFirstStep].x : time();
+  const Snapshot snap = snapshot();
+  std::uint32_t badId = 0xffffffffu;
+  glm::vec4 badPos(0.0f);
+  for (std::size_t i = 0; i < snap.ids.size(); ++i) {
+    const glm::vec4 p = snap.positions[i], v = snap.velocities[i];
+    const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(v.x) &&
+                        std::isfinite(v.y) && std::isfinite(v.z);
+    if (!finite && snap.ids[i] < badId) {
+      badId = snap.ids[i];
+      badPos = p;
+    }
+  }
+  std::ostringstream msg;
+  msg << "the simulation became non-finite at step " << bad << " (t = " << t << " s): " << status.nonFinite
+      << " particle updates produced NaN/Inf, the first by particle id " << badId
+      << " (increase the resolution, lower time.cfl_acoustic / time.max_dt_s, or check the forces)";
+  throw SimulationError(msg.str());
+}
+
+Snapshot Simulation::snapshot() const {
+  Snapshot s;
+  const std::uint32_t n = store_->count();
+  const auto pos = store_->readPositions();
+  const auto vel = store_->readVelocities();
+  const auto ids = store_->readIds();
+  const auto state = solver_->state().readback<glm::vec4>(n);
+  s.positions.resize(n);
+  s.velocities.resize(n);
+  s.densityPressure.resize(n);
+  s.ids.resize(n);
+  for (std::uint32_t slot = 0; slot < n; ++slot) {
+    const std::uint32_t id = ids[slot];
+    if (id >= n) continue;
+    s.positions[id] = pos[slot];
+    s.velocities[id] = vel[slot];
+    s.densityPressure[id] = glm::vec2(state[slot]);
+    s.ids[id] = id;
+  }
+  return s;
+}
+
+std::uint32_t Simulation::escapedParticles() const {
+  const auto pos = store_->readPositions();
+  const auto vel = store_->readVelocities();
+  std::uint32_t escaped = 0;
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    if (vel[i].w != float(ParticleKind::Fluid)) continue;
+    for (int a = 0; a < 3; ++a) {
+      if (!(pos[i][a] >= scene_.domain.min[a] && pos[i][a] <= scene_.domain.max[a])) {
+        ++escaped;
+        break;
+      }
+    }
+  }
+  return escaped;
+}
+
+}  // namespace hemo::sim
