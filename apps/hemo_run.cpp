@@ -28,7 +28,8 @@ const char* kUsage =
     "  --until SECONDS  run until this simulated time (default: the scene's time.end_time_s)\n"
     "  --device SEL     Vulkan device index or name part (default: HEMO_DEVICE, else the best)\n"
     "  --vtk-every N    write DIR/particles_<step>.vtk every N steps (and at the end)\n"
-    "  --png-every N, --surface-every N  need the renderer and marching cubes (not in this build)\n";
+    "  --png-every N, --surface-every N  need the renderer and marching cubes (not in this build)\n"
+    "hemo-run --describe-scene   prints the scene-file parameter table\n";
 
 void printProgress(const hemo::sim::Progress& p, bool tty) {
   const double fraction = p.endTime > 0 ? p.time / p.endTime
@@ -45,6 +46,10 @@ void printProgress(const hemo::sim::Progress& p, bool tty) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc == 2 && std::string(argv[1]) == "--describe-scene") {
+    std::printf("%s", hemo::scene::schemaMarkdown().c_str());  // the table of docs/scene-format.md
+    return 0;
+  }
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--out", "--steps", "--until", "--device", "--vtk-every", "--png-every",
@@ -160,6 +165,11 @@ int main(int argc, char** argv) {
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},
                {"finite", finite}};
     if (!finite) summary["error"] = failure;
+    if (ctx.validationEnabled() && ctx.validationMessageCount() > 0) {
+      for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";
+      std::cerr << "hemo-run: the Vulkan validation layer reported problems\n";
+      return 3;
+    }
   } catch (const hemo::scene::SceneError& e) {
     std::cerr << "hemo-run: " << e.what() << "\n";
     return 1;

@@ -60,7 +60,9 @@
 #define HEMO_FORCES_BINDING_NLIST 6
 #define HEMO_FORCES_BINDING_ACCEL 7
 #define HEMO_FORCES_BINDING_DT_LIMIT 8
-#define HEMO_FORCES_BINDING_COUNT 9
+#define HEMO_FORCES_BINDING_IDS 9
+#define HEMO_FORCES_BINDING_STATUS 10
+#define HEMO_FORCES_BINDING_COUNT 11
 
 // sph/integrate.comp: symplectic Euler with the GPU-reduced time step, clock, status.
 #define HEMO_INTEGRATE_BINDING_POSITIONS 0
@@ -82,6 +84,8 @@
 #define HEMO_STATUS_NONFINITE 1           // particle updates that produced NaN/Inf
 #define HEMO_STATUS_NEIGHBOUR_OVERFLOW 2  // particles whose neighbours exceeded the capacity
 #define HEMO_STATUS_MAX_NEIGHBOURS 3      // most neighbours any particle had
+#define HEMO_STATUS_BAD_INPUT_ID 4        // lowest id entering the force pass non-finite (init ~0u)
+#define HEMO_STATUS_BAD_FORCE_ID 5        // lowest id whose acceleration came out non-finite (init ~0u)
 #define HEMO_STATUS_COUNT 8
 
 #endif

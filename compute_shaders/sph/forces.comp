@@ -28,6 +28,8 @@ layout(std430, binding = HEMO_FORCES_BINDING_NCOUNT) readonly buffer Counts { ui
 layout(std430, binding = HEMO_FORCES_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_ACCEL) writeonly buffer Accel { vec4 accel[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_DT_LIMIT) writeonly buffer DtLimit { float dtLimit[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_IDS) readonly buffer Ids { uint ids[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_STATUS) buffer Status { uint status[]; };
 layout(push_constant) uniform Push { uint n; } pc;
 
 const float kNoLimit = 3.0e38;
@@ -45,6 +47,15 @@ void main() {
   }
   const vec3 xi = positions[i].xyz;
   const vec2 si = state[i].xy;  // rho, p
+  // Blow-up diagnosis, only until the first non-finite step has been recorded (after that
+  // the NaNs have spread): which particle was non-finite first (its own state), or which
+  // one's forces became non-finite from finite inputs.
+  const bool diagnose = status[HEMO_STATUS_FIRST_BAD_STEP] == 0xffffffffu;
+  const bool finiteInput = !(any(isnan(xi)) || any(isinf(xi)) || any(isnan(vi.xyz)) || any(isinf(vi.xyz)) ||
+                             any(isnan(si)) || any(isinf(si)));
+  if (diagnose && !finiteInput) {
+    atomicMin(status[HEMO_STATUS_BAD_INPUT_ID], ids[i]);
+  }
   const float h = params.h;
   const float support2 = params.supportRadius * params.supportRadius;
   const float twoMu = 2.0 * params.mu;
@@ -90,6 +101,9 @@ void main() {
   a += repulsion / max(repulsionWeight, 1.0);
   a += params.gravity.xyz;
   accel[i] = vec4(a, 0.0);
+  if (diagnose && finiteInput && (any(isnan(a)) || any(isinf(a)))) {
+    atomicMin(status[HEMO_STATUS_BAD_FORCE_ID], ids[i]);
+  }
 
   const float speed = length(vi.xyz);
   const float accelMag = length(a);

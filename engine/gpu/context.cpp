@@ -188,10 +188,17 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Context::onMessage(VkDebugUtilsMessageSeverityFla
   return VK_FALSE;
 }
 
-Context::Context(const ContextOptions& options) : validation_(options.validation) {
-  instance_ = createInstance(options.validation);
+namespace {
+bool validationFromEnvironment() {
+  const char* v = std::getenv("HEMO_VALIDATION");
+  return v && std::string(v) != "0" && std::string(v) != "";
+}
+}  // namespace
+
+Context::Context(const ContextOptions& options) : validation_(options.validation || validationFromEnvironment()) {
+  instance_ = createInstance(validation_);
   try {
-    if (options.validation) {
+    if (validation_) {
       VkDebugUtilsMessengerCreateInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
       info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
                              VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;

@@ -228,7 +228,7 @@ Scene parseScene(const std::string& text, const std::string& source) {
   Json raw;
   try {
     raw = Json::parse(text);
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // syntax errors, and numbers that overflow a double
     throw SceneError(source + ": not valid JSON: " + e.what());
   }
   const Checker c(source);

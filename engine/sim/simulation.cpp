@@ -99,22 +99,15 @@ void Simulation::checkStatus(std::uint64_t batchFirstStep) {
   const auto log = solver_->stepLog().readback<glm::vec2>(scene_.stepsPerBatch);
   const std::uint64_t bad = status.firstBadStep;
   const double t = bad >= batchFirstStep && bad - batchFirstStep < log.size() ? log[bad - batchFirstStep].x : time();
-  const Snapshot snap = snapshot();
-  std::uint32_t badId = 0xffffffffu;
-  glm::vec4 badPos(0.0f);
-  for (std::size_t i = 0; i < snap.ids.size(); ++i) {
-    const glm::vec4 p = snap.positions[i], v = snap.velocities[i];
-    const bool finite = std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && std::isfinite(v.x) &&
-                        std::isfinite(v.y) && std::isfinite(v.z);
-    if (!finite && snap.ids[i] < badId) {
-      badId = snap.ids[i];
-      badPos = p;
-    }
-  }
   std::ostringstream msg;
   msg << "the simulation became non-finite at step " << bad << " (t = " << t << " s): " << status.nonFinite
-      << " particle updates produced NaN/Inf, the first by particle id " << badId
-      << " (increase the resolution, lower time.cfl_acoustic / time.max_dt_s, or check the forces)";
+      << " particle updates produced NaN/Inf";
+  if (status.badInputId != 0xffffffffu) {
+    msg << "; particle id " << status.badInputId << " was the first with a non-finite state";
+  } else if (status.badForceId != 0xffffffffu) {
+    msg << "; the forces on particle id " << status.badForceId << " were the first to turn non-finite";
+  }
+  msg << " (increase the resolution, lower time.cfl_acoustic / time.max_dt_s, or check the forces)";
   throw SimulationError(msg.str());
 }
 

@@ -151,7 +151,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_FORCES_BINDING_NCOUNT, &ncount_},
                                        {HEMO_FORCES_BINDING_NLIST, &nlist_},
                                        {HEMO_FORCES_BINDING_ACCEL, &accel_},
-                                       {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_}});
+                                       {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
+                                       {HEMO_FORCES_BINDING_IDS, &a.ids},
+                                       {HEMO_FORCES_BINDING_STATUS, &status_}});
     integrateSets_[p] = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                              {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                              {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},
@@ -168,6 +170,7 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   clockParity_ = 0;
   rec.fill(status_, 0);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
+  rec.fill(status_, 0xffffffffu, HEMO_STATUS_BAD_INPUT_ID * 4, 8);  // and BAD_FORCE_ID
   grid_.resetCounters(rec);
   rec.transferToCompute();
 }
@@ -221,7 +224,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
 SphStatus SphSolver::readStatus() const {
   const auto s = status_.readback<std::uint32_t>(HEMO_STATUS_COUNT);
   return SphStatus{s[HEMO_STATUS_FIRST_BAD_STEP], s[HEMO_STATUS_NONFINITE], s[HEMO_STATUS_NEIGHBOUR_OVERFLOW],
-                   s[HEMO_STATUS_MAX_NEIGHBOURS]};
+                   s[HEMO_STATUS_MAX_NEIGHBOURS], s[HEMO_STATUS_BAD_INPUT_ID], s[HEMO_STATUS_BAD_FORCE_ID]};
 }
 
 SphClock SphSolver::readClock() const {

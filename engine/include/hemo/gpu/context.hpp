@@ -34,6 +34,7 @@ struct DeviceInfo {
 
 struct ContextOptions {
   // Enable VK_LAYER_KHRONOS_validation and count its messages. Fails if the layer is missing.
+  // The environment variable HEMO_VALIDATION=1 turns it on as well.
   bool validation = false;
   // Device selector: an index into the device list or a case-insensitive substring of the
   // device name. Empty: the HEMO_DEVICE environment variable, else the default choice

@@ -72,6 +72,8 @@ struct SphStatus {
   std::uint32_t nonFinite = 0;
   std::uint32_t neighbourOverflow = 0;
   std::uint32_t maxNeighbours = 0;
+  std::uint32_t badInputId = 0xffffffffu;  // lowest id already non-finite entering a force pass
+  std::uint32_t badForceId = 0xffffffffu;  // lowest id whose forces turned non-finite
 };
 
 struct SphClock {

@@ -1,0 +1,176 @@
+// Scene files: every kind of bad input gets one clear message naming the field.
+#include "hemo/scene/builders.hpp"
+#include "hemo/scene/scene.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+namespace hemo::scene {
+namespace {
+
+using Json = nlohmann::json;
+
+Json validScene() {
+  return Json::parse(R"({
+    "scene": "t",
+    "particles": { "spacing_m": 0.01 },
+    "fluid": { "expected_max_speed_m_s": 1.0,
+               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.1, 0.05, 0.2] } ] },
+    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.3, 0.05, 0.3], "layers": 3 } ] },
+    "domain": { "min_m": [-0.05, -0.05, -0.05], "max_m": [0.35, 0.1, 0.35] }
+  })");
+}
+
+// Expects parseScene to throw a SceneError whose message contains every fragment.
+void expectError(const Json& j, std::initializer_list<const char*> fragments) {
+  try {
+    parseScene(j.dump(), "bad.json");
+    FAIL() << "accepted: " << j.dump();
+  } catch (const SceneError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("bad.json"), std::string::npos) << m;
+    for (const char* f : fragments) EXPECT_NE(m.find(f), std::string::npos) << "'" << f << "' not in: " << m;
+  }
+}
+
+TEST(Scene, ValidSceneLoadsWithDefaultsAndDerivedSoundSpeed) {
+  const Scene s = parseScene(validScene().dump(), "ok.json");
+  EXPECT_EQ(s.name, "t");
+  EXPECT_FLOAT_EQ(s.sph.spacing, 0.01f);
+  EXPECT_FLOAT_EQ(s.sph.smoothingRatio, 1.3f);
+  EXPECT_FLOAT_EQ(s.sph.soundSpeed, 10.0f);  // 10 x expected max speed
+  EXPECT_FLOAT_EQ(s.sph.restDensity, 1000.0f);
+  EXPECT_FLOAT_EQ(s.sph.gravity.z, -9.81f);
+  ASSERT_EQ(s.blocks.size(), 1u);
+  ASSERT_EQ(s.tanks.size(), 1u);
+  EXPECT_TRUE(s.tanks[0].openTop);
+}
+
+TEST(Scene, UnknownKeysAreNamed) {
+  Json j = validScene();
+  j["fluid"]["viscosty_pa_s"] = 0.1;
+  expectError(j, {"fluid.viscosty_pa_s", "unknown key"});
+  j = validScene();
+  j["extra"] = 1;
+  expectError(j, {"extra", "unknown key"});
+}
+
+TEST(Scene, WrongTypesAreNamed) {
+  Json j = validScene();
+  j["particles"]["spacing_m"] = "small";
+  expectError(j, {"particles.spacing_m", "expected a number"});
+  j = validScene();
+  j["fluid"]["blocks"][0]["min_m"] = Json::array({0, 0});
+  expectError(j, {"fluid.blocks[0].min_m", "3 numbers"});
+  j = validScene();
+  j["fluid"]["clamp_negative_pressure"] = 1;
+  expectError(j, {"fluid.clamp_negative_pressure", "true or false"});
+  j = validScene();
+  j["time"] = Json::object({{"integrator", "euler"}});
+  expectError(j, {"time.integrator", "symplectic_euler"});
+  j = validScene();
+  j["particles"]["neighbour_capacity"] = 64.5;
+  expectError(j, {"particles.neighbour_capacity", "whole number"});
+}
+
+TEST(Scene, OutOfRangeValuesAreNamed) {
+  Json j = validScene();
+  j["particles"]["spacing_m"] = -0.01;
+  expectError(j, {"particles.spacing_m", "must be in"});
+  j = validScene();
+  j["particles"]["spacing_m"] = 0;
+  expectError(j, {"particles.spacing_m"});
+  j = validScene();
+  j["fluid"]["density_kg_m3"] = 1e9;
+  expectError(j, {"fluid.density_kg_m3"});
+}
+
+TEST(Scene, BoxesWithMinAboveMaxAreNamed) {
+  Json j = validScene();
+  j["fluid"]["blocks"][0]["min_m"] = Json::array({0.2, 0, 0});
+  expectError(j, {"fluid.blocks[0]", "min_m must be below max_m", "axis x"});
+  j = validScene();
+  j["domain"]["max_m"][2] = -1.0;
+  expectError(j, {"domain", "axis z"});
+}
+
+TEST(Scene, NonFiniteNumbersAndBadJsonAreRejected) {
+  // JSON has no NaN literal; a NaN can only arrive as bad JSON or an overflowing number.
+  std::string text = validScene().dump();
+  text.replace(text.find("0.01"), 4, "NaN");
+  EXPECT_THROW(parseScene(text, "bad.json"), SceneError);
+  std::string big = validScene().dump();
+  big.replace(big.find("0.01"), 4, "1e999");
+  EXPECT_THROW(parseScene(big, "bad.json"), SceneError);
+  try {
+    parseScene("{ \"scene\": ", "broken.json");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("not valid JSON"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Scene, MissingRequiredFieldsAreNamed) {
+  Json j = validScene();
+  j["particles"].erase("spacing_m");
+  expectError(j, {"particles.spacing_m", "required"});
+  j = validScene();
+  j.erase("domain");
+  expectError(j, {"domain", "required"});
+  j = validScene();
+  j["fluid"]["blocks"] = Json::array();
+  expectError(j, {"fluid.blocks", "at least 1"});
+}
+
+TEST(Scene, GeometryOutsideTheDomainIsNamed) {
+  Json j = validScene();
+  j["fluid"]["blocks"][0]["max_m"][0] = 1.0;
+  expectError(j, {"fluid.blocks[0]", "outside the domain"});
+  j = validScene();
+  j["boundary"]["tanks"][0]["min_m"][1] = -0.04;  // its 3 layers reach y = -0.07
+  expectError(j, {"boundary.tanks[0]", "layers"});
+}
+
+TEST(Scene, MissingFileIsAClearError) {
+  try {
+    loadScene("/nonexistent/dir/scene.json");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/dir/scene.json"), std::string::npos);
+  }
+}
+
+TEST(Scene, ShippedScenesLoad) {
+  for (const char* name : {"dam_break.json", "hydrostatic.json"}) {
+    const Scene s = loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/" + name);
+    EXPECT_FALSE(s.blocks.empty()) << name;
+  }
+}
+
+TEST(Scene, SchemaDocsAreUpToDate) {
+  std::ifstream in(std::string(HEMO_SOURCE_DIR) + "/docs/scene-format.md");
+  ASSERT_TRUE(in) << "docs/scene-format.md is missing";
+  const std::string doc((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(doc.find(schemaMarkdown()), std::string::npos)
+      << "docs/scene-format.md does not contain the current parameter table; regenerate it with "
+         "`hemo-run --describe-scene`";
+}
+
+TEST(Builders, TankAndBlockCountsMatchTheEstimate) {
+  const Scene s = parseScene(validScene().dump(), "ok.json");
+  const ParticleSet set = buildParticles(s);
+  EXPECT_EQ(set.size(), countParticles(s));
+  EXPECT_EQ(set.fluid, 10u * 5u * 20u);
+  // open top: (30+6)(5+6)(30+3) - 30*5*30
+  EXPECT_EQ(set.boundary, 36u * 11u * 33u - 30u * 5u * 30u);
+  for (std::uint32_t i = set.fluid; i < set.size(); ++i) {
+    const glm::vec3 n(set.normals[i]);
+    EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
+  }
+}
+
+}  // namespace
+}  // namespace hemo::scene
