@@ -149,6 +149,10 @@ int main(int argc, char** argv) {
       writeVtk(p);
     }
     const double wall = result.wallSeconds;
+    nlohmann::json stageMs = nlohmann::json::object();
+    if (finite) {
+      for (const auto& [stage, ms] : sim.profileStep()) stageMs[stage] = ms;
+    }
     summary = {{"scene", scene.name},
                {"device", ctx.info().name},
                {"fluid_particles", sim.fluidParticles()},
@@ -163,7 +167,8 @@ int main(int argc, char** argv) {
                {"sim_time_s", sim.time()},
                {"wall_time_s", wall},
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},
-               {"finite", finite}};
+               {"finite", finite},
+               {"stage_ms", stageMs}};
     if (!finite) summary["error"] = failure;
     if (ctx.validationEnabled() && ctx.validationMessageCount() > 0) {
       for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";

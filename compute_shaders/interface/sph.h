@@ -29,6 +29,13 @@
 //   float dampingRate        settling damping xi (1/s): v <- v / (1 + xi dt) while t < dampingUntil
 //   float dampingUntil       end of the settling phase (s); 0: no damping
 
+// sph/mark_fluid_cells.comp: flags (non-zero) every grid cell that holds a fluid particle, so
+// boundary particles with no fluid in their 27 cells skip the density pass.
+#define HEMO_MARK_BINDING_POSITIONS 0
+#define HEMO_MARK_BINDING_VELOCITIES 1
+#define HEMO_MARK_BINDING_FLAGS 2
+#define HEMO_MARK_BINDING_COUNT 3
+
 // sph/density.comp: summation density, Tait pressure, neighbour list.
 #define HEMO_DENSITY_BINDING_POSITIONS 0
 #define HEMO_DENSITY_BINDING_VELOCITIES 1
@@ -38,7 +45,8 @@
 #define HEMO_DENSITY_BINDING_NCOUNT 5
 #define HEMO_DENSITY_BINDING_NLIST 6
 #define HEMO_DENSITY_BINDING_STATUS 7
-#define HEMO_DENSITY_BINDING_COUNT 8
+#define HEMO_DENSITY_BINDING_FLUID_CELLS 8
+#define HEMO_DENSITY_BINDING_COUNT 9
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).

@@ -22,6 +22,7 @@ layout(std430, binding = HEMO_DENSITY_BINDING_STATE) writeonly buffer State { ve
 layout(std430, binding = HEMO_DENSITY_BINDING_NCOUNT) writeonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NLIST) writeonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_STATUS) buffer Status { uint status[]; };
+layout(std430, binding = HEMO_DENSITY_BINDING_FLUID_CELLS) readonly buffer FluidCells { uint fluidCells[]; };
 layout(push_constant) uniform Push { vec4 originInvCell; uvec4 dimsN; } pc;
 
 void main() {
@@ -44,6 +45,23 @@ void main() {
   const ivec3 hi = ivec3(pc.dimsN.xyz) - 1;
   const int x0 = max(c.x - 1, 0);
   const int x1 = min(c.x + 1, hi.x);
+  if (!fluidI) {
+    // A boundary particle needs only its fluid neighbours: none in its 27 cells, no work.
+    bool fluidNear = false;
+    for (int z = max(c.z - 1, 0); z <= min(c.z + 1, hi.z); ++z) {
+      for (int y = max(c.y - 1, 0); y <= min(c.y + 1, hi.y); ++y) {
+        const uint rowFirst = hemo_cell_linear(ivec3(x0, y, z), pc.dimsN.xyz);
+        for (uint k = 0u; k <= uint(x1 - x0); ++k) {
+          fluidNear = fluidNear || fluidCells[rowFirst + k] != 0u;
+        }
+      }
+    }
+    if (!fluidNear) {
+      neighbourCount[i] = 0u;
+      state[i] = vec4(params.rho0, 0.0, 0.0, 0.0);
+      return;
+    }
+  }
   for (int z = max(c.z - 1, 0); z <= min(c.z + 1, hi.z); ++z) {
     for (int y = max(c.y - 1, 0); y <= min(c.y + 1, hi.y); ++y) {
       const uint rowFirst = hemo_cell_linear(ivec3(x0, y, z), pc.dimsN.xyz);

@@ -1,5 +1,6 @@
 #include "hemo/sim/simulation.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -109,6 +110,31 @@ void Simulation::checkStatus(std::uint64_t batchFirstStep) {
   }
   msg << " (increase the resolution, lower time.cfl_acoustic / time.max_dt_s, or check the forces)";
   throw SimulationError(msg.str());
+}
+
+std::vector<std::pair<std::string, double>> Simulation::profileStep(int repeats) {
+  std::vector<std::pair<std::string, double>> result;
+  if (!context_->timestampsSupported()) return result;
+  gpu::TimestampQueries ts(*context_, 32);
+  std::vector<std::vector<std::pair<std::string, double>>> runs;
+  for (int r = 0; r < repeats; ++r) {
+    recorder_->begin();
+    ts.reset(*recorder_);
+    ts.mark(*recorder_, "start");
+    solver_->recordStep(*recorder_, static_cast<std::uint32_t>(steps_), 0, 3.0e38f, &ts);
+    recorder_->end();
+    recorder_->submitAndWait();
+    checkStatus(steps_);
+    ++steps_;
+    runs.push_back(ts.stageMs());
+  }
+  for (std::size_t k = 0; k < runs.front().size(); ++k) {
+    std::vector<double> ms;
+    for (const auto& run : runs) ms.push_back(run[k].second);
+    std::sort(ms.begin(), ms.end());
+    result.emplace_back(runs.front()[k].first, ms[ms.size() / 2]);
+  }
+  return result;
 }
 
 Snapshot Simulation::snapshot() const {

@@ -120,15 +120,20 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
+      fluidCells_(context, grid_.spec().cellCount() * 4, gpu::MemoryUse::Device, "fluid cell flags"),
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)) {
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   auto& cache = context.pipelines();
+  markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
   density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
   boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
   for (int p = 0; p < 2; ++p) {
     const ParticleArrays& a = particles.half(p);
+    markSets_[p] = markFluid_->makeSet({{HEMO_MARK_BINDING_POSITIONS, &a.positions},
+                                        {HEMO_MARK_BINDING_VELOCITIES, &a.velocities},
+                                        {HEMO_MARK_BINDING_FLAGS, &fluidCells_}});
     densitySets_[p] = density_->makeSet({{HEMO_DENSITY_BINDING_POSITIONS, &a.positions},
                                          {HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities},
                                          {HEMO_DENSITY_BINDING_CELL_START, &grid_.cellStart()},
@@ -136,7 +141,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                          {HEMO_DENSITY_BINDING_STATE, &state_},
                                          {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
                                          {HEMO_DENSITY_BINDING_NLIST, &nlist_},
-                                         {HEMO_DENSITY_BINDING_STATUS, &status_}});
+                                         {HEMO_DENSITY_BINDING_STATUS, &status_},
+                                         {HEMO_DENSITY_BINDING_FLUID_CELLS, &fluidCells_}});
     boundarySets_[p] = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
                                                    {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
                                                    {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
@@ -181,6 +187,10 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQuerie
 
 void SphSolver::recordDensity(gpu::CommandRecorder& rec) {
   const std::uint32_t n = particles_->count();
+  rec.fill(fluidCells_, 0);
+  rec.transferToCompute();
+  rec.dispatch(*markFluid_, markSets_[particles_->parity()], grid_.push(n), markFluid_->groupsFor(n));
+  rec.computeToCompute();
   rec.dispatch(*density_, densitySets_[particles_->parity()], grid_.push(n), density_->groupsFor(n));
   rec.computeToCompute();
   rec.dispatch(*boundaryPressure_, boundarySets_[particles_->parity()], CountPush{n}, boundaryPressure_->groupsFor(n));

@@ -61,6 +61,9 @@ class Simulation {
   RunResult run(const RunOptions& options);
 
   Snapshot snapshot() const;
+  // GPU milliseconds of each stage of one step (median of `repeats` steps, run now and
+  // counted like any other step). Empty if the device has no timestamps.
+  std::vector<std::pair<std::string, double>> profileStep(int repeats = 5);
   const scene::Scene& scene() const { return scene_; }
   std::uint32_t fluidParticles() const { return fluid_; }
   std::uint32_t boundaryParticles() const { return boundary_; }

@@ -127,12 +127,14 @@ class SphSolver {
   gpu::Buffer paramsBuffer_;
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_;
   gpu::Buffer clock_, status_, log_;
+  gpu::Buffer fluidCells_;
   gpu::MinMaxReduce dtReduce_;
+  const gpu::ComputePipeline* markFluid_;
   const gpu::ComputePipeline* density_;
   const gpu::ComputePipeline* boundaryPressure_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_;
-  std::array<gpu::DescriptorSet, 2> densitySets_, boundarySets_, forcesSets_, integrateSets_;  // by parity
+  std::array<gpu::DescriptorSet, 2> markSets_, densitySets_, boundarySets_, forcesSets_, integrateSets_;  // by parity
 };
 
 }  // namespace hemo::sim
