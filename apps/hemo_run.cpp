@@ -23,6 +23,7 @@ using Json = nlohmann::json;
 
 const char* kUsage =
     "usage: hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N]\n"
+    "                [--profile N]\n"
     "  --out DIR        output directory (default: out/<scene name>)\n"
     "  --steps N        run N steps\n"
     "  --until SECONDS  run until this simulated time (default: the scene's time.end_time_s)\n"
