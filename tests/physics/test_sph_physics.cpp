@@ -136,5 +136,94 @@ TEST_F(SphPhysicsTest, NonFiniteStateStopsWithStepTimeAndParticle) {
   }
 }
 
+// ---- Hard cases: finite state, bounded speed, nothing lost without being counted ----------
+
+void expectHealthy(sim::Simulation& sim, float speedBound) {
+  const sim::Snapshot s = sim.snapshot();
+  for (std::uint32_t i = 0; i < sim.fluidParticles(); ++i) {
+    const glm::vec3 x(s.positions[i]), v(s.velocities[i]);
+    ASSERT_TRUE(std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z)) << "particle " << i;
+    ASSERT_LT(glm::length(v), speedBound) << "particle " << i << " at speed " << glm::length(v);
+  }
+}
+
+TEST_F(SphPhysicsTest, SingleParticleFallsFreely) {
+  const scene::Scene scene = scene::parseScene(R"({
+    "scene": "single",
+    "particles": { "spacing_m": 0.01 },
+    "fluid": { "expected_max_speed_m_s": 1.0, "blocks": [ { "min_m": [0, 0, 0.5], "max_m": [0.01, 0.01, 0.51] } ] },
+    "time": { "max_dt_s": 0.0005 },
+    "domain": { "min_m": [-0.1, -0.1, -0.1], "max_m": [0.1, 0.1, 0.6] }
+  })", "single");
+  sim::Simulation sim(ctx(), scene);
+  ASSERT_EQ(sim.fluidParticles(), 1u);
+  sim::RunOptions opt;
+  opt.until = 0.2;
+  sim.run(opt);
+  const sim::Snapshot s = sim.snapshot();
+  const double t = sim.time(), z0 = 0.505, g = 9.81;
+  // Symplectic Euler gives v = -g t exactly and falls ahead of the parabola by
+  // g sum(t_k dt_k) - g t^2 / 2 <= g t dt_max / 2, dt_max = C_a h / c0 (the step at rest).
+  const double exact = z0 - 0.5 * g * t * t;
+  const double dtMax = scene.sph.cflAcoustic * scene.sph.h() / scene.sph.soundSpeed;
+  EXPECT_LT(s.positions[0].z, exact);
+  EXPECT_GT(s.positions[0].z, exact - 0.5 * g * t * dtMax - 1e-6);
+  EXPECT_NEAR(s.velocities[0].z, -g * t, 1e-4);
+}
+
+const char* kBox = R"({
+  "scene": "hard_case",
+  "particles": { "spacing_m": 0.01 },
+  "fluid": { "expected_max_speed_m_s": 1.0,
+             "blocks": [ { "min_m": [0.02, 0.02, 0.0], "max_m": [0.08, 0.06, 0.06], "velocity_m_s": [0, 0, 0] } ] },
+  "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.2, 0.08, 0.12], "layers": 3, "open_top": false } ] },
+  "time": { "steps_per_batch": 50 },
+  "domain": { "min_m": [-0.05, -0.05, -0.05], "max_m": [0.25, 0.13, 0.17] }
+})";
+
+TEST_F(SphPhysicsTest, TwoParticlesOnTopOfEachOther) {
+  sim::Simulation sim(ctx(), scene::parseScene(kBox, "hard_case"));
+  auto pos = sim.store().readPositions();
+  const auto ids = sim.store().readIds();
+  glm::vec4 target(0.0f);
+  for (std::size_t i = 0; i < ids.size(); ++i) if (ids[i] == 5) target = pos[i];
+  for (std::size_t i = 0; i < ids.size(); ++i) if (ids[i] == 6) pos[i] = target;  // zero distance
+  sim.store().half(sim.store().parity()).positions.upload(pos);
+  sim::RunOptions opt;
+  opt.steps = 300;
+  EXPECT_NO_THROW(sim.run(opt));
+  expectHealthy(sim, 5.0f);
+  EXPECT_EQ(sim.escapedParticles(), 0u);
+}
+
+TEST_F(SphPhysicsTest, FluidStartedTwentyPercentCompressed) {
+  sim::Simulation sim(ctx(), scene::parseScene(kBox, "hard_case"));
+  auto pos = sim.store().readPositions();
+  const auto vel = sim.store().readVelocities();
+  const float s = std::cbrt(0.8f);  // 20% less volume
+  const glm::vec3 centre(0.05f, 0.04f, 0.0f);
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    if (vel[i].w == 0.0f) pos[i] = glm::vec4(centre + (glm::vec3(pos[i]) - centre) * s, pos[i].w);
+  }
+  sim.store().half(sim.store().parity()).positions.upload(pos);
+  sim::RunOptions opt;
+  opt.steps = 500;
+  EXPECT_NO_THROW(sim.run(opt));
+  // Bounded by the speed of sound of the compressed state (c0 = 10 m/s, rho/rho0 = 1.25).
+  expectHealthy(sim, 20.0f);
+  EXPECT_EQ(sim.escapedParticles(), 0u);
+}
+
+TEST_F(SphPhysicsTest, JetAtThreeTimesTheDesignSpeedHitsAWall) {
+  scene::Scene scene = scene::parseScene(kBox, "hard_case");
+  scene.blocks[0].velocity = glm::vec3(3.0f * scene.expectedMaxSpeed, 0.0f, 0.0f);  // 3 m/s into the +x wall
+  sim::Simulation sim(ctx(), scene);
+  sim::RunOptions opt;
+  opt.until = 0.08;  // reaches the wall at 0.04 s
+  EXPECT_NO_THROW(sim.run(opt));
+  expectHealthy(sim, 30.0f);
+  EXPECT_EQ(sim.escapedParticles(), 0u) << "the closed tank must hold the jet";
+}
+
 }  // namespace
 }  // namespace hemo::test
