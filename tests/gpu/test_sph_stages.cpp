@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace hemo::test {
 namespace {
@@ -69,6 +70,30 @@ reference::SphModel modelOf(const sim::SphParams& p) {
 
 class SphStageTest : public GpuTest {
  protected:
+  // Uploads the case (ids = input index) and runs neighbours, density and forces once.
+  struct Stages {
+    std::unique_ptr<sim::ParticleStore> store;
+    std::unique_ptr<sim::SphSolver> solver;
+  };
+  Stages runStages(const Case& c, const sim::SphSettings& s, glm::vec3 domainMax) {
+    const auto n = static_cast<std::uint32_t>(c.pos.size());
+    Stages st;
+    st.store = std::make_unique<sim::ParticleStore>(ctx(), n);
+    std::vector<std::uint32_t> ids(n);
+    for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
+    st.store->upload(c.pos, c.vel, ids, c.normals);
+    st.solver = std::make_unique<sim::SphSolver>(ctx(), *st.store, glm::vec3(-0.05f), domainMax, s);
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    st.solver->recordReset(rec);
+    st.solver->recordNeighbours(rec);
+    st.solver->recordDensity(rec);
+    st.solver->recordForces(rec);
+    rec.end();
+    rec.submitAndWait();
+    return st;
+  }
+
   static sim::SphSettings settings() {
     sim::SphSettings s;
     s.spacing = 0.01f;
@@ -86,19 +111,9 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
     s.clampNegativePressure = clamp;
     const Case c = makeCase(rng, s, 9, 8, 7);
     const auto n = static_cast<std::uint32_t>(c.pos.size());
-    sim::ParticleStore store(ctx(), n);
-    std::vector<std::uint32_t> ids(n);
-    for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
-    store.upload(c.pos, c.vel, ids, c.normals);
-    sim::SphSolver solver(ctx(), store, {-0.05f, -0.05f, -0.05f}, {0.15f, 0.15f, 0.15f}, s);
-    gpu::CommandRecorder rec(ctx());
-    rec.begin();
-    solver.recordReset(rec);
-    solver.recordNeighbours(rec);
-    solver.recordDensity(rec);
-    solver.recordForces(rec);
-    rec.end();
-    rec.submitAndWait();
+    const Stages st = runStages(c, s, glm::vec3(0.15f));
+    const sim::ParticleStore& store = *st.store;
+    const sim::SphSolver& solver = *st.solver;
 
     const auto slotIds = store.readIds();
     const auto state = solver.state().readback<glm::vec4>(n);
@@ -146,17 +161,9 @@ TEST_F(SphStageTest, TimeStepLimitIsTheMinimumOfTheConditions) {
   const sim::SphSettings s = settings();
   const Case c = makeCase(rng, s, 6, 6, 5);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  sim::ParticleStore store(ctx(), n);
-  store.upload(c.pos, c.vel, {}, c.normals);
-  sim::SphSolver solver(ctx(), store, {-0.05f, -0.05f, -0.05f}, {0.1f, 0.1f, 0.1f}, s);
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  solver.recordReset(rec);
-  solver.recordNeighbours(rec);
-  solver.recordDensity(rec);
-  solver.recordForces(rec);
-  rec.end();
-  rec.submitAndWait();
+  const Stages st = runStages(c, s, glm::vec3(0.1f));
+  const sim::ParticleStore& store = *st.store;
+  const sim::SphSolver& solver = *st.solver;
   const auto vel = store.readVelocities();
   const auto accel = solver.accel().readback<glm::vec4>(n);
   const auto limits = solver.dtLimits().readback<float>(n);
