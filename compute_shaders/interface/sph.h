@@ -48,6 +48,16 @@
 #define HEMO_DENSITY_BINDING_FLUID_CELLS 8
 #define HEMO_DENSITY_BINDING_COUNT 9
 
+// sph/density_list.comp: the same density and pressure from the existing neighbour list (the
+// second stage of a Runge-Kutta step, when particles have moved less than the list's skin).
+#define HEMO_DLIST_BINDING_POSITIONS 0
+#define HEMO_DLIST_BINDING_VELOCITIES 1
+#define HEMO_DLIST_BINDING_PARAMS 2
+#define HEMO_DLIST_BINDING_STATE 3
+#define HEMO_DLIST_BINDING_NCOUNT 4
+#define HEMO_DLIST_BINDING_NLIST 5
+#define HEMO_DLIST_BINDING_COUNT 6
+
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).
 #define HEMO_BPRESSURE_BINDING_POSITIONS 0
@@ -72,7 +82,11 @@
 #define HEMO_FORCES_BINDING_STATUS 10
 #define HEMO_FORCES_BINDING_COUNT 11
 
-// sph/integrate.comp: symplectic Euler with the GPU-reduced time step, clock, status.
+// sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
+// step, clock, status. Push constant `mode`:
+#define HEMO_INTEGRATE_SYMPLECTIC_EULER 0
+#define HEMO_INTEGRATE_RK2_HALF 1  // save (x, v), move to the midpoint with dt / 2
+#define HEMO_INTEGRATE_RK2_FULL 2  // from the saved (x, v) with the midpoint's v and a
 #define HEMO_INTEGRATE_BINDING_POSITIONS 0
 #define HEMO_INTEGRATE_BINDING_VELOCITIES 1
 #define HEMO_INTEGRATE_BINDING_ACCEL 2
@@ -81,7 +95,10 @@
 #define HEMO_INTEGRATE_BINDING_CLOCK 5
 #define HEMO_INTEGRATE_BINDING_STATUS 6
 #define HEMO_INTEGRATE_BINDING_LOG 7
-#define HEMO_INTEGRATE_BINDING_COUNT 8
+#define HEMO_INTEGRATE_BINDING_SAVED_POS 8
+#define HEMO_INTEGRATE_BINDING_SAVED_VEL 9
+#define HEMO_INTEGRATE_BINDING_STEP_DT 10
+#define HEMO_INTEGRATE_BINDING_COUNT 11
 
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).

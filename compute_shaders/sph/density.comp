@@ -13,6 +13,7 @@
 #include "common/grid.glsl"
 #include "common/kernel.glsl"
 #include "common/sph_params.glsl"
+#include "common/tait.glsl"
 
 layout(std430, binding = HEMO_DENSITY_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
@@ -92,11 +93,5 @@ void main() {
     return;
   }
 
-  const float ratio = rho / params.rho0;
-  const float r2 = ratio * ratio;
-  float p = params.taitB * (r2 * r2 * r2 * ratio - 1.0);
-  if (params.clampNegativePressure != 0u) {
-    p = max(p, 0.0);
-  }
-  state[i] = vec4(rho, p, 0.0, 0.0);
+  state[i] = vec4(rho, hemo_tait_pressure(rho, params), 0.0, 0.0);
 }

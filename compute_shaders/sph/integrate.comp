@@ -1,5 +1,10 @@
 #version 450
-// Symplectic Euler: v += a dt, x += v dt for fluid particles, with dt = min(reduced
+// Time integration of fluid particles (mode in the push constants):
+//  symplectic Euler ... v += a dt, x += v dt
+//  RK2 midpoint ....... stage 1 saves (x0, v0) and moves to x0 + v0 dt/2, v0 + a0 dt/2;
+//                       stage 2 (after new forces at the midpoint) sets x = x0 + v dt,
+//                       v = v0 + a dt. Only stage 2 advances the clock.
+// dt = min(reduced
 // per-particle limits, dtMax, endTime - t) read from the GPU (the host never sees dt inside a
 // batch). Once the clock reaches endTime, steps change nothing (dt = 0, not counted).
 // While t < dampingUntil the velocity is damped (a settling phase for validation scenes).
@@ -26,14 +31,38 @@ struct ClockRecord {
 layout(std430, binding = HEMO_INTEGRATE_BINDING_CLOCK) buffer Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STATUS) buffer Status { uint status[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_LOG) writeonly buffer Log { vec2 stepLog[]; };
-layout(push_constant) uniform Push { uint n; uint step; uint logIndex; float endTime; uint clockIn; } pc;
+layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_POS) buffer SavedPos { vec4 savedPos[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec4 savedVel[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
+layout(push_constant) uniform Push { uint n; uint step; uint logIndex; float endTime; uint clockIn; uint mode; } pc;
 
 void main() {
   const uint i = hemo_global_index();
   const ClockRecord clock = clocks[pc.clockIn];
-  const float remaining = pc.endTime - (clock.time - clock.compensation);
-  const float dt = min(min(dtMinMax.x, params.dtMax), max(remaining, 0.0));
+  // The step's dt: from the reduction (Euler, RK2 first stage), or the one the first stage
+  // stored (RK2 second stage, so both stages use the same dt).
+  float dt;
+  if (pc.mode == HEMO_INTEGRATE_RK2_FULL) {
+    dt = stepDt;
+  } else {
+    const float remaining = pc.endTime - (clock.time - clock.compensation);
+    dt = min(min(dtMinMax.x, params.dtMax), max(remaining, 0.0));
+  }
   const bool running = dt > 0.0 || isnan(dt);  // false once the end time is reached
+  if (pc.mode == HEMO_INTEGRATE_RK2_HALF) {
+    if (i == 0u) {
+      stepDt = dt;  // read by the second stage (a later dispatch)
+    }
+    if (running && i < pc.n && uint(velocities[i].w) == HEMO_KIND_FLUID) {
+      const vec4 v = velocities[i];
+      const vec4 x = positions[i];
+      savedPos[i] = x;
+      savedVel[i] = v;
+      velocities[i] = vec4(v.xyz + accel[i].xyz * (0.5 * dt), v.w);
+      positions[i] = vec4(x.xyz + v.xyz * (0.5 * dt), x.w);
+    }
+    return;
+  }
   if (i == 0u) {
     ClockRecord next = clock;
     if (running) {
@@ -57,11 +86,20 @@ void main() {
     return;
   }
   vec4 x = positions[i];
-  v.xyz += accel[i].xyz * dt;
+  if (pc.mode == HEMO_INTEGRATE_RK2_FULL) {
+    // midpoint rule: x1 = x0 + dt v(mid), v1 = v0 + dt a(mid)
+    const vec4 v0 = savedVel[i];
+    x.xyz = savedPos[i].xyz + v.xyz * dt;
+    v.xyz = v0.xyz + accel[i].xyz * dt;
+  } else {
+    v.xyz += accel[i].xyz * dt;
+  }
   if (clock.time < params.dampingUntil) {
     v.xyz /= 1.0 + params.dampingRate * dt;  // settling phase only (implicit, so never unstable)
   }
-  x.xyz += v.xyz * dt;
+  if (pc.mode != HEMO_INTEGRATE_RK2_FULL) {
+    x.xyz += v.xyz * dt;
+  }
   if (any(isnan(x.xyz)) || any(isinf(x.xyz)) || any(isnan(v.xyz)) || any(isinf(v.xyz))) {
     atomicMin(status[HEMO_STATUS_FIRST_BAD_STEP], pc.step);
     atomicAdd(status[HEMO_STATUS_NONFINITE], 1u);

@@ -75,7 +75,7 @@ const std::vector<Field>& schema() {
        }},
       {"time", Kind::Section, "", 0, 0, false, Json::object(), "Time stepping.", {},
        {
-           {"integrator", Kind::Choice, "", 0, 0, false, "symplectic_euler", "Time integration scheme.", {"symplectic_euler"}},
+           {"integrator", Kind::Choice, "", 0, 0, false, "symplectic_euler", "Time integration: symplectic Euler (one force evaluation per step) or the Runge-Kutta midpoint rule (two, the reference).", {"symplectic_euler", "rk2_midpoint"}},
            {"cfl_acoustic", Kind::Number, "1", 0, 1, true, 0.3, "C_a in dt <= C_a h / (c0 + |v|)."},
            {"cfl_force", Kind::Number, "1", 0, 1, true, 0.25, "C_f in dt <= C_f sqrt(h / |a|)."},
            {"max_dt_s", Kind::Number, "s", 0, 1, true, 1e-3, "Upper bound of the time step."},
@@ -274,7 +274,8 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.sph.bodyForce = vec3(j["forces"]["body_force_m_s2"]);
 
   const Json& time = j["time"];
-  s.integrator = Integrator::SymplecticEuler;
+  s.sph.integrator = time["integrator"].get<std::string>() == "rk2_midpoint" ? sim::Integrator::Rk2Midpoint
+                                                                            : sim::Integrator::SymplecticEuler;
   s.sph.cflAcoustic = time["cfl_acoustic"].get<float>();
   s.sph.cflForce = time["cfl_force"].get<float>();
   s.sph.maxTimeStep = time["max_dt_s"].get<float>();

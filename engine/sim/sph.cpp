@@ -19,9 +19,9 @@ struct CountPush {
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
-  std::uint32_t clockIn;
+  std::uint32_t clockIn, mode;
 };
-static_assert(sizeof(IntegratePush) == 20);
+static_assert(sizeof(IntegratePush) == 24);
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
@@ -121,11 +121,15 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
       fluidCells_(context, grid_.spec().cellCount() * 4, gpu::MemoryUse::Device, "fluid cell flags"),
+      savedPos_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "rk2 saved positions"),
+      savedVel_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "rk2 saved velocities"),
+      stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)) {
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   auto& cache = context.pipelines();
   markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
   density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
+  densityList_ = &cache.get({"sph/density_list", HEMO_DLIST_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
@@ -143,6 +147,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                          {HEMO_DENSITY_BINDING_NLIST, &nlist_},
                                          {HEMO_DENSITY_BINDING_STATUS, &status_},
                                          {HEMO_DENSITY_BINDING_FLUID_CELLS, &fluidCells_}});
+    densityListSets_[p] = densityList_->makeSet({{HEMO_DLIST_BINDING_POSITIONS, &a.positions},
+                                                 {HEMO_DLIST_BINDING_VELOCITIES, &a.velocities},
+                                                 {HEMO_DLIST_BINDING_PARAMS, &paramsBuffer_},
+                                                 {HEMO_DLIST_BINDING_STATE, &state_},
+                                                 {HEMO_DLIST_BINDING_NCOUNT, &ncount_},
+                                                 {HEMO_DLIST_BINDING_NLIST, &nlist_}});
     boundarySets_[p] = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
                                                    {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
                                                    {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
@@ -167,7 +177,10 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                              {HEMO_INTEGRATE_BINDING_DT, &dtReduce_.result()},
                                              {HEMO_INTEGRATE_BINDING_CLOCK, &clock_},
                                              {HEMO_INTEGRATE_BINDING_STATUS, &status_},
-                                             {HEMO_INTEGRATE_BINDING_LOG, &log_}});
+                                             {HEMO_INTEGRATE_BINDING_LOG, &log_},
+                                             {HEMO_INTEGRATE_BINDING_SAVED_POS, &savedPos_},
+                                             {HEMO_INTEGRATE_BINDING_SAVED_VEL, &savedVel_},
+                                             {HEMO_INTEGRATE_BINDING_STEP_DT, &stepDt_}});
   }
 }
 
@@ -193,8 +206,20 @@ void SphSolver::recordDensity(gpu::CommandRecorder& rec) {
   rec.computeToCompute();
   rec.dispatch(*density_, densitySets_[particles_->parity()], grid_.push(n), density_->groupsFor(n));
   rec.computeToCompute();
+  recordBoundaryPressure(rec);
+}
+
+void SphSolver::recordBoundaryPressure(gpu::CommandRecorder& rec) {
+  const std::uint32_t n = particles_->count();
   rec.dispatch(*boundaryPressure_, boundarySets_[particles_->parity()], CountPush{n}, boundaryPressure_->groupsFor(n));
   rec.computeToCompute();
+}
+
+void SphSolver::recordDensityFromList(gpu::CommandRecorder& rec) {
+  const std::uint32_t n = particles_->count();
+  rec.dispatch(*densityList_, densityListSets_[particles_->parity()], CountPush{n}, densityList_->groupsFor(n));
+  rec.computeToCompute();
+  recordBoundaryPressure(rec);
 }
 
 void SphSolver::recordForces(gpu::CommandRecorder& rec) {
@@ -204,17 +229,22 @@ void SphSolver::recordForces(gpu::CommandRecorder& rec) {
 }
 
 void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime) {
+  recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_SYMPLECTIC_EULER);
+}
+
+void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex,
+                                    float endTime, std::uint32_t mode) {
   if (logIndex >= maxStepsPerBatch_) {
     throw std::out_of_range("step log index " + std::to_string(logIndex) + " exceeds the batch capacity " +
                             std::to_string(maxStepsPerBatch_));
   }
   const std::uint32_t n = particles_->count();
-  dtReduce_.record(rec, n);
+  if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, n);  // the second stage reuses the step's dt
   // At least one workgroup: invocation 0 advances the clock even with no particles.
   rec.dispatch(*integrate_, integrateSets_[particles_->parity()],
-               IntegratePush{n, step, logIndex, endTime, clockParity_}, integrate_->groupsFor(std::max(n, 1u)));
+               IntegratePush{n, step, logIndex, endTime, clockParity_, mode}, integrate_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
-  clockParity_ ^= 1u;
+  if (mode != HEMO_INTEGRATE_RK2_HALF) clockParity_ ^= 1u;  // the half stage leaves the clock alone
 }
 
 void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
@@ -227,8 +257,16 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   mark("density");
   recordForces(rec);
   mark("forces");
-  recordIntegrate(rec, step, logIndex, endTime);
-  mark("integrate");
+  if (settings_.integrator == Integrator::Rk2Midpoint) {
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_HALF);
+    recordDensityFromList(rec);
+    recordForces(rec);
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_FULL);
+    mark("rk2 midpoint stage + integrate");
+  } else {
+    recordIntegrate(rec, step, logIndex, endTime);
+    mark("integrate");
+  }
 }
 
 SphStatus SphSolver::readStatus() const {

@@ -37,8 +37,6 @@ struct Tank {
   bool openTop = true;
 };
 
-enum class Integrator { SymplecticEuler };
-
 struct Scene {
   std::string name;
   std::string description;
@@ -47,7 +45,6 @@ struct Scene {
   std::vector<FluidBlock> blocks;
   std::vector<Tank> tanks;
   Box domain;
-  Integrator integrator = Integrator::SymplecticEuler;
   double endTime = 1.0;             // s
   std::uint32_t stepsPerBatch = 64;  // steps recorded per submit
 };

@@ -22,6 +22,10 @@ namespace hemo::sim {
 
 enum class ParticleKind : std::uint32_t { Fluid = 0, Boundary = 1 };
 
+// Time integration: symplectic Euler (one force evaluation per step) or the second-order
+// Runge-Kutta midpoint rule (two; the reference scheme).
+enum class Integrator { SymplecticEuler, Rk2Midpoint };
+
 // Physical and numerical settings (SI units).
 struct SphSettings {
   float spacing = 0.0f;             // initial particle spacing dp (m)
@@ -41,6 +45,7 @@ struct SphSettings {
   float listSkin = 0.1f;            // neighbour-list radius = 2h (1 + skin)
   float dampingRate = 0.0f;         // settling phase: v <- v / (1 + rate dt) (1/s) ...
   float dampingUntil = 0.0f;        // ... while t < this (s)
+  Integrator integrator = Integrator::SymplecticEuler;
 
   float h() const { return smoothingRatio * spacing; }
   float supportRadius() const { return 2.0f * h(); }
@@ -99,6 +104,8 @@ class SphSolver {
   void recordDensity(gpu::CommandRecorder& rec);
   void recordForces(gpu::CommandRecorder& rec);
   void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f);
+  // Density and pressure from the current neighbour list (then the boundary pressure).
+  void recordDensityFromList(gpu::CommandRecorder& rec);
 
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);
@@ -123,18 +130,23 @@ class SphSolver {
   SphParams params_;
   std::uint32_t maxStepsPerBatch_;
   std::uint32_t clockParity_ = 0;  // which clock record holds the current time
+  void recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
+                           std::uint32_t mode);
+  void recordBoundaryPressure(gpu::CommandRecorder& rec);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_;
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer fluidCells_;
+  gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::MinMaxReduce dtReduce_;
   const gpu::ComputePipeline* markFluid_;
   const gpu::ComputePipeline* density_;
+  const gpu::ComputePipeline* densityList_;
   const gpu::ComputePipeline* boundaryPressure_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_;
-  std::array<gpu::DescriptorSet, 2> markSets_, densitySets_, boundarySets_, forcesSets_, integrateSets_;  // by parity
+  std::array<gpu::DescriptorSet, 2> markSets_, densitySets_, densityListSets_, boundarySets_, forcesSets_, integrateSets_;  // by parity
 };
 
 }  // namespace hemo::sim
