@@ -1,6 +1,7 @@
 // SPH physics: momentum conservation, determinism, end time. (Hydrostatic, Poiseuille and
 // dam-break validation are in progress: see docs/physics.md.)
 #include "gpu_test.hpp"
+#include "hemo/reference/sph.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/sim/simulation.hpp"
 
@@ -28,6 +29,62 @@ const char* kColumn = R"({
   "time": { "max_dt_s": 0.001, "steps_per_batch": 128 },
   "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.09, 0.09, 0.15] }
 })";
+
+// Hydrostatics: a 0.1 m column, 8 x 8 x 10 particles, settled with damping until 0.8 s. The
+// pressure on the floor is the vertical force the fluid exerts on the floor's boundary
+// particles (the reaction of the symmetric pressure term, evaluated from the GPU state),
+// divided by the floor area, averaged over 0.8-1.0 s; it must be rho0 g H within 2%
+// (measured: 967-976 Pa against 981). The pressure gradient in the lower half must be rho0 g
+// within 5%. (The issue's drift criterion, 0.1 dp after settling, is not met yet: particles
+// in the bottom corners still creep by ~0.35 dp over 0.2 s; see docs/physics.md.)
+TEST_F(SphPhysicsTest, HydrostaticColumnLoadsTheFloorWithRhoGH) {
+  const scene::Scene scene = scene::parseScene(R"({
+    "scene": "hydrostatic_test",
+    "particles": { "spacing_m": 0.01 },
+    "fluid": { "density_kg_m3": 1000, "viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.4,
+               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.1] } ] },
+    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.11], "layers": 3 } ] },
+    "time": { "max_dt_s": 0.001, "steps_per_batch": 128, "settle_damping_1_s": 30, "settle_until_s": 0.8 },
+    "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.12, 0.12, 0.15] }
+  })", "hydrostatic_test");
+  sim::Simulation sim(ctx(), scene);
+  const double g = 9.81, rho0 = 1000.0, H = 0.1, area = 0.08 * 0.08, h = scene.sph.h();
+  double loadSum = 0.0, slopeSum = 0.0;
+  int samples = 0;
+  for (double t : {0.8, 0.9, 1.0}) {
+    sim::RunOptions opt;
+    opt.until = t;
+    sim.run(opt);
+    const sim::Snapshot s = sim.snapshot();
+    double force = 0.0;
+    for (std::uint32_t b = sim.fluidParticles(); b < s.positions.size(); ++b) {
+      if (s.positions[b].z >= 0.0f) continue;
+      for (std::uint32_t f = 0; f < sim.fluidParticles(); ++f) {
+        const glm::dvec3 d = glm::dvec3(s.positions[b]) - glm::dvec3(s.positions[f]);
+        const double r = glm::length(d);
+        if (r >= 2.0 * h || r == 0.0) continue;
+        const glm::dvec2 sb = s.densityPressure[b], sf = s.densityPressure[f];
+        force -= double(s.positions[b].w) * double(s.positions[f].w) *
+                 (sb.y / (sb.x * sb.x) + sf.y / (sf.x * sf.x)) * d.z * (reference::kernelDwdr(r, h) / r);
+      }
+    }
+    loadSum += -force / area;  // the fluid pushes the floor down
+    double sz = 0, sp = 0, szz = 0, szp = 0;
+    int count = 0;
+    for (std::uint32_t i = 0; i < sim.fluidParticles(); ++i) {
+      const double z = s.positions[i].z, p = s.densityPressure[i].y;
+      if (z > 0.5 * H) continue;
+      sz += z, sp += p, szz += z * z, szp += z * p, ++count;
+    }
+    slopeSum += (count * szp - sz * sp) / (count * szz - sz * sz);
+    ++samples;
+  }
+  const double load = loadSum / samples, gradient = -slopeSum / samples;
+  RecordProperty("floor_pressure_pa", std::to_string(load));
+  EXPECT_NEAR(load, rho0 * g * H, 0.02 * rho0 * g * H) << "pressure on the floor " << load << " Pa";
+  EXPECT_NEAR(gradient, rho0 * g, 0.05 * rho0 * g) << "pressure gradient " << gradient << " Pa/m";
+  EXPECT_EQ(sim.escapedParticles(), 0u);
+}
 
 // A blob with no gravity and no walls keeps its total momentum.
 const char* kBlob = R"({
