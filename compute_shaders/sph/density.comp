@@ -46,18 +46,24 @@ void main() {
   const ivec3 hi = ivec3(pc.dimsN.xyz) - 1;
   const int x0 = max(c.x - 1, 0);
   const int x1 = min(c.x + 1, hi.x);
+  uint fluidRows = 0x1ffu;  // fluid particles scan all nine rows
   if (!fluidI) {
     // A boundary particle needs only its fluid neighbours: none in its 27 cells, no work.
-    bool fluidNear = false;
+    fluidRows = 0u;
+    // One bit per row (dz, dy) of the 3 x 3 rows that holds fluid; the others are skipped.
     for (int z = max(c.z - 1, 0); z <= min(c.z + 1, hi.z); ++z) {
       for (int y = max(c.y - 1, 0); y <= min(c.y + 1, hi.y); ++y) {
         const uint rowFirst = hemo_cell_linear(ivec3(x0, y, z), pc.dimsN.xyz);
+        bool rowHasFluid = false;
         for (uint k = 0u; k <= uint(x1 - x0); ++k) {
-          fluidNear = fluidNear || fluidCells[rowFirst + k] != 0u;
+          rowHasFluid = rowHasFluid || fluidCells[rowFirst + k] != 0u;
+        }
+        if (rowHasFluid) {
+          fluidRows |= 1u << uint((z - c.z + 1) * 3 + (y - c.y + 1));
         }
       }
     }
-    if (!fluidNear) {
+    if (fluidRows == 0u) {
       neighbourCount[i] = 0u;
       state[i] = vec4(params.rho0, 0.0, 0.0, 0.0);
       return;
@@ -65,6 +71,9 @@ void main() {
   }
   for (int z = max(c.z - 1, 0); z <= min(c.z + 1, hi.z); ++z) {
     for (int y = max(c.y - 1, 0); y <= min(c.y + 1, hi.y); ++y) {
+      if ((fluidRows & (1u << uint((z - c.z + 1) * 3 + (y - c.y + 1)))) == 0u) {
+        continue;
+      }
       const uint rowFirst = hemo_cell_linear(ivec3(x0, y, z), pc.dimsN.xyz);
       const uint jEnd = cellStart[rowFirst + uint(x1 - x0) + 1u];
       for (uint j = cellStart[rowFirst]; j < jEnd; ++j) {

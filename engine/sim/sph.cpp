@@ -198,7 +198,7 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQuerie
   grid_.record(rec, particles_->count(), timestamps);
 }
 
-void SphSolver::recordDensity(gpu::CommandRecorder& rec) {
+void SphSolver::recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
   rec.fill(fluidCells_, 0);
   rec.transferToCompute();
@@ -206,7 +206,9 @@ void SphSolver::recordDensity(gpu::CommandRecorder& rec) {
   rec.computeToCompute();
   rec.dispatch(*density_, densitySets_[particles_->parity()], grid_.push(n), density_->groupsFor(n));
   rec.computeToCompute();
+  if (timestamps) timestamps->mark(rec, "density");
   recordBoundaryPressure(rec);
+  if (timestamps) timestamps->mark(rec, "boundary pressure");
 }
 
 void SphSolver::recordBoundaryPressure(gpu::CommandRecorder& rec) {
@@ -253,8 +255,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
     if (timestamps) timestamps->mark(rec, stage);
   };
   recordNeighbours(rec, timestamps);
-  recordDensity(rec);
-  mark("density");
+  recordDensity(rec, timestamps);
   recordForces(rec);
   mark("forces");
   if (settings_.integrator == Integrator::Rk2Midpoint) {

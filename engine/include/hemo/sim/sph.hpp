@@ -101,7 +101,7 @@ class SphSolver {
                   gpu::TimestampQueries* timestamps = nullptr);
   // Stages on their own, for tests: neighbours must have been built first.
   void recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
-  void recordDensity(gpu::CommandRecorder& rec);
+  void recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   void recordForces(gpu::CommandRecorder& rec);
   void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f);
   // Density and pressure from the current neighbour list (then the boundary pressure).
