@@ -21,4 +21,8 @@ struct SphParams {
   uint neighbourCapacity;
   float dampingRate;
   float dampingUntil;
+  uint spsEnabled;
+  float spsSmagorinsky;
+  float spsBlinn;
+  float pad0;
 };

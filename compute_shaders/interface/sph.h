@@ -28,6 +28,10 @@
 //   uint  neighbourCapacity  entries per particle in the neighbour list
 //   float dampingRate        settling damping xi (1/s): v <- v / (1 + xi dt) while t < dampingUntil
 //   float dampingUntil       end of the settling phase (s); 0: no damping
+//   uint  spsEnabled         sub-particle-scale turbulence (Dalrymple & Rogers 2006) on/off
+//   float spsSmagorinsky     (C_s dp)^2 (m^2): eddy viscosity nu_t = (C_s dp)^2 |S|
+//   float spsBlinn           C_I dp^2 (m^2): isotropic part -2/3 C_I dp^2 |S|^2
+//   float pad
 
 // sph/mark_fluid_cells.comp: flags (non-zero) every grid cell that holds a fluid particle, so
 // boundary particles with no fluid in their 27 cells skip the density pass.
@@ -68,6 +72,17 @@
 #define HEMO_BPRESSURE_BINDING_NLIST 5
 #define HEMO_BPRESSURE_BINDING_COUNT 6
 
+// sph/sps_stress.comp: the SPS stress tau/rho of each fluid particle from its strain rate.
+#define HEMO_SPS_BINDING_POSITIONS 0
+#define HEMO_SPS_BINDING_VELOCITIES 1
+#define HEMO_SPS_BINDING_PARAMS 2
+#define HEMO_SPS_BINDING_STATE 3
+#define HEMO_SPS_BINDING_NCOUNT 4
+#define HEMO_SPS_BINDING_NLIST 5
+#define HEMO_SPS_BINDING_TAU_A 6  // vec4 (xx, yy, zz, xy) of tau/rho (m^2/s^2)
+#define HEMO_SPS_BINDING_TAU_B 7  // vec4 (xz, yz, 0, 0)
+#define HEMO_SPS_BINDING_COUNT 8
+
 // sph/forces.comp: pressure, viscosity, repulsion, gravity; per-particle time-step limit.
 #define HEMO_FORCES_BINDING_POSITIONS 0
 #define HEMO_FORCES_BINDING_VELOCITIES 1
@@ -80,7 +95,9 @@
 #define HEMO_FORCES_BINDING_DT_LIMIT 8
 #define HEMO_FORCES_BINDING_IDS 9
 #define HEMO_FORCES_BINDING_STATUS 10
-#define HEMO_FORCES_BINDING_COUNT 11
+#define HEMO_FORCES_BINDING_TAU_A 11
+#define HEMO_FORCES_BINDING_TAU_B 12
+#define HEMO_FORCES_BINDING_COUNT 13
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
 // step, clock, status. Push constant `mode`:

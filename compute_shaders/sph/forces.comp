@@ -11,6 +11,8 @@
 //             N(x) = Psi (1 - r) / sqrt(r), r = x / 2h, for 0 < x < D (normal distance),
 //             T(y) = 1 - y / dp for tangential distance y < dp; the summed force is divided
 //             by max(sum T, 1), so it stays constant while a particle slides along a wall.
+//  SPS        when enabled: a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW_ij (fluid
+//             pairs; the stresses come from sps_stress.comp)
 //  gravity and body force.
 // Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc).
 #extension GL_GOOGLE_include_directive : require
@@ -30,6 +32,15 @@ layout(std430, binding = HEMO_FORCES_BINDING_ACCEL) writeonly buffer Accel { vec
 layout(std430, binding = HEMO_FORCES_BINDING_DT_LIMIT) writeonly buffer DtLimit { float dtLimit[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_IDS) readonly buffer Ids { uint ids[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_STATUS) buffer Status { uint status[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_TAU_A) readonly buffer TauA { vec4 tauA[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_TAU_B) readonly buffer TauB { vec4 tauB[]; };
+
+// tau / rho^2 as a symmetric matrix, from the SPS stress per density (sps_stress.comp).
+mat3 hemo_sps_tensor(uint j, float rho) {
+  const vec4 a = tauA[j] / rho;
+  const vec4 b = tauB[j] / rho;
+  return mat3(a.x, a.w, b.x, a.w, a.y, b.y, b.x, b.y, a.z);
+}
 layout(push_constant) uniform Push { uint n; } pc;
 
 const float kNoLimit = 3.0e38;
@@ -61,6 +72,8 @@ void main() {
   const float twoMu = 2.0 * params.mu;
   const float pOverRho2I = si.y / (si.x * si.x);
 
+  const bool sps = params.spsEnabled != 0u;
+  const mat3 spsI = sps ? hemo_sps_tensor(i, si.x) : mat3(0.0);
   vec3 a = vec3(0.0);
   vec3 repulsion = vec3(0.0);
   float repulsionWeight = 0.0;
@@ -84,6 +97,10 @@ void main() {
     const float invRhoIJ = 1.0 / (si.x * rhoJ);
     a -= (pj.w * (pOverRho2I + pOverRho2J)) * gradW;
     a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + params.etaSq)) * (vi.xyz - vj.xyz);
+    if (sps && fluidJ) {
+      // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
+      a += pj.w * ((spsI + hemo_sps_tensor(j, rhoJ)) * gradW);
+    }
     if (!fluidJ) {
       const vec3 nrm = normals[j].xyz;
       const float x = dot(d, nrm);

@@ -62,11 +62,46 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
   return out;
 }
 
+std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& particles,
+                                             const std::vector<glm::dvec2>& rp, const SphModel& m) {
+  std::vector<std::array<double, 9>> out(particles.size(), std::array<double, 9>{});
+  const double support = 2.0 * m.h;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (particles[i].kind != 0) continue;
+    double g[3][3] = {};  // g[a][b] = d u_a / d x_b
+    for (std::size_t j = 0; j < particles.size(); ++j) {
+      if (j == i) continue;
+      const glm::dvec3 d = particles[i].x - particles[j].x;
+      const double r = glm::length(d);
+      if (r >= support || r == 0.0) continue;
+      const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
+      const glm::dvec3 du = (particles[j].v - particles[i].v) * (particles[j].mass / rp[j].x);
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) g[a][b] += du[a] * gradW[b];
+    }
+    double S[3][3], s2 = 0.0, trace = 0.0;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        S[a][b] = 0.5 * (g[a][b] + g[b][a]);
+        s2 += 2.0 * S[a][b] * S[a][b];
+      }
+    for (int a = 0; a < 3; ++a) trace += S[a][a];
+    const double nuT = m.spsSmagorinsky * std::sqrt(s2);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        out[i][a * 3 + b] = 2.0 * nuT * (S[a][b] - (a == b ? trace / 3.0 : 0.0)) -
+                            (a == b ? (2.0 / 3.0) * m.spsBlinn * s2 : 0.0);
+      }
+  }
+  return out;
+}
+
 std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp,
                                       const SphModel& m) {
   std::vector<glm::dvec3> out(particles.size(), glm::dvec3(0.0));
   const double support = 2.0 * m.h;
   const double etaSq = 0.01 * m.h * m.h;
+  const auto tau = m.sps ? spsStress(particles, rp, m) : std::vector<std::array<double, 9>>();
   for (std::size_t i = 0; i < particles.size(); ++i) {
     const SphParticle& pi = particles[i];
     if (pi.kind != 0) continue;
@@ -85,6 +120,16 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
       const double pOverRho2J = rp[j].y / (rp[j].x * rp[j].x);
       a -= pj.mass * (pOverRho2I + pOverRho2J) * gradW;
       a += pj.mass * 2.0 * m.mu / (rp[i].x * rhoJ) * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - pj.v);
+      if (m.sps && fluidJ) {
+        // a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW, with tau / rho stored
+        for (int c = 0; c < 3; ++c) {
+          double sum = 0.0;
+          for (int b = 0; b < 3; ++b) {
+            sum += (tau[i][c * 3 + b] / rp[i].x + tau[j][c * 3 + b] / rp[j].x) * gradW[b];
+          }
+          a[c] += pj.mass * sum;
+        }
+      }
       if (!fluidJ) {
         const double x = glm::dot(d, pj.normal);
         const double y = glm::length(d - x * pj.normal);

@@ -49,6 +49,9 @@ const std::vector<Field>& schema() {
            {"speed_of_sound_m_s", Kind::Number, "m/s", 0, 1e5, false, 0.0, "Speed of sound c0; 0 derives 10 x expected_max_speed_m_s."},
            {"expected_max_speed_m_s", Kind::Number, "m/s", 0, 1e4, true, nullptr, "Largest flow speed expected; sets c0 unless given."},
            {"clamp_negative_pressure", Kind::Bool, "", 0, 0, false, true, "Clamp Tait pressure at 0 (free surfaces)."},
+           {"turbulence", Kind::Choice, "", 0, 0, false, "none", "Sub-particle-scale turbulence model (Dalrymple & Rogers 2006), or none.", {"none", "sps"}},
+           {"smagorinsky_constant", Kind::Number, "1", 0, 1, false, 0.12, "C_s of the SPS eddy viscosity nu_t = (C_s dp)^2 |S|."},
+           {"blinn_constant", Kind::Number, "1", 0, 1, false, 0.0066, "C_I of the SPS isotropic term -2/3 C_I dp^2 |S|^2."},
            {"blocks", Kind::Objects, "", 1, kInf, false, nullptr, "Boxes filled with fluid particles on the dp lattice.", {},
             {
                 {"min_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Lower corner."},
@@ -252,6 +255,9 @@ Scene parseScene(const std::string& text, const std::string& source) {
   const float c0 = fluid["speed_of_sound_m_s"].get<float>();
   s.sph.soundSpeed = c0 > 0.0f ? c0 : 10.0f * s.expectedMaxSpeed;
   s.sph.clampNegativePressure = fluid["clamp_negative_pressure"].get<bool>();
+  s.sph.sps = fluid["turbulence"].get<std::string>() == "sps";
+  s.sph.smagorinsky = fluid["smagorinsky_constant"].get<float>();
+  s.sph.blinn = fluid["blinn_constant"].get<float>();
   for (std::size_t k = 0; k < fluid["blocks"].size(); ++k) {
     const std::string p = "fluid.blocks[" + std::to_string(k) + "]";
     const Json& b = fluid["blocks"][k];

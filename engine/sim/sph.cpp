@@ -49,6 +49,8 @@ void SphSettings::validate() const {
   require(std::isfinite(listSkin) && listSkin >= 0.0f && listSkin <= 1.0f, "neighbour-list skin must be in [0, 1]");
   require(std::isfinite(dampingRate) && dampingRate >= 0.0f, "settling damping rate must be >= 0 (1/s)");
   require(std::isfinite(dampingUntil) && dampingUntil >= 0.0f, "settling time must be >= 0 (s)");
+  require(std::isfinite(smagorinsky) && smagorinsky >= 0.0f && smagorinsky <= 1.0f, "Smagorinsky constant must be in [0, 1]");
+  require(std::isfinite(blinn) && blinn >= 0.0f && blinn <= 1.0f, "Blinn constant must be in [0, 1]");
 }
 
 float SphSettings::particleMass() const {
@@ -92,6 +94,9 @@ SphParams makeParams(const SphSettings& s) {
   p.neighbourCapacity = s.neighbourCapacity;
   p.dampingRate = s.dampingRate;
   p.dampingUntil = s.dampingUntil;
+  p.spsEnabled = s.sps ? 1u : 0u;
+  p.spsSmagorinsky = float(double(s.smagorinsky) * s.spacing * double(s.smagorinsky) * s.spacing);
+  p.spsBlinn = float(double(s.blinn) * s.spacing * s.spacing);
   return p;
 }
 
@@ -124,6 +129,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       savedPos_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "rk2 saved positions"),
       savedVel_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "rk2 saved velocities"),
       stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
+      tauA_(context, settings.sps ? std::uint64_t(std::max(particles.capacity(), 1u)) * 16 : 16, gpu::MemoryUse::Device, "sps tau a"),
+      tauB_(context, settings.sps ? std::uint64_t(std::max(particles.capacity(), 1u)) * 16 : 16, gpu::MemoryUse::Device, "sps tau b"),
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)) {
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   auto& cache = context.pipelines();
@@ -131,6 +138,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
   densityList_ = &cache.get({"sph/density_list", HEMO_DLIST_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
   for (int p = 0; p < 2; ++p) {
@@ -159,6 +167,14 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                                    {HEMO_BPRESSURE_BINDING_STATE, &state_},
                                                    {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
                                                    {HEMO_BPRESSURE_BINDING_NLIST, &nlist_}});
+    spsSets_[p] = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
+                                       {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
+                                       {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
+                                       {HEMO_SPS_BINDING_STATE, &state_},
+                                       {HEMO_SPS_BINDING_NCOUNT, &ncount_},
+                                       {HEMO_SPS_BINDING_NLIST, &nlist_},
+                                       {HEMO_SPS_BINDING_TAU_A, &tauA_},
+                                       {HEMO_SPS_BINDING_TAU_B, &tauB_}});
     forcesSets_[p] = forces_->makeSet({{HEMO_FORCES_BINDING_POSITIONS, &a.positions},
                                        {HEMO_FORCES_BINDING_VELOCITIES, &a.velocities},
                                        {HEMO_FORCES_BINDING_NORMALS, &a.normals},
@@ -169,7 +185,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_FORCES_BINDING_ACCEL, &accel_},
                                        {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
                                        {HEMO_FORCES_BINDING_IDS, &a.ids},
-                                       {HEMO_FORCES_BINDING_STATUS, &status_}});
+                                       {HEMO_FORCES_BINDING_STATUS, &status_},
+                                       {HEMO_FORCES_BINDING_TAU_A, &tauA_},
+                                       {HEMO_FORCES_BINDING_TAU_B, &tauB_}});
     integrateSets_[p] = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                              {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                              {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},
@@ -226,6 +244,10 @@ void SphSolver::recordDensityFromList(gpu::CommandRecorder& rec) {
 
 void SphSolver::recordForces(gpu::CommandRecorder& rec) {
   const std::uint32_t n = particles_->count();
+  if (settings_.sps) {  // only scenes that ask for turbulence pay for it
+    rec.dispatch(*spsStress_, spsSets_[particles_->parity()], CountPush{n}, spsStress_->groupsFor(n));
+    rec.computeToCompute();
+  }
   rec.dispatch(*forces_, forcesSets_[particles_->parity()], CountPush{n}, forces_->groupsFor(n));
   rec.computeToCompute();
 }

@@ -4,6 +4,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <array>
 #include <vector>
 
 namespace hemo::reference {
@@ -26,7 +27,15 @@ struct SphModel {
   double repulsionCutoff = 0.0;
   double wallSpacing = 0.0;
   bool clampNegativePressure = true;
+  bool sps = false;              // sub-particle-scale stress (Dalrymple & Rogers 2006)
+  double spsSmagorinsky = 0.0;   // (C_s dp)^2
+  double spsBlinn = 0.0;         // C_I dp^2
 };
+
+// SPS stress per density tau/rho (symmetric 3x3, row-major) of each particle (zero for
+// boundary particles).
+std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& particles,
+                                             const std::vector<glm::dvec2>& densityPressure, const SphModel& model);
 
 // Wendland C2 in 3D with support 2h.
 double kernelW(double r, double h);

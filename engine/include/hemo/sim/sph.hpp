@@ -46,6 +46,9 @@ struct SphSettings {
   float dampingRate = 0.0f;         // settling phase: v <- v / (1 + rate dt) (1/s) ...
   float dampingUntil = 0.0f;        // ... while t < this (s)
   Integrator integrator = Integrator::SymplecticEuler;
+  bool sps = false;                 // sub-particle-scale turbulence (Dalrymple & Rogers 2006)
+  float smagorinsky = 0.12f;        // C_s
+  float blinn = 0.0066f;            // C_I
 
   float h() const { return smoothingRatio * spacing; }
   float supportRadius() const { return 2.0f * h(); }
@@ -67,8 +70,10 @@ struct SphParams {
   float cflForce, dtViscous, dtMax, c0;
   std::uint32_t clampNegativePressure, neighbourCapacity;
   float dampingRate, dampingUntil;
+  std::uint32_t spsEnabled;
+  float spsSmagorinsky, spsBlinn, pad0;
 };
-static_assert(sizeof(SphParams) == 96);
+static_assert(sizeof(SphParams) == 112);
 
 SphParams makeParams(const SphSettings& s);
 
@@ -102,7 +107,7 @@ class SphSolver {
   // Stages on their own, for tests: neighbours must have been built first.
   void recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   void recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
-  void recordForces(gpu::CommandRecorder& rec);
+  void recordForces(gpu::CommandRecorder& rec);  // with the SPS stress pass first when enabled
   void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f);
   // Density and pressure from the current neighbour list (then the boundary pressure).
   void recordDensityFromList(gpu::CommandRecorder& rec);
@@ -138,15 +143,17 @@ class SphSolver {
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_;
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer fluidCells_;
-  gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
+  gpu::Buffer savedPos_, savedVel_, stepDt_;
+  gpu::Buffer tauA_, tauB_;  // SPS stress per density (zero-sized use when SPS is off)  // RK2: state at the start of the step, its dt
   gpu::MinMaxReduce dtReduce_;
   const gpu::ComputePipeline* markFluid_;
   const gpu::ComputePipeline* density_;
   const gpu::ComputePipeline* densityList_;
   const gpu::ComputePipeline* boundaryPressure_;
+  const gpu::ComputePipeline* spsStress_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_;
-  std::array<gpu::DescriptorSet, 2> markSets_, densitySets_, densityListSets_, boundarySets_, forcesSets_, integrateSets_;  // by parity
+  std::array<gpu::DescriptorSet, 2> markSets_, densitySets_, densityListSets_, spsSets_, boundarySets_, forcesSets_, integrateSets_;  // by parity
 };
 
 }  // namespace hemo::sim

@@ -1,0 +1,67 @@
+#version 450
+// Sub-particle-scale (SPS) turbulence stress of Dalrymple & Rogers (2006), in the form used
+// by DualSPHysics: with the strain rate S = (grad u + grad u^T) / 2 from
+//   grad u_i = sum_j (m_j / rho_j) (u_j - u_i) (x) gradW_ij   (fluid and boundary neighbours;
+//   boundary particles bring their wall velocity, so walls shear the flow),
+// |S| = sqrt(2 S:S), nu_t = (C_s dp)^2 |S|, the stress per density is
+//   tau / rho = 2 nu_t (S - tr(S) I / 3) - 2/3 C_I dp^2 |S|^2 I.
+// forces.comp adds sum_j m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW_ij between fluid
+// particles. Runs only when the scene enables SPS.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/sph.h"
+#include "common/index.glsl"
+#include "common/kernel.glsl"
+#include "common/sph_params.glsl"
+
+layout(std430, binding = HEMO_SPS_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
+layout(std430, binding = HEMO_SPS_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+layout(std430, binding = HEMO_SPS_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+layout(std430, binding = HEMO_SPS_BINDING_STATE) readonly buffer State { vec4 state[]; };
+layout(std430, binding = HEMO_SPS_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
+layout(std430, binding = HEMO_SPS_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(std430, binding = HEMO_SPS_BINDING_TAU_A) writeonly buffer TauA { vec4 tauA[]; };
+layout(std430, binding = HEMO_SPS_BINDING_TAU_B) writeonly buffer TauB { vec4 tauB[]; };
+layout(push_constant) uniform Push { uint n; } pc;
+
+void main() {
+  const uint i = hemo_global_index();
+  if (i >= pc.n) {
+    return;
+  }
+  const vec4 vi = velocities[i];
+  if (uint(vi.w) != HEMO_KIND_FLUID) {
+    tauA[i] = vec4(0.0);
+    tauB[i] = vec4(0.0);
+    return;
+  }
+  const vec3 xi = positions[i].xyz;
+  const float support2 = params.supportRadius * params.supportRadius;
+  mat3 g = mat3(0.0);  // g[b][a] = d u_a / d x_b (column b)
+  const uint count = neighbourCount[i];
+  const uint listBase = i * params.neighbourCapacity;
+  for (uint k = 0u; k < count; ++k) {
+    const uint j = neighbourList[listBase + k];
+    const vec4 pj = positions[j];
+    const vec3 d = xi - pj.xyz;
+    const float r2 = dot(d, d);
+    if (r2 >= support2 || r2 == 0.0) {
+      continue;
+    }
+    const float r = sqrt(r2);
+    const vec3 gradW = d * (hemo_kernel_dwdr(r, params.h, params.kernelNorm) / r);
+    const vec3 du = (velocities[j].xyz - vi.xyz) * (pj.w / state[j].x);
+    g += outerProduct(du, gradW);
+  }
+  const float sxx = g[0][0], syy = g[1][1], szz = g[2][2];
+  const float sxy = 0.5 * (g[1][0] + g[0][1]);
+  const float sxz = 0.5 * (g[2][0] + g[0][2]);
+  const float syz = 0.5 * (g[2][1] + g[1][2]);
+  const float s2 = 2.0 * (sxx * sxx + syy * syy + szz * szz + 2.0 * (sxy * sxy + sxz * sxz + syz * syz));  // |S|^2
+  const float magnitude = sqrt(s2);
+  const float nuT = params.spsSmagorinsky * magnitude;
+  const float trace3 = (sxx + syy + szz) / 3.0;
+  const float iso = (2.0 / 3.0) * params.spsBlinn * s2;
+  tauA[i] = vec4(2.0 * nuT * (sxx - trace3) - iso, 2.0 * nuT * (syy - trace3) - iso, 2.0 * nuT * (szz - trace3) - iso,
+                 2.0 * nuT * sxy);
+  tauB[i] = vec4(2.0 * nuT * sxz, 2.0 * nuT * syz, 0.0, 0.0);
+}
