@@ -5,7 +5,11 @@
 #include "cli.hpp"
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/gpu/primitives.hpp"
+#include "hemo/reference/published.hpp"
+#include "hemo/scene/scene.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
+#include "hemo/sim/probes.hpp"
+#include "hemo/sim/simulation.hpp"
 
 #include "interface/scan.h"
 
@@ -169,15 +173,105 @@ Json primitives(Context& ctx, int repeat) {
   return rows;
 }
 
+// ---- accuracy: error against analytic / published results, next to what it cost -----------
+
+// Runs `sim` to `until` (s) and returns the wall seconds spent.
+double runTo(hemo::sim::Simulation& sim, double until) {
+  hemo::sim::RunOptions opt;
+  opt.until = until;
+  return sim.run(opt).wallSeconds;
+}
+
+// Median GPU ms of one step (sum of the stages), measured after the run.
+double gpuStepMs(hemo::sim::Simulation& sim) {
+  double ms = 0.0;
+  for (const auto& [stage, t] : sim.profileStep(5)) ms += t;
+  return ms;
+}
+
+Json accuracy(Context& ctx, const std::string& only) {
+  using hemo::sim::Integrator;
+  Json rows = Json::array();
+  std::printf("%-12s %10s %-17s %10s %-28s %10s %8s %12s\n", "case", "spacing_m", "integrator", "error", "metric",
+              "ms/step", "steps", "wall s/sim s");
+  auto row = [&](const std::string& name, double spacing, Integrator integrator, double error, const std::string& metric,
+                 double msPerStep, std::uint64_t steps, double wallPerSim) {
+    const char* integ = integrator == Integrator::Rk2Midpoint ? "rk2_midpoint" : "symplectic_euler";
+    std::printf("%-12s %10.5f %-17s %10.4f %-28s %10.2f %8llu %12.1f\n", name.c_str(), spacing, integ, error,
+                metric.c_str(), msPerStep, static_cast<unsigned long long>(steps), wallPerSim);
+    std::fflush(stdout);
+    rows.push_back({{"case", name}, {"spacing_m", spacing}, {"integrator", integ}, {"error", error},
+                    {"error_metric", metric}, {"ms_per_step", msPerStep}, {"steps", steps},
+                    {"wall_s_per_sim_s", wallPerSim}});
+  };
+  const Integrator integrators[] = {Integrator::SymplecticEuler, Integrator::Rk2Midpoint};
+
+  if (only.empty() || only == "hydrostatic") {
+    // A 0.12 m column on a 0.08 m square floor, damped settling to 0.8 s, then the floor load
+    // averaged over 0.8-1.0 s against rho g H (the test's measurement).
+    for (double dp : {0.02, 0.01, 0.008}) {
+      for (Integrator integrator : integrators) {
+        const std::string text = R"({"scene": "hydrostatic_bench", "particles": {"spacing_m": )" + std::to_string(dp) +
+                                 R"(}, "fluid": {"viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.5,
+          "blocks": [{"min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.12]}]},
+          "boundary": {"tanks": [{"min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.13], "layers": 3}]},
+          "time": {"steps_per_batch": 128, "settle_damping_1_s": 30, "settle_until_s": 0.8},
+          "domain": {"min_m": [-0.06, -0.06, -0.06], "max_m": [0.14, 0.14, 0.2]}})";
+        hemo::scene::Scene scene = hemo::scene::parseScene(text, "hydrostatic_bench");
+        scene.sph.integrator = integrator;
+        hemo::sim::Simulation sim(ctx, scene);
+        double wall = runTo(sim, 0.8), load = 0.0;
+        for (double t : {0.9, 1.0}) {
+          wall += runTo(sim, t);
+          load += hemo::sim::floorLoad(sim.snapshot(), sim.fluidParticles(), scene.sph.h()) / (0.08 * 0.08) / 2.0;
+        }
+        const double expect = 1000.0 * 9.81 * 0.12;
+        const std::uint64_t steps = sim.steps();
+        const double perSim = wall / sim.time();
+        row("hydrostatic", dp, integrator, std::abs(load - expect) / expect, "rel_error_floor_pressure", gpuStepMs(sim),
+            steps, perSim);
+      }
+    }
+  }
+  if (only.empty() || only == "dam_break") {
+    // scenes/dam_break.json geometry; mean |dZ| against Martin & Moyce (1952) over T in
+    // [0, 3] with the gate-release offset dT = 0.15 of docs/physics.md.
+    const double a = 0.05715, g = 9.81, offset = 0.15;
+    for (double fraction : {8.0, 10.0, 16.0}) {
+      for (Integrator integrator : integrators) {
+        hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+        scene.sph.spacing = float(a / fraction);
+        scene.sph.integrator = integrator;
+        hemo::sim::Simulation sim(ctx, scene);
+        const auto& table = hemo::reference::martinMoyceN2();
+        double sum = 0.0, wall = 0.0;
+        int samples = 0;
+        for (double T = 0.25; T <= 3.0 - offset + 1e-9; T += 0.25) {
+          wall += runTo(sim, T * std::sqrt(a / (2 * g)));
+          const double front = hemo::sim::surgeFront(sim.snapshot(), sim.fluidParticles(), 2.0f * scene.sph.spacing);
+          sum += std::abs(front / a - hemo::reference::interpolateTable(table, T + offset));
+          ++samples;
+        }
+        const std::uint64_t steps = sim.steps();
+        const double perSim = wall / sim.time();
+        row("dam_break", scene.sph.spacing, integrator, sum / samples, "mean_abs_dZ_martin_moyce", gpuStepMs(sim), steps,
+            perSim);
+      }
+    }
+  }
+  return rows;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const char* usage =
-      "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N]\n"
-      "  SUITE: primitives | accuracy | table1 | render\n";
+      "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME]\n"
+      "  SUITE: primitives | accuracy | table1 | render\n"
+      "  --case NAME  accuracy: only this case (hydrostatic, dam_break)\n";
   hemo::cli::Args args;
   try {
-    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat"});
+    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SUITE");
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
@@ -186,8 +280,8 @@ int main(int argc, char** argv) {
   const std::string suite = args.positional[0];
   try {
     const int repeat = static_cast<int>(args.count("--repeat", 9, 1, 1000));
-    if (suite != "primitives") {
-      if (suite == "accuracy" || suite == "table1" || suite == "render") {
+    if (suite != "primitives" && suite != "accuracy") {
+      if (suite == "table1" || suite == "render") {
         std::cerr << "hemo-bench: suite '" << suite
                   << "' needs the simulation stages that are not in this build yet\n";
       } else {
@@ -203,7 +297,7 @@ int main(int argc, char** argv) {
       std::cerr << "hemo-bench: the device has no timestamp queries; GPU times are unavailable\n";
       return 3;
     }
-    const Json rows = primitives(ctx, repeat);
+    const Json rows = suite == "primitives" ? primitives(ctx, repeat) : accuracy(ctx, args.text("--case"));
     if (args.has("--json")) {
       const std::string path = args.text("--json");
       std::ofstream out(path);

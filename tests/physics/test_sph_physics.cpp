@@ -1,7 +1,8 @@
 // SPH physics: momentum conservation, determinism, end time. (Hydrostatic, Poiseuille and
 // dam-break validation are in progress: see docs/physics.md.)
 #include "gpu_test.hpp"
-#include "hemo/reference/sph.hpp"
+#include "hemo/reference/published.hpp"
+#include "hemo/sim/probes.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/sim/simulation.hpp"
 
@@ -56,27 +57,8 @@ TEST_F(SphPhysicsTest, HydrostaticColumnLoadsTheFloorWithRhoGH) {
     opt.until = t;
     sim.run(opt);
     const sim::Snapshot s = sim.snapshot();
-    double force = 0.0;
-    for (std::uint32_t b = sim.fluidParticles(); b < s.positions.size(); ++b) {
-      if (s.positions[b].z >= 0.0f) continue;
-      for (std::uint32_t f = 0; f < sim.fluidParticles(); ++f) {
-        const glm::dvec3 d = glm::dvec3(s.positions[b]) - glm::dvec3(s.positions[f]);
-        const double r = glm::length(d);
-        if (r >= 2.0 * h || r == 0.0) continue;
-        const glm::dvec2 sb = s.densityPressure[b], sf = s.densityPressure[f];
-        force -= double(s.positions[b].w) * double(s.positions[f].w) *
-                 (sb.y / (sb.x * sb.x) + sf.y / (sf.x * sf.x)) * d.z * (reference::kernelDwdr(r, h) / r);
-      }
-    }
-    loadSum += -force / area;  // the fluid pushes the floor down
-    double sz = 0, sp = 0, szz = 0, szp = 0;
-    int count = 0;
-    for (std::uint32_t i = 0; i < sim.fluidParticles(); ++i) {
-      const double z = s.positions[i].z, p = s.densityPressure[i].y;
-      if (z > 0.5 * H) continue;
-      sz += z, sp += p, szz += z * z, szp += z * p, ++count;
-    }
-    slopeSum += (count * szp - sz * sp) / (count * szz - sz * sz);
+    loadSum += sim::floorLoad(s, sim.fluidParticles(), h) / area;
+    slopeSum += sim::pressureGradient(s, sim.fluidParticles(), float(0.5 * H));
     ++samples;
   }
   const double load = loadSum / samples, gradient = -slopeSum / samples;
@@ -328,31 +310,6 @@ TEST_F(SphPhysicsTest, JetAtThreeTimesTheDesignSpeedHitsAWall) {
 namespace hemo::test {
 namespace {
 
-// Martin & Moyce (1952), column height/width n^2 = 2: surge front Z = x/a against
-// T = t sqrt(2g/a), from tests/data/martin_moyce_n2_2.csv.
-std::vector<std::pair<double, double>> martinMoyce() {
-  std::ifstream in(std::string(HEMO_SOURCE_DIR) + "/tests/data/martin_moyce_n2_2.csv");
-  std::vector<std::pair<double, double>> rows;
-  std::string line;
-  while (std::getline(in, line)) {
-    if (line.empty() || !std::isdigit(static_cast<unsigned char>(line[0]))) continue;
-    const auto comma = line.find(',');
-    rows.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
-  }
-  return rows;
-}
-
-double interpolate(const std::vector<std::pair<double, double>>& rows, double t) {
-  for (std::size_t k = 1; k < rows.size(); ++k) {
-    if (t <= rows[k].first) {
-      const auto [t0, z0] = rows[k - 1];
-      const auto [t1, z1] = rows[k];
-      return z0 + (z1 - z0) * (t - t0) / (t1 - t0);
-    }
-  }
-  return rows.back().second;
-}
-
 // The dam break of scenes/dam_break.json at half its resolution (dp = a/10, 1,200 fluid
 // particles). Front = the largest x of fluid particles within 2 dp of the floor. The
 // experiment's clock includes the gate's opening, so the comparison uses a gate-release
@@ -363,7 +320,7 @@ TEST_F(SphPhysicsTest, DamBreakFrontFollowsMartinAndMoyce) {
   const double a = 0.05715, g = 9.81, offset = 0.15;
   scene.sph.spacing = float(a / 10.0);
   sim::Simulation sim(ctx(), scene);
-  const auto reference = martinMoyce();
+  const auto& reference = reference::martinMoyceN2();
   ASSERT_GT(reference.size(), 10u);
   const double timeScale = std::sqrt(a / (2.0 * g));  // t = T * timeScale
   double sumError = 0.0;
@@ -373,11 +330,8 @@ TEST_F(SphPhysicsTest, DamBreakFrontFollowsMartinAndMoyce) {
     opt.until = T * timeScale;
     sim.run(opt);
     const sim::Snapshot s = sim.snapshot();
-    double front = 0.0;
-    for (std::uint32_t i = 0; i < sim.fluidParticles(); ++i) {
-      if (s.positions[i].z < 2.0f * scene.sph.spacing) front = std::max(front, double(s.positions[i].x));
-    }
-    const double error = std::abs(front / a - interpolate(reference, T + offset));
+    const double front = sim::surgeFront(s, sim.fluidParticles(), 2.0f * scene.sph.spacing);
+    const double error = std::abs(front / a - reference::interpolateTable(reference, T + offset));
     sumError += error;
     ++samples;
   }

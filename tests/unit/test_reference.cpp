@@ -1,9 +1,12 @@
 // Properties of the CPU reference of the neighbour grid.
 #include "hemo/reference/neighbours.hpp"
+#include "hemo/reference/published.hpp"
 
 #include <gtest/gtest.h>
 
+#include <fstream>
 #include <random>
+#include <string>
 
 namespace hemo::reference {
 namespace {
@@ -42,6 +45,23 @@ TEST(ReferenceNeighbours, BruteForceIsSymmetricAndExcludesSelf) {
   EXPECT_EQ(nb[0], (std::vector<std::uint32_t>{1, 3}));
   EXPECT_EQ(nb[1], (std::vector<std::uint32_t>{0, 2, 3}));
   EXPECT_EQ(nb[2], (std::vector<std::uint32_t>{1}));
+}
+
+// The embedded Martin & Moyce table is the one in tests/data (no transcription slip).
+TEST(Published, MartinMoyceTableMatchesTheDataFile) {
+  std::ifstream in(std::string(HEMO_SOURCE_DIR) + "/tests/data/martin_moyce_n2_2.csv");
+  ASSERT_TRUE(in);
+  std::vector<std::pair<double, double>> rows;
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.empty() || line[0] < '0' || line[0] > '9') continue;
+    const auto comma = line.find(',');
+    rows.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
+  }
+  EXPECT_EQ(rows, martinMoyceN2());
+  EXPECT_DOUBLE_EQ(interpolateTable(rows, 0.0), 1.0);
+  EXPECT_NEAR(interpolateTable(rows, 0.205), 1.055, 1e-12);
+  EXPECT_DOUBLE_EQ(interpolateTable(rows, 99.0), rows.back().second);
 }
 
 }  // namespace

@@ -1,0 +1,18 @@
+#pragma once
+// Measurements taken from a snapshot, shared by the validation tests and hemo-bench.
+#include "hemo/sim/simulation.hpp"
+
+namespace hemo::sim {
+
+// Vertical force (N) the fluid exerts on the boundary particles below z = floorZ: the
+// reaction of the symmetric pressure term, sum over fluid-boundary pairs of
+// -m_b m_f (p_b / rho_b^2 + p_f / rho_f^2) dW/dz. Positive when the fluid pushes down.
+double floorLoad(const Snapshot& snapshot, std::uint32_t fluidParticles, double h, float floorZ = 0.0f);
+
+// Largest x among fluid particles below z = maxZ (the surge front of a dam break).
+double surgeFront(const Snapshot& snapshot, std::uint32_t fluidParticles, float maxZ);
+
+// Least-squares slope dp/dz of the fluid pressure over particles with z below maxZ (Pa/m).
+double pressureGradient(const Snapshot& snapshot, std::uint32_t fluidParticles, float maxZ);
+
+}  // namespace hemo::sim

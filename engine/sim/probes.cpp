@@ -1,0 +1,47 @@
+#include "hemo/sim/probes.hpp"
+
+#include "hemo/reference/sph.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+
+namespace hemo::sim {
+
+double floorLoad(const Snapshot& s, std::uint32_t fluid, double h, float floorZ) {
+  double force = 0.0;
+  for (std::size_t b = 0; b < s.positions.size(); ++b) {
+    if (s.velocities[b].w == float(ParticleKind::Fluid) || s.positions[b].z >= floorZ) continue;
+    for (std::uint32_t f = 0; f < fluid; ++f) {
+      const glm::dvec3 d = glm::dvec3(s.positions[b]) - glm::dvec3(s.positions[f]);
+      const double r = glm::length(d);
+      if (r >= 2.0 * h || r == 0.0) continue;
+      const glm::dvec2 sb = s.densityPressure[b], sf = s.densityPressure[f];
+      force -= double(s.positions[b].w) * double(s.positions[f].w) * (sb.y / (sb.x * sb.x) + sf.y / (sf.x * sf.x)) *
+               d.z * (reference::kernelDwdr(r, h) / r);
+    }
+  }
+  return -force;
+}
+
+double surgeFront(const Snapshot& s, std::uint32_t fluid, float maxZ) {
+  double front = -1e30;
+  for (std::uint32_t i = 0; i < fluid; ++i) {
+    if (s.positions[i].z < maxZ) front = std::max(front, double(s.positions[i].x));
+  }
+  return front;
+}
+
+double pressureGradient(const Snapshot& s, std::uint32_t fluid, float maxZ) {
+  double sz = 0, sp = 0, szz = 0, szp = 0;
+  double count = 0;
+  for (std::uint32_t i = 0; i < fluid; ++i) {
+    const double z = s.positions[i].z, p = s.densityPressure[i].y;
+    if (z > maxZ) continue;
+    sz += z, sp += p, szz += z * z, szp += z * p, count += 1;
+  }
+  const double denominator = count * szz - sz * sz;
+  return denominator > 0 ? (count * szp - sz * sp) / denominator : 0.0;
+}
+
+}  // namespace hemo::sim
