@@ -1,0 +1,49 @@
+#!/usr/bin/env python3
+"""Error against cost (Pareto view) from `hemo-bench accuracy --json` files.
+
+usage: plot_accuracy.py OUT_DIR BENCH.json [BENCH.json ...]
+Writes OUT_DIR/accuracy_<case>.png: error (y) against wall seconds per simulated second (x),
+one marker series per integrator, each point labelled with its particle spacing.
+Needs matplotlib (Debian: python3-matplotlib); only for docs, not for building hemo.
+"""
+import json
+import sys
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main():
+    if len(sys.argv) < 3:
+        sys.exit(__doc__)
+    out = sys.argv[1]
+    rows = []
+    for path in sys.argv[2:]:
+        with open(path) as f:
+            rows += json.load(f)["rows"]
+    for case in sorted({r["case"] for r in rows}):
+        fig, ax = plt.subplots(figsize=(6, 4.2))
+        for integrator, marker in (("symplectic_euler", "o"), ("rk2_midpoint", "s")):
+            pts = sorted((r["wall_s_per_sim_s"], r["error"], r["spacing_m"]) for r in rows
+                         if r["case"] == case and r["integrator"] == integrator)
+            if not pts:
+                continue
+            ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marker, label=integrator)
+            for x, y, dp in pts:
+                ax.annotate(f"dp={dp * 1000:.2f} mm", (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        metric = next(r["error_metric"] for r in rows if r["case"] == case)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall seconds per simulated second (lavapipe, 2 cores)")
+        ax.set_ylabel(metric)
+        ax.set_title(f"{case}: error against cost")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(f"{out}/accuracy_{case}.png", dpi=110)
+
+
+if __name__ == "__main__":
+    main()
