@@ -186,9 +186,9 @@ int main(int argc, char** argv) {
   } catch (const hemo::gpu::GpuError& e) {
     std::cerr << "hemo-run: GPU error: " << e.what() << "\n";
     return 3;
-  } catch (const std::exception& e) {
+  } catch (const std::exception& e) {  // e.g. an output file that cannot be written
     std::cerr << "hemo-run: " << e.what() << "\n";
-    return 3;
+    return 1;
   }
 
   std::ofstream file(out / "summary.json");

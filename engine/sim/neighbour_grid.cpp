@@ -70,8 +70,7 @@ GridSpec GridSpec::covering(glm::vec3 lo, glm::vec3 hi, float cellSize) {
 }
 
 NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, ParticleStore& particles)
-    : context_(&context),
-      spec_(spec),
+    : spec_(spec),
       particles_(&particles),
       pairs_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "grid pairs"),
       cellStart_(context, (spec.cellCount() + 1) * 4, gpu::MemoryUse::Device, "grid cellStart"),

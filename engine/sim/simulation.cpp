@@ -69,20 +69,17 @@ RunResult Simulation::run(const RunOptions& options) {
     recorder_->submitAndWait();
     clock = solver_->readClock();
     checkStatus(steps_);
-    // Steps after the end time change nothing and are not counted.
-    steps_ += std::min<std::uint64_t>(batch, clock.steps - before);
-    if (clock.steps - before < batch && !options.steps) {
-      clock.time = std::max(clock.time, endTime);  // reached the end inside the batch
-    }
+    // Steps after the end time change nothing and are not counted by the GPU clock.
+    const std::uint64_t done = clock.steps - before;
+    steps_ += done;
     if (options.onBatch) options.onBatch(progress());
     if (options.outputEvery && steps_ % options.outputEvery == 0 && options.onOutput) options.onOutput(progress());
-    if (clock.steps - before < batch) break;
+    if (done < batch) break;  // the end time was reached inside this batch
   }
   RunResult r;
   r.steps = steps_ - firstStep;
-  r.simTime = solver_->readClock().time;
+  r.simTime = clock.time;
   r.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  r.finite = true;
   return r;
 }
 

@@ -311,15 +311,21 @@ TEST_F(SphPhysicsTest, JetAtThreeTimesTheDesignSpeedHitsAWall) {
 namespace hemo::test {
 namespace {
 
+// scenes/dam_break.json at half its resolution: dp = a/10 (a = 0.05715 m), 1,200 fluid particles.
+scene::Scene coarseDamBreak() {
+  scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  scene.sph.spacing = float(0.05715 / 10.0);
+  return scene;
+}
+
 // The dam break of scenes/dam_break.json at half its resolution (dp = a/10, 1,200 fluid
 // particles). Front = the largest x of fluid particles within 2 dp of the floor. The
 // experiment's clock includes the gate's opening, so the comparison uses a gate-release
 // offset of dT = 0.15 (8.1 ms): Z_sim(T) against Z_MM(T + dT). Measured mean |dZ| over
 // T in [0, 3] with it: 0.043 (0.148 without; 0.21 without / 0.05 with dT = 0.2 at dp = a/20).
 TEST_F(SphPhysicsTest, DamBreakFrontFollowsMartinAndMoyce) {
-  scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  const scene::Scene scene = coarseDamBreak();
   const double a = 0.05715, g = 9.81, offset = 0.15;
-  scene.sph.spacing = float(a / 10.0);
   sim::Simulation sim(ctx(), scene);
   const auto& reference = reference::martinMoyceN2();
   ASSERT_GT(reference.size(), 10u);
@@ -351,8 +357,7 @@ namespace {
 // the force condition), on the coarse dam break, for both integrators: finite, speeds bounded
 // (the surge runs at about 2 sqrt(g a) = 1.5 m/s), nothing leaves the tank.
 TEST_P(SphIntegratorTest, DamBreakAtTheLargestAcceptedCfl) {
-  scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
-  scene.sph.spacing = float(0.05715 / 10.0);
+  scene::Scene scene = coarseDamBreak();
   scene.sph.cflAcoustic = 1.0f;
   scene.sph.cflForce = 1.0f;
   scene.sph.integrator = GetParam();

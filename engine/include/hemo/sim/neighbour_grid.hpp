@@ -62,7 +62,6 @@ class NeighbourGrid {
   Push push(std::uint32_t n) const;
 
  private:
-  gpu::Context* context_;
   GridSpec spec_;
   ParticleStore* particles_;
   const gpu::ComputePipeline* hash_;

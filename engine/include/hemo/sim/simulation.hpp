@@ -40,7 +40,6 @@ struct RunResult {
   std::uint64_t steps = 0;
   double simTime = 0.0;     // s
   double wallSeconds = 0.0;
-  bool finite = true;
 };
 
 // Fluid state in input (id) order, for output and tests.
