@@ -25,4 +25,12 @@ struct SphParams {
   float spsSmagorinsky;
   float spsBlinn;
   float pad0;
+  vec4 origin;     // xyz: domain origin (m), where periodic axes start
+  vec4 period;     // xyz: period (m) on periodic axes, 0 on the others
+  vec4 invPeriod;  // xyz: 1 / period, 0 on non-periodic axes
 };
+
+// Minimum-image separation (unchanged on non-periodic axes). Needs `params` bound.
+#define hemo_min_image(d) ((d) - params.period.xyz * round((d) * params.invPeriod.xyz))
+// Position wrapped into [origin, origin + period) on periodic axes.
+#define hemo_wrap_position(x) ((x) - params.period.xyz * floor(((x) - params.origin.xyz) * params.invPeriod.xyz))

@@ -1,7 +1,8 @@
 #version 450
 // Neighbour grid, step 1: the cell of every particle as a (cell, slot) pair for the sort.
-// Particles outside the grid are clamped into the border cells and counted; a particle with
-// a non-finite coordinate goes to cell 0 and is counted separately so the caller can stop.
+// Particles outside the grid are clamped into the border cells and counted (on periodic
+// axes they wrap instead); a particle with a non-finite coordinate goes to cell 0 and is
+// counted separately so the caller can stop.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/grid.h"
 #include "common/index.glsl"
@@ -10,11 +11,11 @@
 layout(std430, binding = HEMO_HASH_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_HASH_BINDING_PAIRS) writeonly buffer Pairs { uvec2 pairs[]; };
 layout(std430, binding = HEMO_HASH_BINDING_COUNTERS) buffer Counters { uint counters[]; };
-layout(push_constant) uniform Push { vec4 originInvCell; uvec4 dimsN; } pc;
+layout(push_constant) uniform Push { HemoGrid grid; } pc;
 
 void main() {
   const uint i = hemo_global_index();
-  if (i >= pc.dimsN.w) {
+  if (i >= pc.grid.dimsN.w) {
     return;
   }
   const vec3 p = positions[i].xyz;
@@ -23,8 +24,8 @@ void main() {
     atomicAdd(counters[HEMO_COUNTER_NONFINITE], 1u);
   } else {
     bool outside;
-    const ivec3 c = hemo_cell_coords(p, pc.originInvCell, pc.dimsN.xyz, outside);
-    cell = hemo_cell_linear(c, pc.dimsN.xyz);
+    const ivec3 c = hemo_cell_coords(p, pc.grid, outside);
+    cell = hemo_cell_linear(c, pc.grid.dimsN.xyz);
     if (outside) {
       atomicAdd(counters[HEMO_COUNTER_OUTSIDE], 1u);
     }

@@ -1,7 +1,8 @@
 #version 450
-// Neighbour grid, step 4 (after the sort and the scan of the cell counts): gathers particle
-// data (positions, velocities, normals, ids) into cell order and records where each particle
-// id now lives.
+// Neighbour grid, step 4 (after the sort and the cell ranges): gathers particle data
+// (positions, velocities, normals, ids) from the scratch copy into cell order in the live
+// arrays, keeps the positions of this build (for the list's validity check) and records
+// where each particle id now lives.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/grid.h"
 #include "common/index.glsl"
@@ -16,6 +17,7 @@ layout(std430, binding = HEMO_REORDER_BINDING_ID_OUT) writeonly buffer IdOut { u
 layout(std430, binding = HEMO_REORDER_BINDING_SLOT_OF_ID) writeonly buffer SlotOfId { uint slotOfId[]; };
 layout(std430, binding = HEMO_REORDER_BINDING_NORMAL_IN) readonly buffer NormalIn { vec4 normalIn[]; };
 layout(std430, binding = HEMO_REORDER_BINDING_NORMAL_OUT) writeonly buffer NormalOut { vec4 normalOut[]; };
+layout(std430, binding = HEMO_REORDER_BINDING_POS_AT_BUILD) writeonly buffer PosAtBuild { vec4 posAtBuild[]; };
 layout(push_constant) uniform Push { uint n; uint idCapacity; } pc;
 
 void main() {
@@ -24,7 +26,9 @@ void main() {
     return;
   }
   const uint src = pairs[i].y;
-  posOut[i] = posIn[src];
+  const vec4 p = posIn[src];
+  posOut[i] = p;
+  posAtBuild[i] = p;
   velOut[i] = velIn[src];
   normalOut[i] = normalIn[src];
   const uint id = idIn[src];

@@ -32,35 +32,36 @@
 //   float spsSmagorinsky     (C_s dp)^2 (m^2): eddy viscosity nu_t = (C_s dp)^2 |S|
 //   float spsBlinn           C_I dp^2 (m^2): isotropic part -2/3 C_I dp^2 |S|^2
 //   float pad
+//   vec4  origin             xyz: domain origin (m), where periodic axes start
+//   vec4  period             xyz: period (m) on periodic axes, 0 on the others
+//   vec4  invPeriod          xyz: 1 / period, 0 on non-periodic axes
 
 // sph/mark_fluid_cells.comp: flags (non-zero) every grid cell that holds a fluid particle, so
-// boundary particles with no fluid in their 27 cells skip the density pass.
-#define HEMO_MARK_BINDING_POSITIONS 0
+// boundary particles with no fluid in their 27 cells skip the list build.
+#define HEMO_MARK_BINDING_CELL_START 0
 #define HEMO_MARK_BINDING_VELOCITIES 1
 #define HEMO_MARK_BINDING_FLAGS 2
 #define HEMO_MARK_BINDING_COUNT 3
 
-// sph/density.comp: summation density, Tait pressure, neighbour list.
+// sph/build_list.comp: the neighbour (Verlet) list.
+#define HEMO_BUILD_BINDING_POSITIONS 0
+#define HEMO_BUILD_BINDING_VELOCITIES 1
+#define HEMO_BUILD_BINDING_CELL_START 2
+#define HEMO_BUILD_BINDING_PARAMS 3
+#define HEMO_BUILD_BINDING_NCOUNT 4
+#define HEMO_BUILD_BINDING_NLIST 5
+#define HEMO_BUILD_BINDING_STATUS 6
+#define HEMO_BUILD_BINDING_FLUID_CELLS 7
+#define HEMO_BUILD_BINDING_COUNT 8
+
+// sph/density.comp: summation density and Tait pressure of fluid particles from the list.
 #define HEMO_DENSITY_BINDING_POSITIONS 0
 #define HEMO_DENSITY_BINDING_VELOCITIES 1
-#define HEMO_DENSITY_BINDING_CELL_START 2
-#define HEMO_DENSITY_BINDING_PARAMS 3
-#define HEMO_DENSITY_BINDING_STATE 4
-#define HEMO_DENSITY_BINDING_NCOUNT 5
-#define HEMO_DENSITY_BINDING_NLIST 6
-#define HEMO_DENSITY_BINDING_STATUS 7
-#define HEMO_DENSITY_BINDING_FLUID_CELLS 8
-#define HEMO_DENSITY_BINDING_COUNT 9
-
-// sph/density_list.comp: the same density and pressure from the existing neighbour list (the
-// second stage of a Runge-Kutta step, when particles have moved less than the list's skin).
-#define HEMO_DLIST_BINDING_POSITIONS 0
-#define HEMO_DLIST_BINDING_VELOCITIES 1
-#define HEMO_DLIST_BINDING_PARAMS 2
-#define HEMO_DLIST_BINDING_STATE 3
-#define HEMO_DLIST_BINDING_NCOUNT 4
-#define HEMO_DLIST_BINDING_NLIST 5
-#define HEMO_DLIST_BINDING_COUNT 6
+#define HEMO_DENSITY_BINDING_PARAMS 2
+#define HEMO_DENSITY_BINDING_STATE 3
+#define HEMO_DENSITY_BINDING_NCOUNT 4
+#define HEMO_DENSITY_BINDING_NLIST 5
+#define HEMO_DENSITY_BINDING_COUNT 6
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).
@@ -115,7 +116,9 @@
 #define HEMO_INTEGRATE_BINDING_SAVED_POS 8
 #define HEMO_INTEGRATE_BINDING_SAVED_VEL 9
 #define HEMO_INTEGRATE_BINDING_STEP_DT 10
-#define HEMO_INTEGRATE_BINDING_COUNT 11
+#define HEMO_INTEGRATE_BINDING_POS_AT_BUILD 11
+#define HEMO_INTEGRATE_BINDING_REACH 12
+#define HEMO_INTEGRATE_BINDING_COUNT 13
 
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).

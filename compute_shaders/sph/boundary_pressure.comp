@@ -35,7 +35,7 @@ void main() {
   const uint listBase = b * params.neighbourCapacity;
   for (uint k = 0u; k < count; ++k) {
     const uint f = neighbourList[listBase + k];  // fluid neighbours only
-    const vec3 d = xb - positions[f].xyz;
+    const vec3 d = hemo_min_image(xb - positions[f].xyz);
     const float r2 = dot(d, d);
     if (r2 >= support2) {
       continue;

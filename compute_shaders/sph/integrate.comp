@@ -10,6 +10,10 @@
 // While t < dampingUntil the velocity is damped (a settling phase for validation scenes).
 // Invocation 0 advances the clock (Kahan-compensated float sum) and logs (t, dt).
 // A particle that becomes non-finite records the step in the status buffer.
+// Every slot also gets its reach for the neighbour-list check: how far it has moved since the
+// list was built, plus (when the next step evaluates forces at a midpoint) the farthest the
+// next half step can take it, |v| min(dtMax, C_a h / (c0 + |v|)) / 2. The step's gate
+// rebuilds the list once the largest reach exceeds half the list's skin.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -34,7 +38,26 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_LOG) writeonly buffer Log { vec2
 layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_POS) buffer SavedPos { vec4 savedPos[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec4 savedVel[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
-layout(push_constant) uniform Push { uint n; uint step; uint logIndex; float endTime; uint clockIn; uint mode; } pc;
+layout(std430, binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) readonly buffer PosAtBuild { vec4 posAtBuild[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_REACH) writeonly buffer Reach { float reach[]; };
+layout(push_constant) uniform Push {
+  uint n;
+  uint step;
+  uint logIndex;
+  float endTime;
+  uint clockIn;
+  uint mode;
+  uint midpointLookahead;
+} pc;
+
+void writeReach(uint i, vec3 x, vec3 v) {
+  float r = length(hemo_min_image(x - posAtBuild[i].xyz));
+  if (pc.midpointLookahead != 0u) {
+    const float speed = length(v);
+    r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / (params.c0 + speed));
+  }
+  reach[i] = r;
+}
 
 void main() {
   const uint i = hemo_global_index();
@@ -59,7 +82,7 @@ void main() {
       savedPos[i] = x;
       savedVel[i] = v;
       velocities[i] = vec4(v.xyz + accel[i].xyz * (0.5 * dt), v.w);
-      positions[i] = vec4(x.xyz + v.xyz * (0.5 * dt), x.w);
+      positions[i] = vec4(hemo_wrap_position(x.xyz + v.xyz * (0.5 * dt)), x.w);
     }
     return;
   }
@@ -75,21 +98,19 @@ void main() {
     clocks[1u - pc.clockIn] = next;
     stepLog[pc.logIndex] = vec2(next.time, running ? dt : 0.0);
   }
-  if (!running) {
-    return;
-  }
   if (i >= pc.n) {
     return;
   }
   vec4 v = velocities[i];
-  if (uint(v.w) != HEMO_KIND_FLUID) {
+  vec4 x = positions[i];
+  if (!running || uint(v.w) != HEMO_KIND_FLUID) {
+    writeReach(i, x.xyz, v.xyz);
     return;
   }
-  vec4 x = positions[i];
   if (pc.mode == HEMO_INTEGRATE_RK2_FULL) {
     // midpoint rule: x1 = x0 + dt v(mid), v1 = v0 + dt a(mid)
     const vec4 v0 = savedVel[i];
-    x.xyz = savedPos[i].xyz + v.xyz * dt;
+    x.xyz = savedPos[i].xyz + v.xyz * dt;  // wrapped below: the saved position may be across the seam
     v.xyz = v0.xyz + accel[i].xyz * dt;
   } else {
     v.xyz += accel[i].xyz * dt;
@@ -100,10 +121,12 @@ void main() {
   if (pc.mode != HEMO_INTEGRATE_RK2_FULL) {
     x.xyz += v.xyz * dt;
   }
+  x.xyz = hemo_wrap_position(x.xyz);
   if (any(isnan(x.xyz)) || any(isinf(x.xyz)) || any(isnan(v.xyz)) || any(isinf(v.xyz))) {
     atomicMin(status[HEMO_STATUS_FIRST_BAD_STEP], pc.step);
     atomicAdd(status[HEMO_STATUS_NONFINITE], 1u);
   }
   velocities[i] = v;
   positions[i] = x;
+  writeReach(i, x.xyz, v.xyz);
 }

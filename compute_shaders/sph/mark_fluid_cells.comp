@@ -1,23 +1,25 @@
 #version 450
-// Marks the grid cells that hold fluid particles (integer atomicOr of 1: the result does not
-// depend on order). The density pass lets a boundary particle skip its neighbour search when
-// none of its 27 cells is marked: most of a tank's wall never touches the fluid.
+// Flags every grid cell that holds at least one fluid particle (one invocation per cell,
+// gathering over the cell's slots), so boundary particles with no fluid in their 27 cells
+// skip the list build.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
-#include "common/grid.glsl"
 
-layout(std430, binding = HEMO_MARK_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
+layout(std430, binding = HEMO_MARK_BINDING_CELL_START) readonly buffer CellStart { uint cellStart[]; };
 layout(std430, binding = HEMO_MARK_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_MARK_BINDING_FLAGS) buffer Flags { uint fluidCells[]; };
-layout(push_constant) uniform Push { vec4 originInvCell; uvec4 dimsN; } pc;
+layout(std430, binding = HEMO_MARK_BINDING_FLAGS) writeonly buffer Flags { uint fluidCells[]; };
+layout(push_constant) uniform Push { uint cellCount; } pc;
 
 void main() {
-  const uint i = hemo_global_index();
-  if (i >= pc.dimsN.w || uint(velocities[i].w) != HEMO_KIND_FLUID) {
+  const uint c = hemo_global_index();
+  if (c >= pc.cellCount) {
     return;
   }
-  bool outside;
-  const ivec3 c = hemo_cell_coords(positions[i].xyz, pc.originInvCell, pc.dimsN.xyz, outside);
-  atomicOr(fluidCells[hemo_cell_linear(c, pc.dimsN.xyz)], 1u);
+  uint flag = 0u;
+  const uint end = cellStart[c + 1u];
+  for (uint j = cellStart[c]; j < end && flag == 0u; ++j) {
+    flag = uint(velocities[j].w) == HEMO_KIND_FLUID ? 1u : 0u;
+  }
+  fluidCells[c] = flag;
 }

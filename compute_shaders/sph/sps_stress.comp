@@ -42,7 +42,7 @@ void main() {
   for (uint k = 0u; k < count; ++k) {
     const uint j = neighbourList[listBase + k];
     const vec4 pj = positions[j];
-    const vec3 d = xi - pj.xyz;
+    const vec3 d = hemo_min_image(xi - pj.xyz);
     const float r2 = dot(d, d);
     if (r2 >= support2 || r2 == 0.0) {
       continue;

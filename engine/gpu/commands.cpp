@@ -1,5 +1,7 @@
 #include "hemo/gpu/commands.hpp"
 
+#include "hemo/gpu/gate.hpp"
+
 namespace hemo::gpu {
 
 CommandRecorder::CommandRecorder(Context& context) : context_(&context) {
@@ -36,6 +38,7 @@ void CommandRecorder::begin() {
   info.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   check(vkBeginCommandBuffer(cmd_, &info), "vkBeginCommandBuffer");
   dispatches_ = 0;
+  gate_ = nullptr;
   boundPipeline_ = VK_NULL_HANDLE;
   boundSet_ = VK_NULL_HANDLE;
 }
@@ -83,8 +86,24 @@ void CommandRecorder::dispatch(const ComputePipeline& pipeline, const Descriptor
   if (pushBytes) {
     vkCmdPushConstants(cmd_, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, pushBytes, push);
   }
-  vkCmdDispatch(cmd_, groups.x, groups.y, 1);
+  if (gate_) {
+    vkCmdDispatchIndirect(cmd_, gate_->args_.handle(), gate_->claim(groups));
+  } else {
+    vkCmdDispatch(cmd_, groups.x, groups.y, 1);
+  }
   ++dispatches_;
+}
+
+void CommandRecorder::beginGate(DispatchGate& gate) {
+  if (gate_) throw std::logic_error("gated regions do not nest ('" + gate.name() + "' inside '" + gate_->name() + "')");
+  gate_ = &gate;
+  gate.beginRegion();
+}
+
+void CommandRecorder::endGate() {
+  if (!gate_) throw std::logic_error("endGate without beginGate");
+  gate_->endRegion();
+  gate_ = nullptr;
 }
 
 void CommandRecorder::barrier(VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst,

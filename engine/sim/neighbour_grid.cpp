@@ -18,6 +18,10 @@ struct RangesPush {
 };
 static_assert(sizeof(RangesPush) == 8);
 
+struct CountPush {
+  std::uint32_t n;
+};
+
 struct ReorderPush {
   std::uint32_t n;
   std::uint32_t idCapacity;
@@ -30,7 +34,7 @@ struct NeighbourListPush {
   std::uint32_t capacity;
   std::uint32_t pad[2];
 };
-static_assert(sizeof(NeighbourListPush) == 48);
+static_assert(sizeof(NeighbourListPush) == 80);
 }  // namespace
 
 void GridSpec::validate() const {
@@ -43,6 +47,15 @@ void GridSpec::validate() const {
   if (dims.x == 0 || dims.y == 0 || dims.z == 0) {
     throw std::invalid_argument("grid needs at least one cell per axis");
   }
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(period[a]) || period[a] < 0.0f) throw std::invalid_argument("grid period must be finite and >= 0");
+    if (periodic(a) && dims[a] < 3) {
+      throw std::invalid_argument(std::string("periodic axis ") + "xyz"[a] + " of " + std::to_string(period[a]) +
+                                  " m holds only " + std::to_string(dims[a]) + " cells of " + std::to_string(cellSize) +
+                                  " m; it needs at least 3 (a period of at least " + std::to_string(3.0f * cellSize) +
+                                  " m)");
+    }
+  }
   // cellStart has cellCount + 1 entries and cell indices must fit in uint32.
   if (cellCount() >= 0xffffffffull) {
     throw std::invalid_argument("grid of " + std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
@@ -50,7 +63,13 @@ void GridSpec::validate() const {
   }
 }
 
-GridSpec GridSpec::covering(glm::vec3 lo, glm::vec3 hi, float cellSize) {
+glm::vec3 GridSpec::invCellSize() const {
+  glm::vec3 inv;
+  for (int a = 0; a < 3; ++a) inv[a] = periodic(a) ? float(double(dims[a]) / period[a]) : 1.0f / cellSize;
+  return inv;
+}
+
+GridSpec GridSpec::covering(glm::vec3 lo, glm::vec3 hi, float cellSize, glm::bvec3 periodic) {
   GridSpec spec;
   spec.origin = lo;
   spec.cellSize = cellSize;
@@ -61,9 +80,11 @@ GridSpec GridSpec::covering(glm::vec3 lo, glm::vec3 hi, float cellSize) {
     if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || hi[a] < lo[a]) {
       throw std::invalid_argument("grid bounds must be finite with min <= max on every axis");
     }
-    const double cells = std::ceil(double(hi[a] - lo[a]) / cellSize);
+    const double extent = double(hi[a]) - lo[a];
+    const double cells = periodic[a] ? std::floor(extent / cellSize) : std::ceil(extent / cellSize);
     if (cells > 4.0e9) throw std::invalid_argument("grid bounds span too many cells");
-    spec.dims[a] = static_cast<std::uint32_t>(std::max(1.0, cells));
+    spec.dims[a] = static_cast<std::uint32_t>(std::max(periodic[a] ? 0.0 : 1.0, cells));
+    if (periodic[a]) spec.period[a] = float(extent);
   }
   spec.validate();
   return spec;
@@ -76,36 +97,48 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
       cellStart_(context, (spec.cellCount() + 1) * 4, gpu::MemoryUse::Device, "grid cellStart"),
       counters_(context, HEMO_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "grid counters"),
       slotOfId_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "slot of id"),
+      posAtBuild_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
+                  "positions at the last grid build"),
       sort_(context, pairs_, particles.capacity()) {
   spec_.validate();
   hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}});
   ranges_ = &context.pipelines().get({"grid/cell_ranges", HEMO_RANGES_BINDING_COUNT, sizeof(RangesPush), kWorkgroup, {}});
   rangesSet_ = ranges_->makeSet({{HEMO_RANGES_BINDING_PAIRS, &pairs_}, {HEMO_RANGES_BINDING_CELL_START, &cellStart_}});
+  copy_ = &context.pipelines().get({"grid/copy_particles", HEMO_COPY_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   reorder_ = &context.pipelines().get({"grid/reorder", HEMO_REORDER_BINDING_COUNT, sizeof(ReorderPush), kWorkgroup, {}});
-  for (int p = 0; p < 2; ++p) {
-    const ParticleArrays& src = particles.half(p);
-    const ParticleArrays& dst = particles.half(p ^ 1);
-    hashSets_[p] = hash_->makeSet({{HEMO_HASH_BINDING_POSITIONS, &src.positions},
-                                   {HEMO_HASH_BINDING_PAIRS, &pairs_},
-                                   {HEMO_HASH_BINDING_COUNTERS, &counters_}});
-    reorderSets_[p] = reorder_->makeSet({{HEMO_REORDER_BINDING_PAIRS, &pairs_},
-                                         {HEMO_REORDER_BINDING_POS_IN, &src.positions},
-                                         {HEMO_REORDER_BINDING_VEL_IN, &src.velocities},
-                                         {HEMO_REORDER_BINDING_ID_IN, &src.ids},
-                                         {HEMO_REORDER_BINDING_POS_OUT, &dst.positions},
-                                         {HEMO_REORDER_BINDING_VEL_OUT, &dst.velocities},
-                                         {HEMO_REORDER_BINDING_ID_OUT, &dst.ids},
-                                         {HEMO_REORDER_BINDING_SLOT_OF_ID, &slotOfId_},
-                                         {HEMO_REORDER_BINDING_NORMAL_IN, &src.normals},
-                                         {HEMO_REORDER_BINDING_NORMAL_OUT, &dst.normals}});
-  }
+  const ParticleArrays& live = particles.live();
+  const ParticleArrays& scratch = particles.scratch();
+  hashSet_ = hash_->makeSet({{HEMO_HASH_BINDING_POSITIONS, &live.positions},
+                             {HEMO_HASH_BINDING_PAIRS, &pairs_},
+                             {HEMO_HASH_BINDING_COUNTERS, &counters_}});
+  copySet_ = copy_->makeSet({{HEMO_COPY_BINDING_POS_IN, &live.positions},
+                             {HEMO_COPY_BINDING_VEL_IN, &live.velocities},
+                             {HEMO_COPY_BINDING_NORMAL_IN, &live.normals},
+                             {HEMO_COPY_BINDING_ID_IN, &live.ids},
+                             {HEMO_COPY_BINDING_POS_OUT, &scratch.positions},
+                             {HEMO_COPY_BINDING_VEL_OUT, &scratch.velocities},
+                             {HEMO_COPY_BINDING_NORMAL_OUT, &scratch.normals},
+                             {HEMO_COPY_BINDING_ID_OUT, &scratch.ids}});
+  reorderSet_ = reorder_->makeSet({{HEMO_REORDER_BINDING_PAIRS, &pairs_},
+                                   {HEMO_REORDER_BINDING_POS_IN, &scratch.positions},
+                                   {HEMO_REORDER_BINDING_VEL_IN, &scratch.velocities},
+                                   {HEMO_REORDER_BINDING_ID_IN, &scratch.ids},
+                                   {HEMO_REORDER_BINDING_POS_OUT, &live.positions},
+                                   {HEMO_REORDER_BINDING_VEL_OUT, &live.velocities},
+                                   {HEMO_REORDER_BINDING_ID_OUT, &live.ids},
+                                   {HEMO_REORDER_BINDING_SLOT_OF_ID, &slotOfId_},
+                                   {HEMO_REORDER_BINDING_NORMAL_IN, &scratch.normals},
+                                   {HEMO_REORDER_BINDING_NORMAL_OUT, &live.normals},
+                                   {HEMO_REORDER_BINDING_POS_AT_BUILD, &posAtBuild_}});
 }
 
 NeighbourGrid::Push NeighbourGrid::push(std::uint32_t n) const {
-  return Push{{spec_.origin.x, spec_.origin.y, spec_.origin.z},
-              1.0f / spec_.cellSize,
+  const glm::vec3 inv = spec_.invCellSize();
+  return Push{{spec_.origin.x, spec_.origin.y, spec_.origin.z, 0.0f},
+              {inv.x, inv.y, inv.z, 0.0f},
               {spec_.dims.x, spec_.dims.y, spec_.dims.z},
-              n};
+              n,
+              {spec_.periodic(0) ? 1u : 0u, spec_.periodic(1) ? 1u : 0u, spec_.periodic(2) ? 1u : 0u, 0u}};
 }
 
 void NeighbourGrid::resetCounters(gpu::CommandRecorder& rec) {
@@ -121,9 +154,8 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
     throw std::invalid_argument("neighbour grid: " + std::to_string(n) + " particles exceed the capacity " +
                                 std::to_string(particles_->capacity()));
   }
-  const int src = particles_->parity();
   const std::uint64_t cells = spec_.cellCount();
-  rec.dispatch(*hash_, hashSets_[src], push(n), hash_->groupsFor(n));
+  rec.dispatch(*hash_, hashSet_, push(n), hash_->groupsFor(n));
   rec.computeToCompute();
   mark("hash");
   sort_.record(rec, n, gpu::bitsFor(cells - 1));
@@ -131,10 +163,11 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
   rec.dispatch(*ranges_, rangesSet_, RangesPush{n, static_cast<std::uint32_t>(cells)}, ranges_->groupsFor(n + 1));
   rec.computeToCompute();
   mark("cell ranges");
-  rec.dispatch(*reorder_, reorderSets_[src], ReorderPush{n, particles_->capacity()}, reorder_->groupsFor(n));
+  rec.dispatch(*copy_, copySet_, CountPush{n}, copy_->groupsFor(n));
+  rec.computeToCompute();
+  rec.dispatch(*reorder_, reorderSet_, ReorderPush{n, particles_->capacity()}, reorder_->groupsFor(n));
   rec.computeToCompute();
   mark("reorder");
-  particles_->flip();
 }
 
 GridCounters NeighbourGrid::readCounters() const {
@@ -145,31 +178,31 @@ GridCounters NeighbourGrid::readCounters() const {
 NeighbourList::NeighbourList(gpu::Context& context, const NeighbourGrid& grid, ParticleStore& particles,
                              float radius, std::uint32_t maxPerParticle)
     : grid_(&grid),
-      particles_(&particles),
       radius_(radius),
       maxPerParticle_(maxPerParticle),
       counts_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device,
               "neighbour counts"),
       list_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * std::max(maxPerParticle, 1u) * 4,
             gpu::MemoryUse::Device, "neighbour list") {
-  if (!(radius > 0.0f) || radius > grid.spec().cellSize) {
+  if (!(radius > 0.0f) || radius > grid.spec().cellSize ||
+      (grid.spec().periodic(0) && 2.0f * radius > grid.spec().period.x) ||
+      (grid.spec().periodic(1) && 2.0f * radius > grid.spec().period.y) ||
+      (grid.spec().periodic(2) && 2.0f * radius > grid.spec().period.z)) {
     throw std::invalid_argument("neighbour radius " + std::to_string(radius) +
                                 " m must be positive and at most the grid cell size " +
                                 std::to_string(grid.spec().cellSize) + " m");
   }
   pipeline_ = &context.pipelines().get(
       {"grid/neighbour_list", HEMO_NLIST_BINDING_COUNT, sizeof(NeighbourListPush), kWorkgroup, {}});
-  for (int p = 0; p < 2; ++p) {
-    sets_[p] = pipeline_->makeSet({{HEMO_NLIST_BINDING_POSITIONS, &particles.half(p).positions},
-                                   {HEMO_NLIST_BINDING_CELL_START, &grid.cellStart()},
-                                   {HEMO_NLIST_BINDING_COUNTS, &counts_},
-                                   {HEMO_NLIST_BINDING_LIST, &list_}});
-  }
+  set_ = pipeline_->makeSet({{HEMO_NLIST_BINDING_POSITIONS, &particles.live().positions},
+                            {HEMO_NLIST_BINDING_CELL_START, &grid.cellStart()},
+                            {HEMO_NLIST_BINDING_COUNTS, &counts_},
+                            {HEMO_NLIST_BINDING_LIST, &list_}});
 }
 
 void NeighbourList::record(gpu::CommandRecorder& rec, std::uint32_t n) const {
   const NeighbourListPush push{grid_->push(n), radius_, maxPerParticle_, {0, 0}};
-  rec.dispatch(*pipeline_, sets_[particles_->parity()], push, pipeline_->groupsFor(n));
+  rec.dispatch(*pipeline_, set_, push, pipeline_->groupsFor(n));
   rec.computeToCompute();
 }
 

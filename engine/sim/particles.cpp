@@ -8,12 +8,12 @@ namespace hemo::sim {
 
 ParticleStore::ParticleStore(gpu::Context& context, std::uint32_t capacity) : capacity_(capacity) {
   const VkDeviceSize n = std::max<VkDeviceSize>(capacity, 1);
-  for (int h = 0; h < 2; ++h) {
-    const std::string tag = h == 0 ? " A" : " B";
-    halves_[h].positions = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "positions" + tag);
-    halves_[h].velocities = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "velocities" + tag);
-    halves_[h].normals = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "normals" + tag);
-    halves_[h].ids = gpu::Buffer(context, n * 4, gpu::MemoryUse::Device, "ids" + tag);
+  for (ParticleArrays* a : {&live_, &scratch_}) {
+    const std::string tag = a == &live_ ? "" : " (scratch)";
+    a->positions = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "positions" + tag);
+    a->velocities = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "velocities" + tag);
+    a->normals = gpu::Buffer(context, n * 16, gpu::MemoryUse::Device, "normals" + tag);
+    a->ids = gpu::Buffer(context, n * 4, gpu::MemoryUse::Device, "ids" + tag);
   }
 }
 
@@ -33,22 +33,21 @@ void ParticleStore::upload(const std::vector<glm::vec4>& positions, const std::v
     std::iota(idList.begin(), idList.end(), 0u);
   }
   count_ = static_cast<std::uint32_t>(positions.size());
-  parity_ = 0;
-  halves_[0].positions.upload(positions);
-  halves_[0].velocities.upload(velocities);
-  halves_[0].ids.upload(idList);
-  halves_[0].normals.upload(normals.empty() ? std::vector<glm::vec4>(positions.size(), glm::vec4(0.0f)) : normals);
+  live_.positions.upload(positions);
+  live_.velocities.upload(velocities);
+  live_.ids.upload(idList);
+  live_.normals.upload(normals.empty() ? std::vector<glm::vec4>(positions.size(), glm::vec4(0.0f)) : normals);
 }
 
 std::vector<glm::vec4> ParticleStore::readPositions() const {
-  return current().positions.readback<glm::vec4>(count_);
+  return live_.positions.readback<glm::vec4>(count_);
 }
 std::vector<glm::vec4> ParticleStore::readVelocities() const {
-  return current().velocities.readback<glm::vec4>(count_);
+  return live_.velocities.readback<glm::vec4>(count_);
 }
 std::vector<glm::vec4> ParticleStore::readNormals() const {
-  return current().normals.readback<glm::vec4>(count_);
+  return live_.normals.readback<glm::vec4>(count_);
 }
-std::vector<std::uint32_t> ParticleStore::readIds() const { return current().ids.readback<std::uint32_t>(count_); }
+std::vector<std::uint32_t> ParticleStore::readIds() const { return live_.ids.readback<std::uint32_t>(count_); }
 
 }  // namespace hemo::sim

@@ -19,9 +19,13 @@ struct CountPush {
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
-  std::uint32_t clockIn, mode;
+  std::uint32_t clockIn, mode, midpointLookahead;
 };
-static_assert(sizeof(IntegratePush) == 24);
+static_assert(sizeof(IntegratePush) == 28);
+
+std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
+  return std::uint64_t(std::max(particles.capacity(), 1u)) * bytes;
+}
 
 void require(bool ok, const std::string& what) {
   if (!ok) throw std::invalid_argument(what);
@@ -103,7 +107,7 @@ SphParams makeParams(const SphSettings& s) {
 namespace {
 GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
   s.validate();
-  return GridSpec::covering(lo, hi, s.listRadius());
+  return GridSpec::covering(lo, hi, s.listRadius(), s.periodic);
 }
 }  // namespace
 
@@ -116,91 +120,100 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       maxStepsPerBatch_(std::max(maxStepsPerBatch, 1u)),
       grid_(context, gridFor(domainMin, domainMax, settings), particles),
       paramsBuffer_(context, sizeof(SphParams), gpu::MemoryUse::Device, "sph params"),
-      state_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "sph state"),
-      accel_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "sph accel"),
-      dtLimit_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "sph dt limits"),
-      ncount_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "neighbour counts"),
-      nlist_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * settings.neighbourCapacity * 4,
-             gpu::MemoryUse::Device, "neighbour list"),
+      state_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "sph state"),
+      accel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "sph accel"),
+      dtLimit_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "sph dt limits"),
+      ncount_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "neighbour counts"),
+      nlist_(context, perParticle(particles, 4) * settings.neighbourCapacity, gpu::MemoryUse::Device, "neighbour list"),
+      reach_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "reach since the list build"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
       fluidCells_(context, grid_.spec().cellCount() * 4, gpu::MemoryUse::Device, "fluid cell flags"),
-      savedPos_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "rk2 saved positions"),
-      savedVel_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "rk2 saved velocities"),
+      savedPos_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "rk2 saved positions"),
+      savedVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "rk2 saved velocities"),
       stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
-      tauA_(context, settings.sps ? std::uint64_t(std::max(particles.capacity(), 1u)) * 16 : 16, gpu::MemoryUse::Device, "sps tau a"),
-      tauB_(context, settings.sps ? std::uint64_t(std::max(particles.capacity(), 1u)) * 16 : 16, gpu::MemoryUse::Device, "sps tau b"),
-      dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)) {
+      tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
+      tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
+      dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)),
+      reachReduce_(context, reach_, std::max(particles.capacity(), 1u)),
+      rebuildGate_(context, reachReduce_.result(), 64, "neighbour rebuild") {
+  const GridSpec& spec = grid_.spec();
+  for (int a = 0; a < 3; ++a) {
+    params_.origin[a] = spec.origin[a];
+    params_.period[a] = spec.period[a];
+    params_.invPeriod[a] = spec.periodic(a) ? 1.0f / spec.period[a] : 0.0f;
+  }
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   auto& cache = context.pipelines();
-  markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
-  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
-  densityList_ = &cache.get({"sph/density_list", HEMO_DLIST_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
+  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
-  for (int p = 0; p < 2; ++p) {
-    const ParticleArrays& a = particles.half(p);
-    markSets_[p] = markFluid_->makeSet({{HEMO_MARK_BINDING_POSITIONS, &a.positions},
-                                        {HEMO_MARK_BINDING_VELOCITIES, &a.velocities},
-                                        {HEMO_MARK_BINDING_FLAGS, &fluidCells_}});
-    densitySets_[p] = density_->makeSet({{HEMO_DENSITY_BINDING_POSITIONS, &a.positions},
-                                         {HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities},
-                                         {HEMO_DENSITY_BINDING_CELL_START, &grid_.cellStart()},
-                                         {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
-                                         {HEMO_DENSITY_BINDING_STATE, &state_},
-                                         {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
-                                         {HEMO_DENSITY_BINDING_NLIST, &nlist_},
-                                         {HEMO_DENSITY_BINDING_STATUS, &status_},
-                                         {HEMO_DENSITY_BINDING_FLUID_CELLS, &fluidCells_}});
-    densityListSets_[p] = densityList_->makeSet({{HEMO_DLIST_BINDING_POSITIONS, &a.positions},
-                                                 {HEMO_DLIST_BINDING_VELOCITIES, &a.velocities},
-                                                 {HEMO_DLIST_BINDING_PARAMS, &paramsBuffer_},
-                                                 {HEMO_DLIST_BINDING_STATE, &state_},
-                                                 {HEMO_DLIST_BINDING_NCOUNT, &ncount_},
-                                                 {HEMO_DLIST_BINDING_NLIST, &nlist_}});
-    boundarySets_[p] = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
-                                                   {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
-                                                   {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
-                                                   {HEMO_BPRESSURE_BINDING_STATE, &state_},
-                                                   {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
-                                                   {HEMO_BPRESSURE_BINDING_NLIST, &nlist_}});
-    spsSets_[p] = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
-                                       {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
-                                       {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
-                                       {HEMO_SPS_BINDING_STATE, &state_},
-                                       {HEMO_SPS_BINDING_NCOUNT, &ncount_},
-                                       {HEMO_SPS_BINDING_NLIST, &nlist_},
-                                       {HEMO_SPS_BINDING_TAU_A, &tauA_},
-                                       {HEMO_SPS_BINDING_TAU_B, &tauB_}});
-    forcesSets_[p] = forces_->makeSet({{HEMO_FORCES_BINDING_POSITIONS, &a.positions},
-                                       {HEMO_FORCES_BINDING_VELOCITIES, &a.velocities},
-                                       {HEMO_FORCES_BINDING_NORMALS, &a.normals},
-                                       {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
-                                       {HEMO_FORCES_BINDING_STATE, &state_},
-                                       {HEMO_FORCES_BINDING_NCOUNT, &ncount_},
-                                       {HEMO_FORCES_BINDING_NLIST, &nlist_},
-                                       {HEMO_FORCES_BINDING_ACCEL, &accel_},
-                                       {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
-                                       {HEMO_FORCES_BINDING_IDS, &a.ids},
-                                       {HEMO_FORCES_BINDING_STATUS, &status_},
-                                       {HEMO_FORCES_BINDING_TAU_A, &tauA_},
-                                       {HEMO_FORCES_BINDING_TAU_B, &tauB_}});
-    integrateSets_[p] = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
-                                             {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
-                                             {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},
-                                             {HEMO_INTEGRATE_BINDING_PARAMS, &paramsBuffer_},
-                                             {HEMO_INTEGRATE_BINDING_DT, &dtReduce_.result()},
-                                             {HEMO_INTEGRATE_BINDING_CLOCK, &clock_},
-                                             {HEMO_INTEGRATE_BINDING_STATUS, &status_},
-                                             {HEMO_INTEGRATE_BINDING_LOG, &log_},
-                                             {HEMO_INTEGRATE_BINDING_SAVED_POS, &savedPos_},
-                                             {HEMO_INTEGRATE_BINDING_SAVED_VEL, &savedVel_},
-                                             {HEMO_INTEGRATE_BINDING_STEP_DT, &stepDt_}});
-  }
+  const ParticleArrays& a = particles.live();
+  markSet_ = markFluid_->makeSet({{HEMO_MARK_BINDING_CELL_START, &grid_.cellStart()},
+                                  {HEMO_MARK_BINDING_VELOCITIES, &a.velocities},
+                                  {HEMO_MARK_BINDING_FLAGS, &fluidCells_}});
+  buildListSet_ = buildList_->makeSet({{HEMO_BUILD_BINDING_POSITIONS, &a.positions},
+                                       {HEMO_BUILD_BINDING_VELOCITIES, &a.velocities},
+                                       {HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart()},
+                                       {HEMO_BUILD_BINDING_PARAMS, &paramsBuffer_},
+                                       {HEMO_BUILD_BINDING_NCOUNT, &ncount_},
+                                       {HEMO_BUILD_BINDING_NLIST, &nlist_},
+                                       {HEMO_BUILD_BINDING_STATUS, &status_},
+                                       {HEMO_BUILD_BINDING_FLUID_CELLS, &fluidCells_}});
+  densitySet_ = density_->makeSet({{HEMO_DENSITY_BINDING_POSITIONS, &a.positions},
+                                   {HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities},
+                                   {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
+                                   {HEMO_DENSITY_BINDING_STATE, &state_},
+                                   {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
+                                   {HEMO_DENSITY_BINDING_NLIST, &nlist_}});
+  boundarySet_ = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
+                                             {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
+                                             {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
+                                             {HEMO_BPRESSURE_BINDING_STATE, &state_},
+                                             {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
+                                             {HEMO_BPRESSURE_BINDING_NLIST, &nlist_}});
+  spsSet_ = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
+                                 {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
+                                 {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
+                                 {HEMO_SPS_BINDING_STATE, &state_},
+                                 {HEMO_SPS_BINDING_NCOUNT, &ncount_},
+                                 {HEMO_SPS_BINDING_NLIST, &nlist_},
+                                 {HEMO_SPS_BINDING_TAU_A, &tauA_},
+                                 {HEMO_SPS_BINDING_TAU_B, &tauB_}});
+  forcesSet_ = forces_->makeSet({{HEMO_FORCES_BINDING_POSITIONS, &a.positions},
+                                 {HEMO_FORCES_BINDING_VELOCITIES, &a.velocities},
+                                 {HEMO_FORCES_BINDING_NORMALS, &a.normals},
+                                 {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
+                                 {HEMO_FORCES_BINDING_STATE, &state_},
+                                 {HEMO_FORCES_BINDING_NCOUNT, &ncount_},
+                                 {HEMO_FORCES_BINDING_NLIST, &nlist_},
+                                 {HEMO_FORCES_BINDING_ACCEL, &accel_},
+                                 {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
+                                 {HEMO_FORCES_BINDING_IDS, &a.ids},
+                                 {HEMO_FORCES_BINDING_STATUS, &status_},
+                                 {HEMO_FORCES_BINDING_TAU_A, &tauA_},
+                                 {HEMO_FORCES_BINDING_TAU_B, &tauB_}});
+  integrateSet_ = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
+                                       {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
+                                       {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},
+                                       {HEMO_INTEGRATE_BINDING_PARAMS, &paramsBuffer_},
+                                       {HEMO_INTEGRATE_BINDING_DT, &dtReduce_.result()},
+                                       {HEMO_INTEGRATE_BINDING_CLOCK, &clock_},
+                                       {HEMO_INTEGRATE_BINDING_STATUS, &status_},
+                                       {HEMO_INTEGRATE_BINDING_LOG, &log_},
+                                       {HEMO_INTEGRATE_BINDING_SAVED_POS, &savedPos_},
+                                       {HEMO_INTEGRATE_BINDING_SAVED_VEL, &savedVel_},
+                                       {HEMO_INTEGRATE_BINDING_STEP_DT, &stepDt_},
+                                       {HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild()},
+                                       {HEMO_INTEGRATE_BINDING_REACH, &reach_}});
 }
+
+float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
 void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rec.fill(clock_, 0);
@@ -208,47 +221,39 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rec.fill(status_, 0);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_BAD_INPUT_ID * 4, 8);  // and BAD_FORCE_ID
+  rec.fill(reachReduce_.result(), 0x7f800000u);  // reach = +inf: the first step builds the list
   grid_.resetCounters(rec);
-  rec.transferToCompute();
+  rebuildGate_.recordReset(rec);
 }
 
 void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
-  grid_.record(rec, particles_->count(), timestamps);
+  const std::uint32_t n = particles_->count();
+  grid_.record(rec, n, timestamps);
+  const auto cells = static_cast<std::uint32_t>(grid_.spec().cellCount());
+  rec.dispatch(*markFluid_, markSet_, CountPush{cells}, markFluid_->groupsFor(cells));
+  rec.computeToCompute();
+  rec.dispatch(*buildList_, buildListSet_, grid_.push(n), buildList_->groupsFor(n));
+  rec.computeToCompute();
+  if (timestamps) timestamps->mark(rec, "neighbour list");
 }
 
 void SphSolver::recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
-  rec.fill(fluidCells_, 0);
-  rec.transferToCompute();
-  rec.dispatch(*markFluid_, markSets_[particles_->parity()], grid_.push(n), markFluid_->groupsFor(n));
-  rec.computeToCompute();
-  rec.dispatch(*density_, densitySets_[particles_->parity()], grid_.push(n), density_->groupsFor(n));
+  rec.dispatch(*density_, densitySet_, CountPush{n}, density_->groupsFor(n));
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
-  recordBoundaryPressure(rec);
+  rec.dispatch(*boundaryPressure_, boundarySet_, CountPush{n}, boundaryPressure_->groupsFor(n));
+  rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "boundary pressure");
-}
-
-void SphSolver::recordBoundaryPressure(gpu::CommandRecorder& rec) {
-  const std::uint32_t n = particles_->count();
-  rec.dispatch(*boundaryPressure_, boundarySets_[particles_->parity()], CountPush{n}, boundaryPressure_->groupsFor(n));
-  rec.computeToCompute();
-}
-
-void SphSolver::recordDensityFromList(gpu::CommandRecorder& rec) {
-  const std::uint32_t n = particles_->count();
-  rec.dispatch(*densityList_, densityListSets_[particles_->parity()], CountPush{n}, densityList_->groupsFor(n));
-  rec.computeToCompute();
-  recordBoundaryPressure(rec);
 }
 
 void SphSolver::recordForces(gpu::CommandRecorder& rec) {
   const std::uint32_t n = particles_->count();
   if (settings_.sps) {  // only scenes that ask for turbulence pay for it
-    rec.dispatch(*spsStress_, spsSets_[particles_->parity()], CountPush{n}, spsStress_->groupsFor(n));
+    rec.dispatch(*spsStress_, spsSet_, CountPush{n}, spsStress_->groupsFor(n));
     rec.computeToCompute();
   }
-  rec.dispatch(*forces_, forcesSets_[particles_->parity()], CountPush{n}, forces_->groupsFor(n));
+  rec.dispatch(*forces_, forcesSet_, CountPush{n}, forces_->groupsFor(n));
   rec.computeToCompute();
 }
 
@@ -264,11 +269,15 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   }
   const std::uint32_t n = particles_->count();
   if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, n);  // the second stage reuses the step's dt
+  const std::uint32_t lookahead = settings_.integrator == Integrator::Rk2Midpoint ? 1u : 0u;
   // At least one workgroup: invocation 0 advances the clock even with no particles.
-  rec.dispatch(*integrate_, integrateSets_[particles_->parity()],
-               IntegratePush{n, step, logIndex, endTime, clockParity_, mode}, integrate_->groupsFor(std::max(n, 1u)));
+  rec.dispatch(*integrate_, integrateSet_, IntegratePush{n, step, logIndex, endTime, clockParity_, mode, lookahead},
+               integrate_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
-  if (mode != HEMO_INTEGRATE_RK2_HALF) clockParity_ ^= 1u;  // the half stage leaves the clock alone
+  if (mode != HEMO_INTEGRATE_RK2_HALF) {
+    clockParity_ ^= 1u;  // the half stage leaves the clock alone
+    reachReduce_.record(rec, n);  // the next step's rebuild decision
+  }
 }
 
 void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
@@ -276,13 +285,17 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   auto mark = [&](const char* stage) {
     if (timestamps) timestamps->mark(rec, stage);
   };
+  // Rebuild the grid and the list only when some particle may have crossed the list's skin.
+  rebuildGate_.recordArm(rec, 1, rebuildThreshold());  // max of the (min, max) reach
+  rec.beginGate(rebuildGate_);
   recordNeighbours(rec, timestamps);
+  rec.endGate();
   recordDensity(rec, timestamps);
   recordForces(rec);
   mark("forces");
   if (settings_.integrator == Integrator::Rk2Midpoint) {
     recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_HALF);
-    recordDensityFromList(rec);
+    recordDensity(rec);
     recordForces(rec);
     recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_FULL);
     mark("rk2 midpoint stage + integrate");
@@ -291,6 +304,8 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
     mark("integrate");
   }
 }
+
+std::uint32_t SphSolver::readRebuilds() const { return rebuildGate_.readOpened(); }
 
 SphStatus SphSolver::readStatus() const {
   const auto s = status_.readback<std::uint32_t>(HEMO_STATUS_COUNT);

@@ -1,5 +1,6 @@
 // Exclusive prefix scan and min/max reduction against the standard library.
 #include "gpu_test.hpp"
+#include "hemo/gpu/gate.hpp"
 #include "hemo/gpu/primitives.hpp"
 
 #include <limits>
@@ -72,6 +73,48 @@ TEST_F(ScanTest, RecordsForAnyCountUpToItsCapacity) {
     EXPECT_EQ(got, expect) << "n = " << n << " (elements past n must stay untouched)";
   }
   EXPECT_THROW(scan.record(rec, 10001), std::invalid_argument);
+}
+
+// A dispatch gate runs its region (here a multi-dispatch prefix scan) only when the decision
+// value exceeds the threshold or is NaN, counts its openings, and rejects a region whose
+// dispatches change between recordings.
+TEST_F(ScanTest, DispatchGateRunsItsRegionOnlyWhenOpen) {
+  const std::size_t n = 70000;  // several scan levels, so several gated dispatches
+  std::vector<std::uint32_t> input(n, 1u);
+  gpu::Buffer data(ctx(), n * 4, gpu::MemoryUse::Device, "gated scan data");
+  gpu::Buffer values(ctx(), 16, gpu::MemoryUse::Device, "gate values");
+  gpu::PrefixScan scan(ctx(), data, n);
+  gpu::DispatchGate gate(ctx(), values, 16, "test gate");
+  gpu::CommandRecorder rec(ctx());
+  auto run = [&](float value) {
+    data.upload(input);
+    values.upload(std::vector<float>{0.0f, value, 0.0f, 0.0f});
+    rec.begin();
+    gate.recordArm(rec, 1, 0.5f);
+    rec.beginGate(gate);
+    scan.record(rec, n);
+    rec.endGate();
+    rec.end();
+    rec.submitAndWait();
+    return data.readback<std::uint32_t>(n);
+  };
+  rec.begin();
+  gate.recordReset(rec);
+  rec.end();
+  rec.submitAndWait();
+  EXPECT_EQ(run(1.0f), cpuScan(input)) << "open";
+  EXPECT_EQ(run(0.25f), input) << "closed: the scan must not run";
+  EXPECT_EQ(run(0.5f), input) << "closed at the threshold itself";
+  EXPECT_EQ(run(std::numeric_limits<float>::quiet_NaN()), cpuScan(input)) << "NaN opens";
+  EXPECT_EQ(run(std::numeric_limits<float>::infinity()), cpuScan(input)) << "+inf opens";
+  EXPECT_EQ(gate.readOpened(), 3u);
+
+  rec.begin();
+  rec.beginGate(gate);
+  EXPECT_THROW(scan.record(rec, n / 2), std::logic_error);  // other workgroup counts
+  rec.endGate();
+  EXPECT_THROW(rec.endGate(), std::logic_error);
+  rec.end();
 }
 
 }  // namespace

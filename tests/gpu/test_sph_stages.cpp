@@ -159,28 +159,44 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
   }
 }
 
-// The list-based density (second Runge-Kutta stage) sums the same terms in the same order as
-// the cell-based pass: at unchanged positions the states are bit-identical.
-TEST_F(SphStageTest, DensityFromTheListEqualsDensityFromTheCells) {
+// recordStep rebuilds the grid and the neighbour list only when the largest reach (distance
+// moved since the build, GPU-reduced by the integrator) exceeds half the list's skin.
+TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenAParticleCrossesHalfTheSkin) {
   auto rng = rngFor();
-  const sim::SphSettings s = settings();
-  const Case c = makeCase(rng, s, 7, 6, 6);
+  sim::SphSettings s = settings();
+  s.maxTimeStep = 1.0e-6f;  // particles move ~1e-6 m per step: far below the threshold
+  const Case c = makeCase(rng, s, 6, 5, 5, 0.1f);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  const Stages st = runStages(c, s, glm::vec3(0.12f));
-  const auto fromCells = st.solver->state().readback<glm::vec4>(n);
+  sim::ParticleStore store(ctx(), n);
+  store.upload(c.pos, c.vel, {}, c.normals);
+  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.12f), s);
+  ASSERT_GT(solver.rebuildThreshold(), 0.0f);
   gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  rec.fill(st.solver->state(), 0);  // make sure the pass writes everything it should
-  rec.transferToCompute();
-  st.solver->recordDensityFromList(rec);
-  rec.end();
-  rec.submitAndWait();
-  const auto fromList = st.solver->state().readback<glm::vec4>(n);
-  const auto vel = st.store->readVelocities();
-  for (std::uint32_t i = 0; i < n; ++i) {
-    if (vel[i].w != 0.0f && fromCells[i].y == 0.0f) continue;  // boundary far from fluid: untouched by both
-    EXPECT_EQ(fromList[i], fromCells[i]) << "slot " << i << " kind " << vel[i].w;
+  std::uint32_t step = 0;
+  auto steps = [&](int count) {
+    rec.begin();
+    if (step == 0) solver.recordReset(rec);
+    for (int k = 0; k < count; ++k, ++step) solver.recordStep(rec, step, std::uint32_t(k));
+    rec.end();
+    rec.submitAndWait();
+    return solver.readRebuilds();
+  };
+  EXPECT_EQ(steps(1), 1u) << "the first step builds the list";
+  EXPECT_EQ(steps(5), 1u) << "tiny motion keeps the list";
+  // Move one fluid particle by 1.05 x the threshold: the step after the move measures it
+  // (the gate uses the reach of the step before), the one after rebuilds.
+  auto pos = store.readPositions();
+  const auto vel = store.readVelocities();
+  std::uint32_t moved = n;
+  for (std::uint32_t i = 0; i < n && moved == n; ++i) {
+    if (vel[i].w == 0.0f) moved = i;
   }
+  ASSERT_LT(moved, n);
+  pos[moved].x += 1.05f * solver.rebuildThreshold();
+  store.live().positions.upload(pos);
+  EXPECT_EQ(steps(1), 1u);
+  EXPECT_EQ(steps(1), 2u) << "a particle past half the skin forces a rebuild";
+  EXPECT_EQ(steps(3), 2u) << "and the new list serves again";
 }
 
 // With SPS turbulence on, the accelerations (SPS stress from the strain rate, then its

@@ -102,7 +102,7 @@ TEST_P(SphIntegratorTest, FreeBlobConservesMomentum) {
       const float s = float(ids[i] % 7) - 3.0f, t = float(ids[i] % 5) - 2.0f;
       vel[i] += glm::vec4(0.1f * s, 0.1f * t, -0.05f * s * t, 0.0f);
     }
-    sim.store().half(sim.store().parity()).velocities.upload(vel);
+    sim.store().live().velocities.upload(vel);
   }
   const sim::Snapshot start = sim.snapshot();
   const glm::dvec3 p0 = momentum(start, sim.fluidParticles());
@@ -177,7 +177,7 @@ TEST_F(SphPhysicsTest, NonFiniteStateStopsWithStepTimeAndParticle) {
   for (std::size_t i = 0; i < ids.size(); ++i) {
     if (ids[i] == 42) vel[i].x = std::numeric_limits<float>::quiet_NaN();
   }
-  sim.store().half(sim.store().parity()).velocities.upload(vel);
+  sim.store().live().velocities.upload(vel);
   try {
     sim.run(opt);
     FAIL() << "the run should have stopped";
@@ -261,7 +261,7 @@ void editPositions(sim::Simulation& sim, Edit edit) {
   const auto vel = sim.store().readVelocities();
   const auto ids = sim.store().readIds();
   for (std::size_t i = 0; i < pos.size(); ++i) edit(ids[i], vel[i].w, pos[i]);
-  sim.store().half(sim.store().parity()).positions.upload(pos);
+  sim.store().live().positions.upload(pos);
 }
 
 // Runs `steps` steps of a hard case; it must stay finite, slower than `speedBound`, and lose

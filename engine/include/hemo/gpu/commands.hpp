@@ -10,6 +10,7 @@
 namespace hemo::gpu {
 
 class TimestampQueries;
+class DispatchGate;
 
 class CommandRecorder {
  public:
@@ -40,6 +41,10 @@ class CommandRecorder {
     dispatch(pipeline, set, &push, sizeof(Push), groups);
   }
 
+  // Dispatches between beginGate and endGate run only when the gate is open (see gate.hpp).
+  void beginGate(DispatchGate& gate);
+  void endGate();
+
   // Named barriers (global memory barriers; the only raw masks live in commands.cpp).
   void computeToCompute();   // shader writes -> shader reads/writes
   void computeToTransfer();  // shader writes -> copy/fill
@@ -65,6 +70,7 @@ class CommandRecorder {
   VkPipeline boundPipeline_ = VK_NULL_HANDLE;
   VkDescriptorSet boundSet_ = VK_NULL_HANDLE;
   std::uint64_t dispatches_ = 0;
+  DispatchGate* gate_ = nullptr;
 };
 
 // GPU timestamps around named stages. reset() before use in each recording; stage times are

@@ -1,15 +1,18 @@
 #pragma once
-// Cell-linked-list neighbour search built on the GPU every step:
+// Cell-linked-list neighbour search built on the GPU:
 //   hash ........ cell of each particle as (cell, slot) pairs
 //   sort ........ stable radix sort of the pairs by cell
 //   cell ranges . cellStart from the sorted keys (empty cells carry the running offset)
-//   reorder ..... gather positions/velocities/ids into cell order, id -> slot map
+//   copy ........ live particle arrays -> scratch
+//   reorder ..... gather positions/velocities/normals/ids from scratch into cell order in the
+//                 live arrays, keep the positions at this build, id -> slot map
 // The cell size is the support radius (or more); neighbours within it lie in the 27 cells
 // around a particle, scanned as nine contiguous x-rows.
 #include "hemo/gpu/primitives.hpp"
 #include "hemo/sim/particles.hpp"
 
 #include <glm/vec3.hpp>
+#include <glm/vector_relational.hpp>
 
 #include <array>
 #include <cstdint>
@@ -18,15 +21,20 @@ namespace hemo::sim {
 
 struct GridSpec {
   glm::vec3 origin{0.0f};  // m, corner of cell (0,0,0)
-  float cellSize = 0.0f;   // m
+  float cellSize = 0.0f;   // m, on bounded axes; periodic axes have cells of period / dims >= this
   glm::uvec3 dims{0u};     // cells per axis
+  glm::vec3 period{0.0f};  // m on periodic axes (the grid spans exactly one period), 0 on bounded ones
 
   std::uint64_t cellCount() const { return std::uint64_t(dims.x) * dims.y * dims.z; }
+  bool periodic(int axis) const { return period[axis] > 0.0f; }
+  glm::vec3 invCellSize() const;  // cells per m along each axis
   // Throws std::invalid_argument naming the problem (non-positive or non-finite size,
-  // zero dims, too many cells for 32-bit indices).
+  // zero dims, too many cells for 32-bit indices, a periodic axis of fewer than 3 cells).
   void validate() const;
-  // The smallest grid of cells of `cellSize` that covers the box [lo, hi].
-  static GridSpec covering(glm::vec3 lo, glm::vec3 hi, float cellSize);
+  // The smallest grid of cells of `cellSize` that covers the box [lo, hi]; on the axes
+  // flagged `periodic`, [lo, hi) is one period, split into as many whole cells of at least
+  // `cellSize` as fit (at least 3).
+  static GridSpec covering(glm::vec3 lo, glm::vec3 hi, float cellSize, glm::bvec3 periodic = glm::bvec3(false));
 };
 
 // Counters the hash stage accumulates (read back only when the caller asks).
@@ -39,9 +47,9 @@ class NeighbourGrid {
  public:
   NeighbourGrid(gpu::Context& context, const GridSpec& spec, ParticleStore& particles);
 
-  // Records the whole build for the store's first n particles; the sorted data ends up in
-  // the other half and the store flips to it. Counters are reset by resetCounters().
-  // With `timestamps`, marks "hash", "sort", "cell ranges" and "reorder" after each stage.
+  // Records the whole build for the store's first n particles, which end up sorted by cell
+  // in the store's live arrays. Counters are reset by resetCounters(). With `timestamps`,
+  // marks "hash", "sort", "cell ranges" and "reorder" after each stage.
   void record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps = nullptr);
   void resetCounters(gpu::CommandRecorder& rec);
 
@@ -50,15 +58,17 @@ class NeighbourGrid {
   const gpu::Buffer& pairs() const { return pairs_; }          // sorted (cell, old slot)
   const gpu::Buffer& slotOfId() const { return slotOfId_; }    // id -> slot (ids < capacity)
   const gpu::Buffer& counters() const { return counters_; }
+  const gpu::Buffer& positionsAtBuild() const { return posAtBuild_; }  // vec4 per slot
   GridCounters readCounters() const;
 
-  struct Push {  // mirrors the push constants of grid/hash.comp
-    float origin[3];
-    float invCellSize;
+  struct Push {  // mirrors HemoGrid in common/grid.glsl
+    float origin[4];
+    float invCell[4];
     std::uint32_t dims[3];
     std::uint32_t n;
+    std::uint32_t periodic[4];
   };
-  static_assert(sizeof(Push) == 32);
+  static_assert(sizeof(Push) == 64);
   Push push(std::uint32_t n) const;
 
  private:
@@ -66,21 +76,20 @@ class NeighbourGrid {
   ParticleStore* particles_;
   const gpu::ComputePipeline* hash_;
   const gpu::ComputePipeline* ranges_;
+  const gpu::ComputePipeline* copy_;
   const gpu::ComputePipeline* reorder_;
   gpu::Buffer pairs_;
   gpu::Buffer cellStart_;
   gpu::Buffer counters_;
   gpu::Buffer slotOfId_;
+  gpu::Buffer posAtBuild_;
   gpu::RadixSort sort_;
-  std::array<gpu::DescriptorSet, 2> hashSets_;     // by source parity
-  gpu::DescriptorSet rangesSet_;
-  std::array<gpu::DescriptorSet, 2> reorderSets_;  // source parity -> other half
+  gpu::DescriptorSet hashSet_, rangesSet_, copySet_, reorderSet_;
 };
 
 // Every particle's neighbours closer than `radius` (<= cell size), as ascending slots of the
 // sorted order, up to `maxPerParticle` each; counts() holds the true number (which may exceed
-// the capacity: the caller checks). Reads the store's current half, so record it after the
-// grid build.
+// the capacity: the caller checks). Record it after the grid build.
 class NeighbourList {
  public:
   NeighbourList(gpu::Context& context, const NeighbourGrid& grid, ParticleStore& particles, float radius,
@@ -92,13 +101,12 @@ class NeighbourList {
 
  private:
   const NeighbourGrid* grid_;
-  ParticleStore* particles_;
   const gpu::ComputePipeline* pipeline_;
   float radius_;
   std::uint32_t maxPerParticle_;
   gpu::Buffer counts_;
   gpu::Buffer list_;
-  std::array<gpu::DescriptorSet, 2> sets_;  // by current parity
+  gpu::DescriptorSet set_;
 };
 
 }  // namespace hemo::sim

@@ -1,16 +1,15 @@
 #pragma once
-// Particle state on the GPU, double-buffered so the neighbour grid can gather it into cell
-// order each step: positions (vec4: xyz in m relative to the domain origin, w free),
-// velocities (vec4: xyz in m/s, w free), normals (vec4: xyz unit wall normal for boundary
-// and wall particles, w free) and stable ids (uint32). `current()` holds the live data; the
-// grid's reorder writes the other half and flips. What the w components mean is up to the
-// stages that use the store (the SPH solver: w of positions = mass in kg, w of velocities =
-// particle kind).
+// Particle state on the GPU: positions (vec4: xyz in m, w free), velocities (vec4: xyz in
+// m/s, w free), normals (vec4: xyz unit wall normal for boundary and wall particles, w free)
+// and stable ids (uint32). `live()` always holds the data, so every descriptor set binds the
+// same buffers whether or not the GPU chose to re-sort this step; `scratch()` is the copy the
+// neighbour grid gathers from when it reorders the live arrays into cell order. What the w
+// components mean is up to the stages that use the store (the SPH solver: w of positions =
+// mass in kg, w of velocities = particle kind).
 #include "hemo/gpu/buffer.hpp"
 
 #include <glm/vec4.hpp>
 
-#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -29,12 +28,9 @@ class ParticleStore {
 
   std::uint32_t capacity() const { return capacity_; }
   std::uint32_t count() const { return count_; }
-  // Index (0 or 1) of the half that holds the live data.
-  int parity() const { return parity_; }
-  ParticleArrays& half(int which) { return halves_[which]; }
-  const ParticleArrays& half(int which) const { return halves_[which]; }
-  const ParticleArrays& current() const { return halves_[parity_]; }
-  void flip() { parity_ ^= 1; }
+  ParticleArrays& live() { return live_; }
+  const ParticleArrays& live() const { return live_; }
+  const ParticleArrays& scratch() const { return scratch_; }
 
   // Replaces the particles (set-up only). ids default to 0 .. n-1, normals to zero.
   void upload(const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities,
@@ -47,8 +43,8 @@ class ParticleStore {
  private:
   std::uint32_t capacity_;
   std::uint32_t count_ = 0;
-  int parity_ = 0;
-  std::array<ParticleArrays, 2> halves_;
+  ParticleArrays live_;
+  ParticleArrays scratch_;
 };
 
 }  // namespace hemo::sim

@@ -1,19 +1,24 @@
 #pragma once
 // Weakly compressible SPH on the GPU: one step is
-//   neighbour grid (hash, sort, cell ranges, reorder)
-//   density ... summation density (fluid + boundary), Tait pressure, neighbour list
+//   gate ...... decides on the GPU whether the neighbour list is still valid (no particle has
+//               moved more than half its skin since it was built)
+//   neighbours  only when not: grid (hash, sort, cell ranges, reorder), neighbour list
+//   density ... summation density (fluid + boundary) from the list, Tait pressure
 //   boundary .. boundary-particle pressure extrapolated from the fluid (Adami et al. 2012)
 //   forces .... pressure, laminar viscosity, boundary repulsion, gravity; dt limit per particle
 //   dt ........ min reduction of the limits (stays on the GPU)
-//   integrate . symplectic Euler with that dt; clock, step log and status on the GPU
+//   integrate . symplectic Euler with that dt; clock, step log and status on the GPU; each
+//               particle's reach since the list build, reduced for the next step's gate
 // Sources: Monaghan (1994) for WCSPH and the Tait equation, Mueller et al. (2003) for the
 // symmetric pressure force, Morris et al. (1997) for laminar viscosity, Wendland (1995)
 // for the kernel; docs/physics.md.
+#include "hemo/gpu/gate.hpp"
 #include "hemo/gpu/primitives.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
 #include "hemo/sim/particles.hpp"
 
 #include <glm/vec3.hpp>
+#include <glm/vector_relational.hpp>
 
 #include <cstdint>
 #include <string>
@@ -49,6 +54,7 @@ struct SphSettings {
   bool sps = false;                 // sub-particle-scale turbulence (Dalrymple & Rogers 2006)
   float smagorinsky = 0.12f;        // C_s
   float blinn = 0.0066f;            // C_I
+  glm::bvec3 periodic{false};       // axes on which the domain [min, max) is periodic
 
   float h() const { return smoothingRatio * spacing; }
   float supportRadius() const { return 2.0f * h(); }
@@ -72,8 +78,9 @@ struct SphParams {
   float dampingRate, dampingUntil;
   std::uint32_t spsEnabled;
   float spsSmagorinsky, spsBlinn, pad0;
+  float origin[4], period[4], invPeriod[4];  // set by the solver from its grid
 };
-static_assert(sizeof(SphParams) == 112);
+static_assert(sizeof(SphParams) == 160);
 
 SphParams makeParams(const SphSettings& s);
 
@@ -94,8 +101,9 @@ struct SphClock {
 
 class SphSolver {
  public:
-  // `domain` is the region the grid covers (its cell size is replaced by the list radius);
-  // particles outside it still interact correctly but are counted as outside.
+  // `domain` is the region the grid covers (cells of the list radius); particles outside it
+  // still interact correctly but are counted as outside. On the settings' periodic axes the
+  // domain [min, max) is one period: particles leaving it re-enter on the other side.
   SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 domainMin, glm::vec3 domainMax,
             const SphSettings& settings, std::uint32_t maxStepsPerBatch = 256);
 
@@ -104,13 +112,13 @@ class SphSolver {
   // change nothing.
   void recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f,
                   gpu::TimestampQueries* timestamps = nullptr);
-  // Stages on their own, for tests: neighbours must have been built first.
+  // Stages on their own, for tests. recordNeighbours always rebuilds (grid and list); the
+  // others use the current list.
   void recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
+  // Density and pressure of fluid particles, then of boundary particles.
   void recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   void recordForces(gpu::CommandRecorder& rec);  // with the SPS stress pass first when enabled
   void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f);
-  // Density and pressure from the current neighbour list (then the boundary pressure).
-  void recordDensityFromList(gpu::CommandRecorder& rec);
 
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);
@@ -124,9 +132,14 @@ class SphSolver {
   const gpu::Buffer& neighbourCounts() const { return ncount_; }
   const gpu::Buffer& neighbourList() const { return nlist_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
+  // Largest distance a particle may move from where the list was built before recordStep
+  // rebuilds it (half the list's skin), m.
+  float rebuildThreshold() const;
 
   SphStatus readStatus() const;
   SphClock readClock() const;
+  // Neighbour-list rebuilds since the last reset (a readback).
+  std::uint32_t readRebuilds() const;
 
  private:
   gpu::Context* context_;
@@ -137,23 +150,23 @@ class SphSolver {
   std::uint32_t clockParity_ = 0;  // which clock record holds the current time
   void recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
                            std::uint32_t mode);
-  void recordBoundaryPressure(gpu::CommandRecorder& rec);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
-  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_;
+  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, reach_;
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer fluidCells_;
-  gpu::Buffer savedPos_, savedVel_, stepDt_;
-  gpu::Buffer tauA_, tauB_;  // SPS stress per density (zero-sized use when SPS is off)  // RK2: state at the start of the step, its dt
-  gpu::MinMaxReduce dtReduce_;
+  gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
+  gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
+  gpu::MinMaxReduce dtReduce_, reachReduce_;
+  gpu::DispatchGate rebuildGate_;
   const gpu::ComputePipeline* markFluid_;
+  const gpu::ComputePipeline* buildList_;
   const gpu::ComputePipeline* density_;
-  const gpu::ComputePipeline* densityList_;
   const gpu::ComputePipeline* boundaryPressure_;
   const gpu::ComputePipeline* spsStress_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_;
-  std::array<gpu::DescriptorSet, 2> markSets_, densitySets_, densityListSets_, spsSets_, boundarySets_, forcesSets_, integrateSets_;  // by parity
+  gpu::DescriptorSet markSet_, buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_;
 };
 
 }  // namespace hemo::sim

@@ -1,0 +1,51 @@
+#pragma once
+// GPU-decided conditional work without a host round trip. Dispatches recorded between
+// CommandRecorder::beginGate(gate) and endGate() become indirect dispatches, one slot of
+// the gate's argument buffer each; the gate remembers the workgroup counts they were
+// recorded with. recordArm() (one small dispatch) then writes, on the GPU, either those
+// counts (gate open) or zeros (closed) into the slots, depending on a value another stage
+// computed: open when values[index] > threshold, or when the value is NaN.
+// A region must record the same dispatches with the same counts every time (the slots are
+// reused by every step of a batch); a mismatch throws.
+#include "hemo/gpu/commands.hpp"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hemo::gpu {
+
+class DispatchGate {
+ public:
+  DispatchGate(Context& context, const Buffer& values, std::uint32_t maxSlots, std::string name);
+
+  // Records the decision for the next gated region. Needs the writes of `values` visible to
+  // compute (a computeToCompute barrier before), and leaves the arguments ready for indirect
+  // reads.
+  void recordArm(CommandRecorder& rec, std::uint32_t index, float threshold);
+  // Zeroes the counter of openings (transfer command).
+  void recordReset(CommandRecorder& rec);
+  // How often the gate opened since the last reset (a readback: outside the step loop).
+  std::uint32_t readOpened() const;
+  const std::string& name() const { return name_; }
+
+ private:
+  friend class CommandRecorder;
+  // The indirect-argument offset for the next dispatch of the region being recorded.
+  VkDeviceSize claim(Groups groups);
+  void beginRegion() { cursor_ = 0; }
+  void endRegion();
+
+  std::string name_;
+  std::uint32_t maxSlots_;
+  const ComputePipeline* arm_;
+  Buffer armed_;   // host-written table of counts (uvec4 per slot)
+  Buffer args_;    // indirect arguments (uvec4 per slot; the first three are x, y, z)
+  Buffer opened_;  // uint
+  DescriptorSet set_;
+  std::vector<std::uint32_t> table_;  // host copy of armed_
+  std::uint32_t cursor_ = 0;
+  bool dirty_ = false;
+};
+
+}  // namespace hemo::gpu
