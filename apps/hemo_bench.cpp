@@ -6,6 +6,7 @@
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/gpu/primitives.hpp"
 #include "hemo/reference/published.hpp"
+#include "hemo/scene/builders.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
 #include "hemo/sim/probes.hpp"
@@ -241,6 +242,8 @@ Json accuracy(Context& ctx, const std::string& only) {
       for (Integrator integrator : integrators) {
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
         scene.sph.spacing = float(a / fraction);
+        // the periodic slab: 0.6 a thick as in the scene, at least three list radii
+        scene = hemo::scene::withSlabThickness(scene, 1, std::max(9, int(std::lround(0.6 * fraction))));
         scene.sph.integrator = integrator;
         hemo::sim::Simulation sim(ctx, scene);
         const auto& table = hemo::reference::martinMoyceN2();

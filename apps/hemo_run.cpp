@@ -169,6 +169,7 @@ int main(int argc, char** argv) {
                {"escaped_particles", finite ? sim.escapedParticles() : 0},
                {"lost_particles", 0},
                {"steps", sim.steps()},
+               {"neighbour_rebuilds", sim.solver().readRebuilds()},
                {"sim_time_s", sim.time()},
                {"wall_time_s", wall},
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},

@@ -24,11 +24,15 @@ struct SphParams {
   uint spsEnabled;
   float spsSmagorinsky;
   float spsBlinn;
-  float pad0;
+  uint listStride;
   vec4 origin;     // xyz: domain origin (m), where periodic axes start
   vec4 period;     // xyz: period (m) on periodic axes, 0 on the others
   vec4 invPeriod;  // xyz: 1 / period, 0 on non-periodic axes
 };
+
+// Entry k of particle i's neighbour list. Entries are interleaved (entry k of every particle,
+// then entry k + 1), so neighbouring invocations read neighbouring words.
+#define hemo_list_slot(i, k) ((k) * params.listStride + (i))
 
 // Minimum-image separation (unchanged on non-periodic axes). Needs `params` bound.
 #define hemo_min_image(d) ((d) - params.period.xyz * round((d) * params.invPeriod.xyz))

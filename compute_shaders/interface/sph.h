@@ -14,7 +14,8 @@
 //   float kernelNorm         Wendland C2 (3D): 21 / (16 pi h^3)  (1/m^3)
 //   float rho0               rest density (kg/m^3)
 //   float taitB              Tait stiffness B = c0^2 rho0 / 7 (Pa)
-//   float mu                 dynamic viscosity (Pa s)
+//   float mu                 dynamic viscosity (Pa s) / the lattice factor of the viscous term
+//                            (SphSettings::viscousLatticeFactor)
 //   float etaSq              regulariser of the viscous term, 0.01 h^2 (m^2)
 //   float psi                repulsion strength Psi (m/s^2)
 //   float repulsionCutoff    D (m): no repulsion beyond this normal distance
@@ -31,7 +32,9 @@
 //   uint  spsEnabled         sub-particle-scale turbulence (Dalrymple & Rogers 2006) on/off
 //   float spsSmagorinsky     (C_s dp)^2 (m^2): eddy viscosity nu_t = (C_s dp)^2 |S|
 //   float spsBlinn           C_I dp^2 (m^2): isotropic part -2/3 C_I dp^2 |S|^2
-//   float pad
+//   uint  listStride         particles per neighbour-list entry row: entry k of particle i is
+//                            at k * listStride + i (interleaved, so neighbouring invocations read
+//                            neighbouring words)
 //   vec4  origin             xyz: domain origin (m), where periodic axes start
 //   vec4  period             xyz: period (m) on periodic axes, 0 on the others
 //   vec4  invPeriod          xyz: 1 / period, 0 on non-periodic axes
@@ -71,7 +74,8 @@
 #define HEMO_BPRESSURE_BINDING_STATE 3
 #define HEMO_BPRESSURE_BINDING_NCOUNT 4
 #define HEMO_BPRESSURE_BINDING_NLIST 5
-#define HEMO_BPRESSURE_BINDING_COUNT 6
+#define HEMO_BPRESSURE_BINDING_WALL_VEL 6  // vec4: velocity shown to the viscous term (no-slip)
+#define HEMO_BPRESSURE_BINDING_COUNT 7
 
 // sph/sps_stress.comp: the SPS stress tau/rho of each fluid particle from its strain rate.
 #define HEMO_SPS_BINDING_POSITIONS 0
@@ -98,7 +102,8 @@
 #define HEMO_FORCES_BINDING_STATUS 10
 #define HEMO_FORCES_BINDING_TAU_A 11
 #define HEMO_FORCES_BINDING_TAU_B 12
-#define HEMO_FORCES_BINDING_COUNT 13
+#define HEMO_FORCES_BINDING_WALL_VEL 13
+#define HEMO_FORCES_BINDING_COUNT 14
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
 // step, clock, status. Push constant `mode`:

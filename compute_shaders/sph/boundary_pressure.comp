@@ -4,7 +4,11 @@
 //   p_b = ( sum_f p_f W_bf + g . sum_f rho_f (x_b - x_f) W_bf ) / sum_f W_bf
 // with g the gravity + body force, and the density from the inverse Tait equation,
 //   rho_b = rho0 (p_b / B + 1)^(1/7).
-// A boundary particle without fluid neighbours keeps (rho0, 0). The force pass then treats
+// For the viscous term the boundary particle shows the no-slip velocity of the same paper
+// (eq. 22-23): v = 2 v_wall - sum_f v_f W_bf / sum_f W_bf, so the shear across the wall is
+// that of a velocity that vanishes at the wall (a zero velocity gives about half of it, and
+// the fluid slips).
+// A boundary particle without fluid neighbours keeps (rho0, 0) and its own velocity. The force pass then treats
 // boundary particles like fluid ones in the symmetric pressure term, which holds a fluid
 // column at the hydrostatic pressure without the wall having to be penetrated.
 #extension GL_GOOGLE_include_directive : require
@@ -19,11 +23,16 @@ layout(std430, binding = HEMO_BPRESSURE_BINDING_PARAMS) readonly buffer Params {
 layout(std430, binding = HEMO_BPRESSURE_BINDING_STATE) buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_WALL_VEL) writeonly buffer WallVel { vec4 wallVel[]; };
 layout(push_constant) uniform Push { uint n; } pc;
 
 void main() {
   const uint b = hemo_global_index();
-  if (b >= pc.n || uint(velocities[b].w) == HEMO_KIND_FLUID) {
+  if (b >= pc.n) {
+    return;
+  }
+  const vec4 vb = velocities[b];
+  if (uint(vb.w) == HEMO_KIND_FLUID) {
     return;
   }
   const vec3 xb = positions[b].xyz;
@@ -31,10 +40,10 @@ void main() {
   float sumW = 0.0;
   float sumP = 0.0;
   vec3 sumRhoR = vec3(0.0);
+  vec3 sumV = vec3(0.0);
   const uint count = neighbourCount[b];
-  const uint listBase = b * params.neighbourCapacity;
   for (uint k = 0u; k < count; ++k) {
-    const uint f = neighbourList[listBase + k];  // fluid neighbours only
+    const uint f = neighbourList[hemo_list_slot(b, k)];  // fluid neighbours only
     const vec3 d = hemo_min_image(xb - positions[f].xyz);
     const float r2 = dot(d, d);
     if (r2 >= support2) {
@@ -45,11 +54,14 @@ void main() {
     sumW += w;
     sumP += sf.y * w;
     sumRhoR += sf.x * d * w;
+    sumV += velocities[f].xyz * w;
   }
   if (sumW <= 0.0) {
     state[b] = vec4(params.rho0, 0.0, 0.0, 0.0);
+    wallVel[b] = vec4(vb.xyz, 0.0);
     return;
   }
+  wallVel[b] = vec4(2.0 * vb.xyz - sumV / sumW, 0.0);
   float p = (sumP + dot(params.gravity.xyz, sumRhoR)) / sumW;
   if (params.clampNegativePressure != 0u) {
     p = max(p, 0.0);

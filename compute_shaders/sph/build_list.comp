@@ -30,7 +30,6 @@ void main() {
   const vec3 xi = positions[i].xyz;
   const float list2 = params.listRadius * params.listRadius;
   const uint capacity = params.neighbourCapacity;
-  const uint listBase = i * capacity;
   const uvec3 dims = pc.grid.dimsN.xyz;
 
   bool outside;
@@ -73,7 +72,7 @@ void main() {
           const vec3 d = hemo_grid_min_image(xi - positions[j].xyz, pc.grid);
           if (j != i && dot(d, d) < list2 && (fluidI || uint(velocities[j].w) == HEMO_KIND_FLUID)) {
             if (count < capacity) {
-              neighbourList[listBase + count] = j;
+              neighbourList[hemo_list_slot(i, count)] = j;
             }
             ++count;
           }

@@ -29,9 +29,8 @@ void main() {
   const float support2 = params.supportRadius * params.supportRadius;
   float rho = pi.w * hemo_kernel_w(0.0, params.h, params.kernelNorm);
   const uint count = neighbourCount[i];
-  const uint listBase = i * params.neighbourCapacity;
   for (uint k = 0u; k < count; ++k) {
-    const vec4 pj = positions[neighbourList[listBase + k]];
+    const vec4 pj = positions[neighbourList[hemo_list_slot(i, k)]];
     const vec3 d = hemo_min_image(pi.xyz - pj.xyz);
     const float r2 = dot(d, d);
     if (r2 < support2) {

@@ -6,8 +6,8 @@
 //             see docs/physics.md)
 //  viscosity  a += m_j 2 mu / (rho_i rho_j) (x_ij . gradW_ij) / (r^2 + eta^2) v_ij
 //             (laminar term of Morris et al. 1997 / Lo & Shao 2002)
-//  boundary   neighbours take part with the pressure and density extrapolated to them from
-//             the fluid (boundary_pressure.comp), their own velocity (no-slip), and repel: F = n N(x) T(y) with
+//  boundary   neighbours take part with the pressure, density and no-slip velocity
+//             extrapolated to them from the fluid (boundary_pressure.comp), and repel: F = n N(x) T(y) with
 //             N(x) = Psi (1 - r) / sqrt(r), r = x / 2h, for 0 < x < D (normal distance),
 //             T(y) = 1 - y / dp for tangential distance y < dp; the summed force is divided
 //             by max(sum T, 1), so it stays constant while a particle slides along a wall.
@@ -34,6 +34,7 @@ layout(std430, binding = HEMO_FORCES_BINDING_IDS) readonly buffer Ids { uint ids
 layout(std430, binding = HEMO_FORCES_BINDING_STATUS) buffer Status { uint status[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_TAU_A) readonly buffer TauA { vec4 tauA[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_TAU_B) readonly buffer TauB { vec4 tauB[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_WALL_VEL) readonly buffer WallVel { vec4 wallVel[]; };
 
 // tau / rho^2 as a symmetric matrix, from the SPS stress per density (sps_stress.comp).
 mat3 hemo_sps_tensor(uint j, float rho) {
@@ -78,9 +79,8 @@ void main() {
   vec3 repulsion = vec3(0.0);
   float repulsionWeight = 0.0;
   const uint count = neighbourCount[i];
-  const uint listBase = i * params.neighbourCapacity;
   for (uint k = 0u; k < count; ++k) {
-    const uint j = neighbourList[listBase + k];
+    const uint j = neighbourList[hemo_list_slot(i, k)];
     const vec4 pj = positions[j];
     const vec3 d = hemo_min_image(xi - pj.xyz);
     const float r2 = dot(d, d);
@@ -96,7 +96,8 @@ void main() {
     const float pOverRho2J = sj.y / (sj.x * sj.x);
     const float invRhoIJ = 1.0 / (si.x * rhoJ);
     a -= (pj.w * (pOverRho2I + pOverRho2J)) * gradW;
-    a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + params.etaSq)) * (vi.xyz - vj.xyz);
+    const vec3 viscousVj = fluidJ ? vj.xyz : wallVel[j].xyz;
+    a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + params.etaSq)) * (vi.xyz - viscousVj);
     if (sps && fluidJ) {
       // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
       a += pj.w * ((spsI + hemo_sps_tensor(j, rhoJ)) * gradW);

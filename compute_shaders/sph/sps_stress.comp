@@ -38,9 +38,8 @@ void main() {
   const float support2 = params.supportRadius * params.supportRadius;
   mat3 g = mat3(0.0);  // g[b][a] = d u_a / d x_b (column b)
   const uint count = neighbourCount[i];
-  const uint listBase = i * params.neighbourCapacity;
   for (uint k = 0u; k < count; ++k) {
-    const uint j = neighbourList[listBase + k];
+    const uint j = neighbourList[hemo_list_slot(i, k)];
     const vec4 pj = positions[j];
     const vec3 d = hemo_min_image(xi - pj.xyz);
     const float r2 = dot(d, d);

@@ -96,9 +96,31 @@ std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& par
   return out;
 }
 
+std::vector<glm::dvec3> viscousVelocities(const std::vector<SphParticle>& particles, const SphModel& m) {
+  std::vector<glm::dvec3> out(particles.size());
+  const double support = 2.0 * m.h;
+  for (std::size_t b = 0; b < particles.size(); ++b) {
+    out[b] = particles[b].v;
+    if (particles[b].kind == 0) continue;
+    double sumW = 0.0;
+    glm::dvec3 sumV(0.0);
+    for (const auto& f : particles) {
+      if (f.kind != 0) continue;
+      const double r = glm::length(particles[b].x - f.x);
+      if (r >= support) continue;
+      const double w = kernelW(r, m.h);
+      sumW += w;
+      sumV += f.v * w;
+    }
+    if (sumW > 0.0) out[b] = 2.0 * particles[b].v - sumV / sumW;
+  }
+  return out;
+}
+
 std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp,
                                       const SphModel& m) {
   std::vector<glm::dvec3> out(particles.size(), glm::dvec3(0.0));
+  const auto vv = viscousVelocities(particles, m);
   const double support = 2.0 * m.h;
   const double etaSq = 0.01 * m.h * m.h;
   const auto tau = m.sps ? spsStress(particles, rp, m) : std::vector<std::array<double, 9>>();
@@ -119,7 +141,7 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
       const double pOverRho2I = rp[i].y / (rp[i].x * rp[i].x);
       const double pOverRho2J = rp[j].y / (rp[j].x * rp[j].x);
       a -= pj.mass * (pOverRho2I + pOverRho2J) * gradW;
-      a += pj.mass * 2.0 * m.mu / (rp[i].x * rhoJ) * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - pj.v);
+      a += pj.mass * 2.0 * m.mu / (rp[i].x * rhoJ) * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[j]);
       if (m.sps && fluidJ) {
         // a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW, with tau / rho stored
         for (int c = 0; c < 3; ++c) {

@@ -19,11 +19,16 @@ glm::ivec3 cellsAlong(const Box& b, float dp) {
 template <class F>
 void forEachTankParticle(const Tank& t, float dp, F&& f) {
   const glm::ivec3 n = cellsAlong(t.box, dp);
-  const int L = int(t.layers);
-  const int zTop = t.openTop ? n.z : n.z + L;
-  for (int k = -L; k < zTop; ++k)
-    for (int j = -L; j < n.y + L; ++j)
-      for (int i = -L; i < n.x + L; ++i) {
+  glm::ivec3 lo, hi;  // lattice range, walls of L layers outside the box except across periodic axes
+  for (int a = 0; a < 3; ++a) {
+    const int L = t.periodic[a] ? 0 : int(t.layers);
+    lo[a] = -L;
+    hi[a] = n[a] + L;
+  }
+  if (t.openTop) hi.z = n.z;
+  for (int k = lo.z; k < hi.z; ++k)
+    for (int j = lo.y; j < hi.y; ++j)
+      for (int i = lo.x; i < hi.x; ++i) {
         const bool inside = i >= 0 && i < n.x && j >= 0 && j < n.y && k >= 0 && k < n.z;
         if (inside) continue;
         const glm::vec3 p = t.box.min + (glm::vec3(i, j, k) + 0.5f) * dp;
@@ -42,8 +47,11 @@ std::uint64_t countParticles(const Scene& s) {
   }
   for (const auto& t : s.tanks) {
     const glm::ivec3 n = cellsAlong(t.box, s.sph.spacing);
-    const std::uint64_t L = t.layers;
-    const std::uint64_t outer = (n.x + 2 * L) * (n.y + 2 * L) * (n.z + (t.openTop ? L : 2 * L));
+    std::uint64_t outer = 1;
+    for (int a = 0; a < 3; ++a) {
+      const std::uint64_t walls = t.periodic[a] ? 0 : (a == 2 && t.openTop ? 1 : 2);
+      outer *= std::uint64_t(n[a]) + walls * t.layers;
+    }
     count += outer - std::uint64_t(n.x) * n.y * n.z;
   }
   return count;
@@ -75,6 +83,28 @@ ParticleSet buildParticles(const Scene& s) {
   set.ids.resize(set.size());
   for (std::uint32_t i = 0; i < set.size(); ++i) set.ids[i] = i;
   return set;
+}
+
+Scene withSlabThickness(Scene s, int axis, int spacings) {
+  const std::string name = std::string(1, "xyz"[axis]);
+  if (axis < 0 || axis > 2 || !s.sph.periodic[axis]) {
+    throw SceneError(s.name + ": a slab thickness needs a periodic axis (" + name + " is not)");
+  }
+  const float lo = s.domain.min[axis], hi = s.domain.max[axis];
+  auto spans = [&](const Box& b) { return std::abs(b.min[axis] - lo) <= 1e-6f * s.sph.spacing && std::abs(b.max[axis] - hi) <= 1e-6f * s.sph.spacing; };
+  const float top = lo + float(spacings) * s.sph.spacing;
+  for (auto& b : s.blocks) {
+    if (!spans(b.box)) throw SceneError(s.name + ": a fluid block does not span the periodic axis " + name);
+    b.box.max[axis] = top;
+  }
+  for (auto& t : s.tanks) t.box.max[axis] = top;  // the loader made tanks span periodic axes
+  s.domain.max[axis] = top;
+  const float need = 3.0f * s.sph.listRadius();
+  if (top - lo < need * (1.0f - 1e-6f)) {
+    throw SceneError(s.name + ": a slab of " + std::to_string(spacings) + " spacings along " + name +
+                     " is thinner than three neighbour-list radii (" + std::to_string(need) + " m)");
+  }
+  return s;
 }
 
 }  // namespace hemo::scene

@@ -1,5 +1,6 @@
 #include "hemo/scene/scene.hpp"
 
+#include <glm/common.hpp>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
@@ -13,7 +14,7 @@ using Json = nlohmann::json;
 
 namespace {
 
-enum class Kind { Number, Integer, Bool, String, Vec3, Choice, Objects, Section };
+enum class Kind { Number, Integer, Bool, String, Vec3, Choice, ChoiceList, Objects, Section };
 
 struct Field {
   std::string key;
@@ -91,6 +92,7 @@ const std::vector<Field>& schema() {
        {
            {"min_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Lower corner."},
            {"max_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Upper corner."},
+           {"periodic", Kind::ChoiceList, "", 0, 0, false, Json::array(), "Axes on which [min_m, max_m) is one period: particles leaving one side enter at the other, and tanks have no walls across these axes (they must span the domain there). The period must be a whole number of spacings and at least 3 neighbour-list radii.", {"x", "y", "z"}},
        }},
   };
   return fields;
@@ -104,6 +106,7 @@ std::string kindName(Kind k) {
     case Kind::String: return "string";
     case Kind::Vec3: return "array of 3 numbers";
     case Kind::Choice: return "string";
+    case Kind::ChoiceList: return "array of strings";
     case Kind::Objects: return "array of objects";
     case Kind::Section: return "object";
   }
@@ -183,6 +186,16 @@ class Checker {
           all += (all.empty() ? "" : ", ") + ("\"" + c + "\"");
         }
         fail(p, "unknown value " + v.dump() + " (expected one of: " + all + ")");
+      }
+      case Kind::ChoiceList: {
+        if (!v.is_array()) fail(p, "expected an array of strings, got " + v.dump());
+        for (std::size_t k = 0; k < v.size(); ++k) {
+          value(p + "[" + std::to_string(k) + "]", v[k], Field{"", Kind::Choice, "", 0, 0, false, nullptr, "", f.choices});
+          for (std::size_t m = 0; m < k; ++m) {
+            if (v[m] == v[k]) fail(p, "lists " + v[k].dump() + " twice");
+          }
+        }
+        return v;
       }
       case Kind::Vec3: {
         if (!v.is_array() || v.size() != 3) fail(p, "expected an array of 3 numbers (" + f.unit + "), got " + v.dump());
@@ -292,6 +305,30 @@ Scene parseScene(const std::string& text, const std::string& source) {
 
   s.domain = box(c, "domain", j["domain"]);
   const float slack = 1e-6f * s.sph.spacing;
+  for (const auto& axisName : j["domain"]["periodic"]) {
+    const int a = axisName.get<std::string>()[0] - 'x';
+    s.sph.periodic[a] = true;
+    const std::string axis(1, "xyz"[a]);
+    const double period = double(s.domain.max[a]) - s.domain.min[a];
+    const double spacings = period / s.sph.spacing;
+    if (std::abs(spacings - std::round(spacings)) > 1e-3) {
+      c.fail("domain.periodic", "the period along " + axis + " (" + fmt(period) + " m) must be a whole number of spacings dp = " +
+                                    fmt(s.sph.spacing) + " m (it is " + fmt(spacings) + ")");
+    }
+    const double listRadius = s.sph.listRadius();
+    if (period < 3.0 * listRadius) {
+      c.fail("domain.periodic", "the period along " + axis + " (" + fmt(period) + " m) must be at least 3 neighbour-list radii (" +
+                                    fmt(3.0 * listRadius) + " m)");
+    }
+    for (std::size_t k = 0; k < s.tanks.size(); ++k) {
+      const Box& b = s.tanks[k].box;
+      if (std::abs(b.min[a] - s.domain.min[a]) > slack || std::abs(b.max[a] - s.domain.max[a]) > slack) {
+        c.fail("boundary.tanks[" + std::to_string(k) + "]", "must span the domain along the periodic axis " + axis +
+                                                              " (min_m and max_m equal to the domain's there)");
+      }
+      s.tanks[k].periodic[a] = true;
+    }
+  }
   for (std::size_t k = 0; k < s.blocks.size(); ++k) {
     if (!inside(s.blocks[k].box, s.domain, slack)) {
       c.fail("fluid.blocks[" + std::to_string(k) + "]", "lies (partly) outside the domain");
@@ -299,7 +336,8 @@ Scene parseScene(const std::string& text, const std::string& source) {
   }
   for (std::size_t k = 0; k < s.tanks.size(); ++k) {
     const float reach = float(s.tanks[k].layers) * s.sph.spacing;
-    const Box outer{s.tanks[k].box.min - glm::vec3(reach), s.tanks[k].box.max + glm::vec3(reach)};
+    const glm::vec3 grow = glm::mix(glm::vec3(reach), glm::vec3(0.0f), s.tanks[k].periodic);
+    const Box outer{s.tanks[k].box.min - grow, s.tanks[k].box.max + grow};
     Box need = outer;
     if (s.tanks[k].openTop) need.max.z = s.tanks[k].box.max.z;
     if (!inside(need, s.domain, slack)) {
@@ -329,7 +367,7 @@ void collect(const std::vector<Field>& fields, const std::string& prefix, std::v
     const std::string path = prefix.empty() ? f.key : prefix + "." + f.key;
     FieldDoc d;
     d.path = path;
-    d.type = f.kind == Kind::Choice ? "one of " + [&] {
+    d.type = f.kind == Kind::Choice || f.kind == Kind::ChoiceList ? std::string(f.kind == Kind::ChoiceList ? "array of " : "one of ") + [&] {
       std::string s;
       for (const auto& ch : f.choices) s += (s.empty() ? "" : ", ") + ("\"" + ch + "\"");
       return s;

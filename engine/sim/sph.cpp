@@ -69,6 +69,22 @@ float SphSettings::particleMass() const {
   return float(restDensity / sum);
 }
 
+double SphSettings::viscousLatticeFactor() const {
+  // The Morris term's estimate of d^2 v / dz^2 for v = z^2 (exactly 2) on the initial cubic
+  // lattice, with particle volumes 1 / sum_j W (as the calibrated mass gives), over 2.
+  const double dp = spacing, hh = h(), etaSq = 0.01 * hh * hh;
+  const int reach = int(std::ceil(2.0 * hh / dp)) + 1;
+  double sumW = 0.0, sum = 0.0;
+  for (int a = -reach; a <= reach; ++a)
+    for (int b = -reach; b <= reach; ++b)
+      for (int c = -reach; c <= reach; ++c) {
+        const double r = dp * std::sqrt(double(a * a + b * b + c * c));
+        sumW += reference::kernelW(r, hh);
+        if (r > 0.0) sum -= 2.0 * r * reference::kernelDwdr(r, hh) / (r * r + etaSq) * (dp * c) * (dp * c);
+      }
+  return sum / sumW / 2.0;
+}
+
 SphParams makeParams(const SphSettings& s) {
   s.validate();
   SphParams p{};
@@ -84,7 +100,7 @@ SphParams makeParams(const SphSettings& s) {
   p.kernelNorm = float(21.0 / (16.0 * std::numbers::pi * h * h * h));
   p.rho0 = s.restDensity;
   p.taitB = float(double(s.soundSpeed) * s.soundSpeed * s.restDensity / 7.0);
-  p.mu = s.viscosity;
+  p.mu = float(s.viscosity / s.viscousLatticeFactor());
   p.etaSq = float(0.01 * h * h);
   p.psi = float(s.repulsionScale * double(s.soundSpeed) * s.soundSpeed / (2.0 * h));
   p.repulsionCutoff = s.repulsionCutoffRatio * s.spacing;
@@ -126,6 +142,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       ncount_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "neighbour counts"),
       nlist_(context, perParticle(particles, 4) * settings.neighbourCapacity, gpu::MemoryUse::Device, "neighbour list"),
       reach_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "reach since the list build"),
+      wallVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "no-slip wall velocities"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
@@ -138,6 +155,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)),
       reachReduce_(context, reach_, std::max(particles.capacity(), 1u)),
       rebuildGate_(context, reachReduce_.result(), 64, "neighbour rebuild") {
+  params_.listStride = std::max(particles.capacity(), 1u);
   const GridSpec& spec = grid_.spec();
   for (int a = 0; a < 3; ++a) {
     params_.origin[a] = spec.origin[a];
@@ -176,7 +194,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
                                              {HEMO_BPRESSURE_BINDING_STATE, &state_},
                                              {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
-                                             {HEMO_BPRESSURE_BINDING_NLIST, &nlist_}});
+                                             {HEMO_BPRESSURE_BINDING_NLIST, &nlist_},
+                                             {HEMO_BPRESSURE_BINDING_WALL_VEL, &wallVel_}});
   spsSet_ = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
                                  {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
@@ -197,7 +216,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  {HEMO_FORCES_BINDING_IDS, &a.ids},
                                  {HEMO_FORCES_BINDING_STATUS, &status_},
                                  {HEMO_FORCES_BINDING_TAU_A, &tauA_},
-                                 {HEMO_FORCES_BINDING_TAU_B, &tauB_}});
+                                 {HEMO_FORCES_BINDING_TAU_B, &tauB_},
+                                 {HEMO_FORCES_BINDING_WALL_VEL, &wallVel_}});
   integrateSet_ = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                        {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},

@@ -1,9 +1,11 @@
 // Properties of the CPU reference of the neighbour grid.
+#include "hemo/reference/analytic.hpp"
 #include "hemo/reference/neighbours.hpp"
 #include "hemo/reference/published.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <random>
 #include <string>
@@ -62,6 +64,23 @@ TEST(Published, MartinMoyceTableMatchesTheDataFile) {
   EXPECT_DOUBLE_EQ(interpolateTable(rows, 0.0), 1.0);
   EXPECT_NEAR(interpolateTable(rows, 0.205), 1.055, 1e-12);
   EXPECT_DOUBLE_EQ(interpolateTable(rows, 99.0), rows.back().second);
+}
+
+// The start-up series: zero at t = 0 and at the walls, the steady parabola F L^2 / (8 nu) at
+// the centre for large t, the analytic e-folding of the slowest mode in between, symmetric.
+TEST(ReferencePoiseuille, StartupSeriesHasTheRightLimits) {
+  const double L = 1e-3, F = 2e-4, nu = 1e-6, peak = F * L * L / (8 * nu);
+  for (double z : {0.1e-3, 0.3e-3, 0.5e-3, 0.9e-3}) {
+    EXPECT_NEAR(poiseuilleStartup(z, 0.0, L, F, nu), 0.0, 1e-5 * peak) << z;
+    EXPECT_NEAR(poiseuilleStartup(z, 10.0, L, F, nu), F / (2 * nu) * z * (L - z), 1e-9 * peak) << z;
+    EXPECT_NEAR(poiseuilleStartup(z, 0.05, L, F, nu), poiseuilleStartup(L - z, 0.05, L, F, nu), 1e-9 * peak);
+  }
+  EXPECT_NEAR(poiseuilleStartup(0.0, 0.1, L, F, nu), 0.0, 1e-12);
+  EXPECT_NEAR(poiseuilleStartup(L, 0.1, L, F, nu), 0.0, 1e-12);
+  // Late enough for the n = 0 mode alone: deficit = 32/pi^3 peak exp(-pi^2 nu t / L^2).
+  const double t = 0.3, pi = 3.14159265358979323846;
+  const double deficit = peak - poiseuilleStartup(L / 2, t, L, F, nu);
+  EXPECT_NEAR(deficit, 32.0 / (pi * pi * pi) * peak * std::exp(-pi * pi * nu * t / (L * L)), 1e-6 * peak);
 }
 
 }  // namespace

@@ -45,6 +45,11 @@ double kernelDwdr(double r, double h);
 // neighbours (Adami et al. 2012) and the matching Tait density.
 std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particles, const SphModel& model);
 
+// The velocity each particle shows the viscous term: its own for fluid particles; for boundary
+// particles with fluid neighbours 2 v_b - (sum_f v_f W_bf) / (sum_f W_bf), the no-slip
+// extrapolation of Adami, Hu & Adams (2012, eq. 22-23).
+std::vector<glm::dvec3> viscousVelocities(const std::vector<SphParticle>& particles, const SphModel& model);
+
 // Acceleration per particle (zero for boundary particles).
 std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
                                       const std::vector<glm::dvec2>& densityPressure, const SphModel& model);

@@ -5,6 +5,7 @@
 #include "hemo/sim/sph.hpp"
 
 #include <glm/vec3.hpp>
+#include <glm/vector_relational.hpp>
 
 #include <filesystem>
 #include <stdexcept>
@@ -30,11 +31,12 @@ struct FluidBlock {
 };
 
 // A rigid container: `layers` layers of boundary particles just outside the box, on every
-// face except the top (+z) when openTop.
+// face except the top (+z) when openTop and the faces across periodic axes.
 struct Tank {
   Box box;
   std::uint32_t layers = 3;
   bool openTop = true;
+  glm::bvec3 periodic{false};  // set from the domain: no walls across these axes
 };
 
 struct Scene {

@@ -63,6 +63,11 @@ struct SphSettings {
   // exactly: m = rho0 / sum_j W(|x_j|) (the kernel sum is 1/dp^3 only to within ~0.2% at
   // h/dp = 1.3, which would otherwise add a uniform 7 B 0.002 to the pressure).
   float particleMass() const;
+  // The laminar (Morris) viscous term on that lattice gives the Laplacian of a velocity field
+  // times this factor (0.96 at h/dp = 1.3: the eta^2 regulariser and the kernel's discrete
+  // second moment); the solver divides the viscosity by it, as the mass is calibrated, so the
+  // fluid has the viscosity the scene asks for (measured with plane Poiseuille flow).
+  double viscousLatticeFactor() const;
   // Throws std::invalid_argument naming the offending setting.
   void validate() const;
 };
@@ -77,7 +82,8 @@ struct SphParams {
   std::uint32_t clampNegativePressure, neighbourCapacity;
   float dampingRate, dampingUntil;
   std::uint32_t spsEnabled;
-  float spsSmagorinsky, spsBlinn, pad0;
+  float spsSmagorinsky, spsBlinn;
+  std::uint32_t listStride;  // set by the solver: the store's capacity
   float origin[4], period[4], invPeriod[4];  // set by the solver from its grid
 };
 static_assert(sizeof(SphParams) == 160);
@@ -152,7 +158,7 @@ class SphSolver {
                            std::uint32_t mode);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
-  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, reach_;
+  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, reach_, wallVel_;
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer fluidCells_;
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt

@@ -1,0 +1,16 @@
+#pragma once
+// Closed-form solutions used to validate the solver.
+#include <cstdint>
+
+namespace hemo::reference {
+
+// Start-up of plane Poiseuille flow: fluid at rest between no-slip walls at z = 0 and z = L,
+// driven from t = 0 by a uniform body force F (m/s^2) along the walls, kinematic viscosity
+// nu (m^2/s). Velocity along F at height z (0 <= z <= L) and time t (s), from the Fourier
+// series of the diffusion equation (as written by Morris, Fox & Zhu 1997, eq. 21):
+//   v(z, t) = F / (2 nu) z (L - z)
+//           - sum_n 4 F L^2 / (nu pi^3 (2n+1)^3) sin((2n+1) pi z / L) exp(-(2n+1)^2 pi^2 nu t / L^2)
+// `terms` terms of the series (the n-th decays like (2n+1)^-3 even at t = 0).
+double poiseuilleStartup(double z, double t, double L, double F, double nu, std::uint32_t terms = 200);
+
+}  // namespace hemo::reference
