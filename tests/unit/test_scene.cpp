@@ -49,6 +49,44 @@ TEST(Scene, ValidSceneLoadsWithDefaultsAndDerivedSoundSpeed) {
   EXPECT_TRUE(s.tanks[0].openTop);
 }
 
+// Periodic axes: accepted when the tank spans the domain there (no walls built across the
+// axis); a period that is not a whole number of spacings, one thinner than three list radii,
+// a tank that does not span the period, an unknown or repeated axis: each named.
+TEST(Scene, PeriodicAxesAreCheckedAndDropTheWallsAcrossThem) {
+  Json j = validScene();
+  j["domain"]["min_m"][1] = 0.0;
+  j["domain"]["max_m"][1] = 0.09;  // 9 spacings: at least three list radii (8.6 dp)
+  j["boundary"]["tanks"][0]["max_m"][1] = 0.09;
+  j["domain"]["periodic"] = Json::array({"y"});
+  const Scene s = parseScene(j.dump(), "ok.json");
+  EXPECT_TRUE(s.sph.periodic.y);
+  EXPECT_FALSE(s.sph.periodic.x);
+  EXPECT_TRUE(s.tanks[0].periodic.y);
+  // 3 layers under the floor and beside the two x walls over the 9 y columns; open top.
+  EXPECT_EQ(countParticles(s), std::uint64_t(36 * 9 * 33 - 30 * 9 * 30) + 10 * 5 * 20);
+  const ParticleSet set = buildParticles(s);
+  EXPECT_EQ(set.size(), countParticles(s));
+  for (const auto& p : set.positions) EXPECT_TRUE(p.y > 0.0f && p.y < 0.09f) << "a particle outside the period";
+
+  Json bad = j;
+  bad["domain"]["max_m"][1] = 0.095;
+  bad["boundary"]["tanks"][0]["max_m"][1] = 0.095;
+  expectError(bad, {"domain.periodic", "whole number of spacings"});
+  bad = j;
+  bad["domain"]["max_m"][1] = 0.1;
+  expectError(bad, {"boundary.tanks[0]", "span the domain", "periodic axis y"});
+  bad = j;
+  bad["domain"]["max_m"][1] = 0.12;
+  bad["boundary"]["tanks"][0]["max_m"][1] = 0.12;
+  bad["particles"]["spacing_m"] = 0.02;
+  expectError(bad, {"domain.periodic", "at least 3 neighbour-list radii"});
+  bad = j;
+  bad["domain"]["periodic"] = Json::array({"w"});
+  expectError(bad, {"domain.periodic[0]", "\"x\""});
+  bad["domain"]["periodic"] = Json::array({"y", "y"});
+  expectError(bad, {"domain.periodic", "twice"});
+}
+
 TEST(Scene, UnknownKeysAreNamed) {
   Json j = validScene();
   j["fluid"]["viscosty_pa_s"] = 0.1;
