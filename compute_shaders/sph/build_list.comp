@@ -1,6 +1,7 @@
 #version 450
 // The per-particle neighbour list (a Verlet list): every other particle closer than the list
-// radius = support * (1 + skin), as ascending slots of the sorted order. The skin lets the
+// radius = support * (1 + skin), as slots of the sorted order (ascending unless a periodic x
+// axis wraps; the order only has to be the same every build). The skin lets the
 // list serve the following steps until some particle has moved half of it (the solver's
 // gate decides on the GPU when to rebuild). Fluid particles list all neighbours; boundary
 // particles list only their fluid neighbours (all boundary_pressure.comp needs), and those

@@ -86,24 +86,21 @@ ParticleSet buildParticles(const Scene& s) {
 }
 
 Scene withSlabThickness(Scene s, int axis, int spacings) {
-  const std::string name = std::string(1, "xyz"[axis]);
   if (axis < 0 || axis > 2 || !s.sph.periodic[axis]) {
-    throw SceneError(s.name + ": a slab thickness needs a periodic axis (" + name + " is not)");
+    throw SceneError(s.name + ": a slab thickness needs a periodic axis (axis " + std::to_string(axis) + " is not)");
   }
-  const float lo = s.domain.min[axis], hi = s.domain.max[axis];
-  auto spans = [&](const Box& b) { return std::abs(b.min[axis] - lo) <= 1e-6f * s.sph.spacing && std::abs(b.max[axis] - hi) <= 1e-6f * s.sph.spacing; };
+  const std::string name(1, "xyz"[axis]);
+  const float lo = s.domain.min[axis], hi = s.domain.max[axis], slack = 1e-6f * s.sph.spacing;
   const float top = lo + float(spacings) * s.sph.spacing;
   for (auto& b : s.blocks) {
-    if (!spans(b.box)) throw SceneError(s.name + ": a fluid block does not span the periodic axis " + name);
+    if (std::abs(b.box.min[axis] - lo) > slack || std::abs(b.box.max[axis] - hi) > slack) {
+      throw SceneError(s.name + ": a fluid block does not span the periodic axis " + name);
+    }
     b.box.max[axis] = top;
   }
   for (auto& t : s.tanks) t.box.max[axis] = top;  // the loader made tanks span periodic axes
   s.domain.max[axis] = top;
-  const float need = 3.0f * s.sph.listRadius();
-  if (top - lo < need * (1.0f - 1e-6f)) {
-    throw SceneError(s.name + ": a slab of " + std::to_string(spacings) + " spacings along " + name +
-                     " is thinner than three neighbour-list radii (" + std::to_string(need) + " m)");
-  }
+  checkPeriodicAxes(s, s.name + " with a slab of " + std::to_string(spacings) + " spacings");
   return s;
 }
 

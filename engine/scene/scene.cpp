@@ -240,6 +240,33 @@ bool inside(const Box& inner, const Box& outer, float slack) {
 
 }  // namespace
 
+void checkPeriodicAxes(const Scene& s, const std::string& source) {
+  const Checker c(source);
+  const float slack = 1e-6f * s.sph.spacing;
+  for (int a = 0; a < 3; ++a) {
+    if (!s.sph.periodic[a]) continue;
+    const std::string axis(1, "xyz"[a]);
+    const double period = double(s.domain.max[a]) - s.domain.min[a];
+    const double spacings = period / s.sph.spacing;
+    if (std::abs(spacings - std::round(spacings)) > 1e-3) {
+      c.fail("domain.periodic", "the period along " + axis + " (" + fmt(period) + " m) must be a whole number of spacings dp = " +
+                                    fmt(s.sph.spacing) + " m (it is " + fmt(spacings) + ")");
+    }
+    const double listRadius = s.sph.listRadius();
+    if (period < 3.0 * listRadius * (1.0 - 1e-6)) {
+      c.fail("domain.periodic", "the period along " + axis + " (" + fmt(period) + " m) must be at least 3 neighbour-list radii (" +
+                                    fmt(3.0 * listRadius) + " m)");
+    }
+    for (std::size_t k = 0; k < s.tanks.size(); ++k) {
+      const Box& b = s.tanks[k].box;
+      if (std::abs(b.min[a] - s.domain.min[a]) > slack || std::abs(b.max[a] - s.domain.max[a]) > slack) {
+        c.fail("boundary.tanks[" + std::to_string(k) + "]", "must span the domain along the periodic axis " + axis +
+                                                              " (min_m and max_m equal to the domain's there)");
+      }
+    }
+  }
+}
+
 Scene parseScene(const std::string& text, const std::string& source) {
   Json raw;
   try {
@@ -308,27 +335,9 @@ Scene parseScene(const std::string& text, const std::string& source) {
   for (const auto& axisName : j["domain"]["periodic"]) {
     const int a = axisName.get<std::string>()[0] - 'x';
     s.sph.periodic[a] = true;
-    const std::string axis(1, "xyz"[a]);
-    const double period = double(s.domain.max[a]) - s.domain.min[a];
-    const double spacings = period / s.sph.spacing;
-    if (std::abs(spacings - std::round(spacings)) > 1e-3) {
-      c.fail("domain.periodic", "the period along " + axis + " (" + fmt(period) + " m) must be a whole number of spacings dp = " +
-                                    fmt(s.sph.spacing) + " m (it is " + fmt(spacings) + ")");
-    }
-    const double listRadius = s.sph.listRadius();
-    if (period < 3.0 * listRadius) {
-      c.fail("domain.periodic", "the period along " + axis + " (" + fmt(period) + " m) must be at least 3 neighbour-list radii (" +
-                                    fmt(3.0 * listRadius) + " m)");
-    }
-    for (std::size_t k = 0; k < s.tanks.size(); ++k) {
-      const Box& b = s.tanks[k].box;
-      if (std::abs(b.min[a] - s.domain.min[a]) > slack || std::abs(b.max[a] - s.domain.max[a]) > slack) {
-        c.fail("boundary.tanks[" + std::to_string(k) + "]", "must span the domain along the periodic axis " + axis +
-                                                              " (min_m and max_m equal to the domain's there)");
-      }
-      s.tanks[k].periodic[a] = true;
-    }
+    for (auto& t : s.tanks) t.periodic[a] = true;
   }
+  checkPeriodicAxes(s, source);
   for (std::size_t k = 0; k < s.blocks.size(); ++k) {
     if (!inside(s.blocks[k].box, s.domain, slack)) {
       c.fail("fluid.blocks[" + std::to_string(k) + "]", "lies (partly) outside the domain");
