@@ -46,14 +46,18 @@ GridBuild buildGrid(const std::vector<glm::dvec3>& positions, const Grid& grid) 
   return b;
 }
 
-std::vector<std::vector<std::uint32_t>> neighboursBruteForce(const std::vector<glm::dvec3>& positions, double radius) {
+std::vector<std::vector<std::uint32_t>> neighboursBruteForce(const std::vector<glm::dvec3>& positions, double radius,
+                                                             const glm::dvec3& period) {
   const std::size_t n = positions.size();
   std::vector<std::vector<std::uint32_t>> out(n);
   const double r2 = radius * radius;
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t j = 0; j < n; ++j) {
       if (i == j) continue;
-      const glm::dvec3 d = positions[i] - positions[j];
+      glm::dvec3 d = positions[i] - positions[j];
+      for (int a = 0; a < 3; ++a) {
+        if (period[a] > 0.0) d[a] -= period[a] * std::round(d[a] / period[a]);
+      }
       if (glm::dot(d, d) < r2) out[i].push_back(static_cast<std::uint32_t>(j));
     }
   }

@@ -22,6 +22,14 @@ double kernelDwdr(double r, double h) {
   return 21.0 / (16.0 * std::numbers::pi * h * h * h) * (-5.0 * q * t * t * t) / h;
 }
 
+glm::dvec3 separation(const SphModel& m, const glm::dvec3& xi, const glm::dvec3& xj) {
+  glm::dvec3 d = xi - xj;
+  for (int a = 0; a < 3; ++a) {
+    if (m.period[a] > 0.0) d[a] -= m.period[a] * std::round(d[a] / m.period[a]);
+  }
+  return d;
+}
+
 std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particles, const SphModel& m) {
   std::vector<glm::dvec2> out(particles.size());
   const double support = 2.0 * m.h;
@@ -29,7 +37,7 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
     if (particles[i].kind != 0) continue;
     double rho = 0.0;
     for (const auto& pj : particles) {
-      const double r = glm::length(particles[i].x - pj.x);
+      const double r = glm::length(separation(m, particles[i].x, pj.x));
       if (r < support) rho += pj.mass * kernelW(r, m.h);
     }
     double p = m.taitB * (std::pow(rho / m.rho0, 7.0) - 1.0);
@@ -43,7 +51,7 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
     glm::dvec3 sumRhoR(0.0);
     for (std::size_t f = 0; f < particles.size(); ++f) {
       if (particles[f].kind != 0) continue;
-      const glm::dvec3 d = particles[b].x - particles[f].x;
+      const glm::dvec3 d = separation(m, particles[b].x, particles[f].x);
       const double r = glm::length(d);
       if (r >= support) continue;
       const double w = kernelW(r, m.h);
@@ -71,7 +79,7 @@ std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& par
     double g[3][3] = {};  // g[a][b] = d u_a / d x_b
     for (std::size_t j = 0; j < particles.size(); ++j) {
       if (j == i) continue;
-      const glm::dvec3 d = particles[i].x - particles[j].x;
+      const glm::dvec3 d = separation(m, particles[i].x, particles[j].x);
       const double r = glm::length(d);
       if (r >= support || r == 0.0) continue;
       const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
@@ -106,7 +114,7 @@ std::vector<glm::dvec3> viscousVelocities(const std::vector<SphParticle>& partic
     glm::dvec3 sumV(0.0);
     for (const auto& f : particles) {
       if (f.kind != 0) continue;
-      const double r = glm::length(particles[b].x - f.x);
+      const double r = glm::length(separation(m, particles[b].x, f.x));
       if (r >= support) continue;
       const double w = kernelW(r, m.h);
       sumW += w;
@@ -132,7 +140,7 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
     for (std::size_t j = 0; j < particles.size(); ++j) {
       if (j == i) continue;
       const SphParticle& pj = particles[j];
-      const glm::dvec3 d = pi.x - pj.x;
+      const glm::dvec3 d = separation(m, pi.x, pj.x);
       const double r = glm::length(d);
       if (r >= support || r == 0.0) continue;
       const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);

@@ -26,7 +26,9 @@ struct GridBuild {
 };
 GridBuild buildGrid(const std::vector<glm::dvec3>& positions, const Grid& grid);
 
-// All j != i with |x_i - x_j| < radius, ascending, by O(N^2) comparison.
-std::vector<std::vector<std::uint32_t>> neighboursBruteForce(const std::vector<glm::dvec3>& positions, double radius);
+// All j != i with |x_i - x_j| < radius, ascending, by O(N^2) comparison; on axes with a
+// non-zero `period` the distance is the minimum image.
+std::vector<std::vector<std::uint32_t>> neighboursBruteForce(const std::vector<glm::dvec3>& positions, double radius,
+                                                             const glm::dvec3& period = glm::dvec3(0.0));
 
 }  // namespace hemo::reference

@@ -30,7 +30,11 @@ struct SphModel {
   bool sps = false;              // sub-particle-scale stress (Dalrymple & Rogers 2006)
   double spsSmagorinsky = 0.0;   // (C_s dp)^2
   double spsBlinn = 0.0;         // C_I dp^2
+  glm::dvec3 period{0.0};        // m on periodic axes (minimum image), 0 on the others
 };
+
+// x_i - x_j, by the minimum image on periodic axes.
+glm::dvec3 separation(const SphModel& model, const glm::dvec3& xi, const glm::dvec3& xj);
 
 // SPS stress per density tau/rho (symmetric 3x3, row-major) of each particle (zero for
 // boundary particles).
