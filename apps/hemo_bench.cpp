@@ -193,17 +193,22 @@ double gpuStepMs(hemo::sim::Simulation& sim) {
 Json accuracy(Context& ctx, const std::string& only) {
   using hemo::sim::Integrator;
   Json rows = Json::array();
-  std::printf("%-12s %10s %-17s %10s %-28s %10s %8s %12s\n", "case", "spacing_m", "integrator", "error", "metric",
-              "ms/step", "steps", "wall s/sim s");
-  auto row = [&](const std::string& name, double spacing, Integrator integrator, double error, const std::string& metric,
-                 double msPerStep, std::uint64_t steps, double wallPerSim) {
-    const char* integ = integrator == Integrator::Rk2Midpoint ? "rk2_midpoint" : "symplectic_euler";
-    std::printf("%-12s %10.5f %-17s %10.4f %-28s %10.2f %8llu %12.1f\n", name.c_str(), spacing, integ, error,
-                metric.c_str(), msPerStep, static_cast<unsigned long long>(steps), wallPerSim);
+  std::printf("%-12s %10s %5s %-17s %10s %-28s %10s %8s %12s\n", "case", "spacing_m", "h/dp", "integrator", "error",
+              "metric", "ms/step", "steps", "wall s/sim s");
+  // One row per run; the scene supplies spacing, smoothing ratio and integrator.
+  auto row = [&](const std::string& name, const hemo::scene::Scene& scene, double error, const std::string& metric,
+                 hemo::sim::Simulation& sim, double wall) {
+    const char* integ = scene.sph.integrator == Integrator::Rk2Midpoint ? "rk2_midpoint" : "symplectic_euler";
+    const std::uint64_t steps = sim.steps();
+    const double wallPerSim = wall / sim.time();
+    const double msPerStep = gpuStepMs(sim);
+    std::printf("%-12s %10.6f %5.2f %-17s %10.4f %-28s %10.2f %8llu %12.1f\n", name.c_str(), scene.sph.spacing,
+                scene.sph.smoothingRatio, integ, error, metric.c_str(), msPerStep, static_cast<unsigned long long>(steps),
+                wallPerSim);
     std::fflush(stdout);
-    rows.push_back({{"case", name}, {"spacing_m", spacing}, {"integrator", integ}, {"error", error},
-                    {"error_metric", metric}, {"ms_per_step", msPerStep}, {"steps", steps},
-                    {"wall_s_per_sim_s", wallPerSim}});
+    rows.push_back({{"case", name}, {"spacing_m", scene.sph.spacing}, {"smoothing_ratio", scene.sph.smoothingRatio},
+                    {"integrator", integ}, {"error", error}, {"error_metric", metric}, {"ms_per_step", msPerStep},
+                    {"steps", steps}, {"wall_s_per_sim_s", wallPerSim}});
   };
   const Integrator integrators[] = {Integrator::SymplecticEuler, Integrator::Rk2Midpoint};
 
@@ -227,24 +232,48 @@ Json accuracy(Context& ctx, const std::string& only) {
           load += hemo::sim::floorLoad(sim.snapshot(), sim.fluidParticles(), scene.sph.h()) / (0.08 * 0.08) / 2.0;
         }
         const double expect = 1000.0 * 9.81 * 0.12;
-        const std::uint64_t steps = sim.steps();
-        const double perSim = wall / sim.time();
-        row("hydrostatic", dp, integrator, std::abs(load - expect) / expect, "rel_error_floor_pressure", gpuStepMs(sim),
-            steps, perSim);
+        row("hydrostatic", scene, std::abs(load - expect) / expect, "rel_error_floor_pressure", sim, wall);
+      }
+    }
+  }
+  if (only.empty() || only == "poiseuille") {
+    // scenes/poiseuille.json at 10, 20 and 40 particles across; RMS error of the layer-mean
+    // velocity against the start-up series at t = 1 s (steady), relative to the peak.
+    const double L = 1e-3, F = 2e-4, nu = 1e-6, t = 1.0;
+    for (int across : {10, 20, 40}) {
+      for (Integrator integrator : integrators) {
+        hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/poiseuille.json");
+        scene.sph.spacing = float(L / across);
+        scene = hemo::scene::withSlabThickness(scene, 0, 9);  // the thinnest periodic extents allowed
+        scene = hemo::scene::withSlabThickness(scene, 1, 9);
+        scene.sph.integrator = integrator;
+        hemo::sim::Simulation sim(ctx, scene);
+        const double wall = runTo(sim, t);
+        const double error = hemo::sim::poiseuilleProfileError(sim.snapshot(), sim.fluidParticles(), scene.sph.spacing, L,
+                                                               F, nu, t);
+        row("poiseuille", scene, error, "rms_over_peak_at_1s", sim, wall);
       }
     }
   }
   if (only.empty() || only == "dam_break") {
     // scenes/dam_break.json geometry; mean |dZ| against Martin & Moyce (1952) over T in
-    // [0, 3] with the gate-release offset dT = 0.15 of docs/physics.md.
+    // [0, 3] with the gate-release offset dT = 0.15 of docs/physics.md. Both integrators at
+    // the scene's h/dp = 1.3; symplectic Euler also at 1.0 and 1.15 (fewer neighbours).
     const double a = 0.05715, g = 9.81, offset = 0.15;
+    struct Variant {
+      Integrator integrator;
+      float smoothingRatio;
+    };
+    const Variant variants[] = {{Integrator::SymplecticEuler, 1.3f}, {Integrator::Rk2Midpoint, 1.3f},
+                                {Integrator::SymplecticEuler, 1.15f}, {Integrator::SymplecticEuler, 1.0f}};
     for (double fraction : {8.0, 10.0, 16.0}) {
-      for (Integrator integrator : integrators) {
+      for (const Variant& v : variants) {
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
         scene.sph.spacing = float(a / fraction);
+        scene.sph.smoothingRatio = v.smoothingRatio;
         // the periodic slab: 0.6 a thick as in the scene, at least three list radii
         scene = hemo::scene::withSlabThickness(scene, 1, std::max(9, int(std::lround(0.6 * fraction))));
-        scene.sph.integrator = integrator;
+        scene.sph.integrator = v.integrator;
         hemo::sim::Simulation sim(ctx, scene);
         const auto& table = hemo::reference::martinMoyceN2();
         double sum = 0.0, wall = 0.0;
@@ -255,10 +284,7 @@ Json accuracy(Context& ctx, const std::string& only) {
           sum += std::abs(front / a - hemo::reference::interpolateTable(table, T + offset));
           ++samples;
         }
-        const std::uint64_t steps = sim.steps();
-        const double perSim = wall / sim.time();
-        row("dam_break", scene.sph.spacing, integrator, sum / samples, "mean_abs_dZ_martin_moyce", gpuStepMs(sim), steps,
-            perSim);
+        row("dam_break", scene, sum / samples, "mean_abs_dZ_martin_moyce", sim, wall);
       }
     }
   }
@@ -271,7 +297,7 @@ int main(int argc, char** argv) {
   const char* usage =
       "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME]\n"
       "  SUITE: primitives | accuracy | table1 | render\n"
-      "  --case NAME  accuracy: only this case (hydrostatic, dam_break)\n";
+      "  --case NAME  accuracy: only this case (hydrostatic, poiseuille, dam_break)\n";
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case"});
@@ -283,6 +309,10 @@ int main(int argc, char** argv) {
   const std::string suite = args.positional[0];
   try {
     const int repeat = static_cast<int>(args.count("--repeat", 9, 1, 1000));
+    const std::string only = args.text("--case");
+    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break") {
+      throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille or dam_break)");
+    }
     if (suite != "primitives" && suite != "accuracy") {
       if (suite == "table1" || suite == "render") {
         std::cerr << "hemo-bench: suite '" << suite
@@ -300,7 +330,7 @@ int main(int argc, char** argv) {
       std::cerr << "hemo-bench: the device has no timestamp queries; GPU times are unavailable\n";
       return 3;
     }
-    const Json rows = suite == "primitives" ? primitives(ctx, repeat) : accuracy(ctx, args.text("--case"));
+    const Json rows = suite == "primitives" ? primitives(ctx, repeat) : accuracy(ctx, only);
     if (args.has("--json")) {
       const std::string path = args.text("--json");
       std::ofstream out(path);

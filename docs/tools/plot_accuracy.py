@@ -3,7 +3,8 @@
 
 usage: plot_accuracy.py OUT_DIR BENCH.json [BENCH.json ...]
 Writes OUT_DIR/accuracy_<case>.png: error (y) against wall seconds per simulated second (x),
-one marker series per integrator, each point labelled with its particle spacing.
+one marker series per integrator and smoothing ratio h/dp, each point labelled with its
+particle spacing.
 Needs matplotlib (Debian: python3-matplotlib); only for docs, not for building hemo.
 """
 import json
@@ -25,14 +26,17 @@ def main():
             rows += json.load(f)["rows"]
     for case in sorted({r["case"] for r in rows}):
         fig, ax = plt.subplots(figsize=(6, 4.2))
+        ratios = sorted({r.get("smoothing_ratio", 1.3) for r in rows if r["case"] == case}, reverse=True)
         for integrator, marker in (("symplectic_euler", "o"), ("rk2_midpoint", "s")):
-            pts = sorted((r["wall_s_per_sim_s"], r["error"], r["spacing_m"]) for r in rows
-                         if r["case"] == case and r["integrator"] == integrator)
-            if not pts:
-                continue
-            ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marker, label=integrator)
-            for x, y, dp in pts:
-                ax.annotate(f"dp={dp * 1000:.2f} mm", (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
+            for ratio in ratios:
+                pts = sorted((r["wall_s_per_sim_s"], r["error"], r["spacing_m"]) for r in rows
+                             if r["case"] == case and r["integrator"] == integrator
+                             and abs(r.get("smoothing_ratio", 1.3) - ratio) < 1e-3)
+                if not pts:
+                    continue
+                ax.plot([p[0] for p in pts], [p[1] for p in pts], marker=marker, label=f"{integrator}, h/dp = {ratio:.2f}")
+                for x, y, dp in pts:
+                    ax.annotate(f"dp={dp * 1000:.3g} mm", (x, y), textcoords="offset points", xytext=(4, 4), fontsize=7)
         metric = next(r["error_metric"] for r in rows if r["case"] == case)
         ax.set_xscale("log")
         ax.set_yscale("log")

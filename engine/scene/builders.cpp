@@ -100,7 +100,7 @@ Scene withSlabThickness(Scene s, int axis, int spacings) {
   }
   for (auto& t : s.tanks) t.box.max[axis] = top;  // the loader made tanks span periodic axes
   s.domain.max[axis] = top;
-  checkPeriodicAxes(s, s.name + " with a slab of " + std::to_string(spacings) + " spacings");
+  checkPeriodicAxes(s, s.name + " with a slab of " + std::to_string(spacings) + " spacings", axis);
   return s;
 }
 

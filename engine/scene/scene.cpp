@@ -240,11 +240,11 @@ bool inside(const Box& inner, const Box& outer, float slack) {
 
 }  // namespace
 
-void checkPeriodicAxes(const Scene& s, const std::string& source) {
+void checkPeriodicAxes(const Scene& s, const std::string& source, int onlyAxis) {
   const Checker c(source);
   const float slack = 1e-6f * s.sph.spacing;
   for (int a = 0; a < 3; ++a) {
-    if (!s.sph.periodic[a]) continue;
+    if (!s.sph.periodic[a] || (onlyAxis >= 0 && a != onlyAxis)) continue;
     const std::string axis(1, "xyz"[a]);
     const double period = double(s.domain.max[a]) - s.domain.min[a];
     const double spacings = period / s.sph.spacing;

@@ -1,10 +1,15 @@
 #include "hemo/sim/probes.hpp"
 
+#include "hemo/reference/analytic.hpp"
 #include "hemo/reference/sph.hpp"
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 namespace hemo::sim {
 
@@ -42,6 +47,28 @@ double pressureGradient(const Snapshot& s, std::uint32_t fluid, float maxZ) {
   }
   const double denominator = count * szz - sz * sz;
   return denominator > 0 ? (count * szp - sz * sp) / denominator : 0.0;
+}
+
+double poiseuilleProfileError(const Snapshot& s, std::uint32_t fluid, double dp, double L, double F, double nu,
+                              double t) {
+  const int layers = static_cast<int>(std::lround(L / dp));
+  std::vector<double> sumU(layers, 0.0), sumZ(layers, 0.0);
+  std::vector<int> count(layers, 0);
+  for (std::uint32_t i = 0; i < fluid; ++i) {
+    const double z = s.positions[i].z;
+    const int k = std::clamp(static_cast<int>(std::floor(z / dp)), 0, layers - 1);
+    sumU[k] += s.velocities[i].x;
+    sumZ[k] += z;
+    ++count[k];
+  }
+  double sq = 0.0;
+  for (int k = 0; k < layers; ++k) {
+    if (count[k] == 0) throw std::runtime_error("Poiseuille profile: layer " + std::to_string(k) + " has no particles");
+    const double z = sumZ[k] / count[k];
+    const double err = sumU[k] / count[k] - reference::poiseuilleStartup(z, t, L, F, nu);
+    sq += err * err;
+  }
+  return std::sqrt(sq / layers) / (F * L * L / (8.0 * nu));
 }
 
 }  // namespace hemo::sim

@@ -55,8 +55,9 @@ Scene parseScene(const std::string& jsonText, const std::string& sourceName);
 Scene loadScene(const std::filesystem::path& path);
 // The rules for periodic axes (a whole number of spacings, at least three neighbour-list
 // radii, tanks spanning the period); throws SceneError naming `source` and the field. Run by
-// the loader, and again by anything that edits a loaded scene's geometry.
-void checkPeriodicAxes(const Scene& scene, const std::string& source);
+// the loader (every periodic axis), and again by anything that edits a loaded scene's
+// geometry (`axis` 0-2: only that axis).
+void checkPeriodicAxes(const Scene& scene, const std::string& source, int axis = -1);
 
 // One row per parameter, for docs and tools.
 struct FieldDoc {

@@ -15,4 +15,11 @@ double surgeFront(const Snapshot& snapshot, std::uint32_t fluidParticles, float 
 // Least-squares slope dp/dz of the fluid pressure over particles with z below maxZ (Pa/m).
 double pressureGradient(const Snapshot& snapshot, std::uint32_t fluidParticles, float maxZ);
 
+// Plane Poiseuille flow between walls at z = 0 and z = L, driven along x: the RMS difference
+// between the mean x-velocity of each fluid layer [k dp, (k + 1) dp) and the start-up
+// solution (reference::poiseuilleStartup) at the layer's mean height and time t, divided by
+// the steady peak F L^2 / (8 nu). Throws std::runtime_error if a layer has no particles.
+double poiseuilleProfileError(const Snapshot& snapshot, std::uint32_t fluidParticles, double dp, double L, double F,
+                              double nu, double t);
+
 }  // namespace hemo::sim
