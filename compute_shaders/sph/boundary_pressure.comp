@@ -36,20 +36,20 @@ void main() {
     return;
   }
   const vec3 xb = positions[b].xyz;
-  const float support2 = params.supportRadius * params.supportRadius;
+  const HemoPairParams pp = hemo_pair_params();
   float sumW = 0.0;
   float sumP = 0.0;
   vec3 sumRhoR = vec3(0.0);
   vec3 sumV = vec3(0.0);
   const uint count = neighbourCount[b];
   for (uint k = 0u; k < count; ++k) {
-    const uint f = neighbourList[hemo_list_slot(b, k)];  // fluid neighbours only
-    const vec3 d = hemo_min_image(xb - positions[f].xyz);
+    const uint f = neighbourList[hemo_list_slot(b, k, pp)];  // fluid neighbours only
+    const vec3 d = hemo_min_image(xb - positions[f].xyz, pp);
     const float r2 = dot(d, d);
-    if (r2 >= support2) {
+    if (r2 >= pp.support2) {
       continue;
     }
-    const float w = hemo_kernel_w(sqrt(r2), params.h, params.kernelNorm);
+    const float w = hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
     const vec2 sf = state[f].xy;
     sumW += w;
     sumP += sf.y * w;

@@ -31,6 +31,7 @@ void main() {
   const vec3 xi = positions[i].xyz;
   const float list2 = params.listRadius * params.listRadius;
   const uint capacity = params.neighbourCapacity;
+  const HemoPairParams pp = hemo_pair_params();
   const uvec3 dims = pc.grid.dimsN.xyz;
 
   bool outside;
@@ -73,7 +74,7 @@ void main() {
           const vec3 d = hemo_grid_min_image(xi - positions[j].xyz, pc.grid);
           if (j != i && dot(d, d) < list2 && (fluidI || uint(velocities[j].w) == HEMO_KIND_FLUID)) {
             if (count < capacity) {
-              neighbourList[hemo_list_slot(i, count)] = j;
+              neighbourList[hemo_list_slot(i, count, pp)] = j;
             }
             ++count;
           }

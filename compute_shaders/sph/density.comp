@@ -26,15 +26,15 @@ void main() {
     return;
   }
   const vec4 pi = positions[i];
-  const float support2 = params.supportRadius * params.supportRadius;
-  float rho = pi.w * hemo_kernel_w(0.0, params.h, params.kernelNorm);
+  const HemoPairParams pp = hemo_pair_params();
+  float rho = pi.w * hemo_kernel_w(0.0, pp.h, pp.kernelNorm);
   const uint count = neighbourCount[i];
   for (uint k = 0u; k < count; ++k) {
-    const vec4 pj = positions[neighbourList[hemo_list_slot(i, k)]];
-    const vec3 d = hemo_min_image(pi.xyz - pj.xyz);
+    const vec4 pj = positions[neighbourList[hemo_list_slot(i, k, pp)]];
+    const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);
     const float r2 = dot(d, d);
-    if (r2 < support2) {
-      rho += pj.w * hemo_kernel_w(sqrt(r2), params.h, params.kernelNorm);
+    if (r2 < pp.support2) {
+      rho += pj.w * hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
     }
   }
   state[i] = vec4(rho, hemo_tait_pressure(rho, params), 0.0, 0.0);

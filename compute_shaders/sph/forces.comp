@@ -68,9 +68,14 @@ void main() {
   if (diagnose && !finiteInput) {
     atomicMin(status[HEMO_STATUS_BAD_INPUT_ID], ids[i]);
   }
-  const float h = params.h;
-  const float support2 = params.supportRadius * params.supportRadius;
+  // Parameters read once into registers (see HemoPairParams).
+  const HemoPairParams pp = hemo_pair_params();
+  const float h = pp.h;
   const float twoMu = 2.0 * params.mu;
+  const float etaSq = params.etaSq;
+  const float cutoff = params.repulsionCutoff;
+  const float wallSpacing = params.wallSpacing;
+  const float psi = params.psi;
   const float pOverRho2I = si.y / (si.x * si.x);
 
   const bool sps = params.spsEnabled != 0u;
@@ -80,15 +85,15 @@ void main() {
   float repulsionWeight = 0.0;
   const uint count = neighbourCount[i];
   for (uint k = 0u; k < count; ++k) {
-    const uint j = neighbourList[hemo_list_slot(i, k)];
+    const uint j = neighbourList[hemo_list_slot(i, k, pp)];
     const vec4 pj = positions[j];
-    const vec3 d = hemo_min_image(xi - pj.xyz);
+    const vec3 d = hemo_min_image(xi - pj.xyz, pp);
     const float r2 = dot(d, d);
-    if (r2 >= support2 || r2 == 0.0) {
+    if (r2 >= pp.support2 || r2 == 0.0) {
       continue;  // outside the support (list skin), or coincident: no defined direction
     }
     const float r = sqrt(r2);
-    const vec3 gradW = d * (hemo_kernel_dwdr(r, h, params.kernelNorm) / r);
+    const vec3 gradW = d * (hemo_kernel_dwdr(r, h, pp.kernelNorm) / r);
     const vec4 vj = velocities[j];
     const bool fluidJ = uint(vj.w) == HEMO_KIND_FLUID;
     const vec2 sj = state[j].xy;
@@ -97,7 +102,7 @@ void main() {
     const float invRhoIJ = 1.0 / (si.x * rhoJ);
     a -= (pj.w * (pOverRho2I + pOverRho2J)) * gradW;
     const vec3 viscousVj = fluidJ ? vj.xyz : wallVel[j].xyz;
-    a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + params.etaSq)) * (vi.xyz - viscousVj);
+    a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + etaSq)) * (vi.xyz - viscousVj);
     if (sps && fluidJ) {
       // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
       a += pj.w * ((spsI + hemo_sps_tensor(j, rhoJ)) * gradW);
@@ -106,12 +111,12 @@ void main() {
       const vec3 nrm = normals[j].xyz;
       const float x = dot(d, nrm);
       const float y = length(d - x * nrm);
-      if (x < params.repulsionCutoff && y < params.wallSpacing) {
-        const float w = 1.0 - y / params.wallSpacing;
+      if (x < cutoff && y < wallSpacing) {
+        const float w = 1.0 - y / wallSpacing;
         // r = x / 2h, kept >= 1e-3 so a particle at (or behind) the wall plane is pushed out
         // with a large but finite force.
         const float q = max(x / (2.0 * h), 1.0e-3);
-        repulsion += nrm * (params.psi * (1.0 - q) / sqrt(q) * w);
+        repulsion += nrm * (psi * (1.0 - q) / sqrt(q) * w);
         repulsionWeight += w;
       }
     }

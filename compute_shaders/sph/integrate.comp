@@ -51,7 +51,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 void writeReach(uint i, vec3 x, vec3 v) {
-  float r = length(hemo_min_image(x - posAtBuild[i].xyz));
+  float r = length(hemo_min_image(x - posAtBuild[i].xyz, hemo_pair_params()));
   if (pc.midpointLookahead != 0u) {
     const float speed = length(v);
     r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / (params.c0 + speed));

@@ -35,19 +35,19 @@ void main() {
     return;
   }
   const vec3 xi = positions[i].xyz;
-  const float support2 = params.supportRadius * params.supportRadius;
+  const HemoPairParams pp = hemo_pair_params();
   mat3 g = mat3(0.0);  // g[b][a] = d u_a / d x_b (column b)
   const uint count = neighbourCount[i];
   for (uint k = 0u; k < count; ++k) {
-    const uint j = neighbourList[hemo_list_slot(i, k)];
+    const uint j = neighbourList[hemo_list_slot(i, k, pp)];
     const vec4 pj = positions[j];
-    const vec3 d = hemo_min_image(xi - pj.xyz);
+    const vec3 d = hemo_min_image(xi - pj.xyz, pp);
     const float r2 = dot(d, d);
-    if (r2 >= support2 || r2 == 0.0) {
+    if (r2 >= pp.support2 || r2 == 0.0) {
       continue;
     }
     const float r = sqrt(r2);
-    const vec3 gradW = d * (hemo_kernel_dwdr(r, params.h, params.kernelNorm) / r);
+    const vec3 gradW = d * (hemo_kernel_dwdr(r, pp.h, pp.kernelNorm) / r);
     const vec3 du = (velocities[j].xyz - vi.xyz) * (pj.w / state[j].x);
     g += outerProduct(du, gradW);
   }
