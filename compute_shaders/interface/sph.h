@@ -5,6 +5,8 @@
 // Particle kinds, stored as a float in velocities[i].w (exact small integers).
 #define HEMO_KIND_FLUID 0
 #define HEMO_KIND_BOUNDARY 1  // rigid: fixed position, counts in density, viscosity, repulsion
+#define HEMO_KIND_WALL 2      // vessel wall: a boundary particle for the fluid that moves as a mass
+                              // point of the spring network (compute_shaders/wall/)
 
 // Layout of the params storage buffer (std430), mirrored by hemo::sim::SphParams in C++.
 //   vec4  gravity            xyz: gravity + body force (m/s^2)

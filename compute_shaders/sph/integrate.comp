@@ -1,5 +1,5 @@
 #version 450
-// Time integration of fluid particles (mode in the push constants):
+// Time integration of fluid and wall particles (mode in the push constants):
 //  symplectic Euler ... v += a dt, x += v dt
 //  RK2 midpoint ....... stage 1 saves (x0, v0) and moves to x0 + v0 dt/2, v0 + a0 dt/2;
 //                       stage 2 (after new forces at the midpoint) sets x = x0 + v dt,
@@ -50,6 +50,12 @@ layout(push_constant) uniform Push {
   uint midpointLookahead;
 } pc;
 
+// Fluid and wall particles move (walls with the acceleration of wall/spring_forces.comp);
+// rigid boundary particles do not.
+bool hemo_moves(float kind) {
+  return uint(kind) == HEMO_KIND_FLUID || uint(kind) == HEMO_KIND_WALL;
+}
+
 void writeReach(uint i, vec3 x, vec3 v) {
   float r = length(hemo_min_image(x - posAtBuild[i].xyz, hemo_pair_params()));
   if (pc.midpointLookahead != 0u) {
@@ -76,7 +82,7 @@ void main() {
     if (i == 0u) {
       stepDt = dt;  // read by the second stage (a later dispatch)
     }
-    if (running && i < pc.n && uint(velocities[i].w) == HEMO_KIND_FLUID) {
+    if (running && i < pc.n && hemo_moves(velocities[i].w)) {
       const vec4 v = velocities[i];
       const vec4 x = positions[i];
       savedPos[i] = x;
@@ -103,7 +109,7 @@ void main() {
   }
   vec4 v = velocities[i];
   vec4 x = positions[i];
-  if (!running || uint(v.w) != HEMO_KIND_FLUID) {
+  if (!running || !hemo_moves(v.w)) {
     writeReach(i, x.xyz, v.xyz);
     return;
   }

@@ -235,7 +235,13 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
 
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
+void SphSolver::attachWall(const SpringNetwork& network) {
+  wall_ = std::make_unique<MassSpring>(*context_, *particles_, grid_.slotOfId(), accel_, dtLimit_, network,
+                                       settings_.gravity, params_.cflAcoustic * params_.h, params_.c0);
+}
+
 void SphSolver::recordReset(gpu::CommandRecorder& rec) {
+  if (wall_) wall_->recordReset(rec);
   rec.fill(clock_, 0);
   clockParity_ = 0;
   rec.fill(status_, 0);
@@ -275,6 +281,7 @@ void SphSolver::recordForces(gpu::CommandRecorder& rec) {
   }
   rec.dispatch(*forces_, forcesSet_, CountPush{n}, forces_->groupsFor(n));
   rec.computeToCompute();
+  if (wall_) wall_->record(rec, n);  // the wall, solved after the fluid in every force evaluation
 }
 
 void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime) {

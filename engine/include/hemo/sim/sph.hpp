@@ -16,11 +16,13 @@
 #include "hemo/gpu/primitives.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
 #include "hemo/sim/particles.hpp"
+#include "hemo/sim/wall.hpp"
 
 #include <glm/vec3.hpp>
 #include <glm/vector_relational.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 
 namespace hemo::sim {
@@ -126,6 +128,12 @@ class SphSolver {
   void recordForces(gpu::CommandRecorder& rec);  // with the SPS stress pass first when enabled
   void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f);
 
+  // Makes the wall particles of `network` (kind HEMO_KIND_WALL) move as mass points of its
+  // springs: every force evaluation then runs the wall stages after the fluid's forces.
+  // Set-up only, before the first step.
+  void attachWall(const SpringNetwork& network);
+  const MassSpring* wall() const { return wall_.get(); }
+
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);
 
@@ -164,6 +172,7 @@ class SphSolver {
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
   gpu::MinMaxReduce dtReduce_, reachReduce_;
+  std::unique_ptr<MassSpring> wall_;
   gpu::DispatchGate rebuildGate_;
   const gpu::ComputePipeline* markFluid_;
   const gpu::ComputePipeline* buildList_;

@@ -1,0 +1,46 @@
+// Vessel wall: mass-spring model (compute_shaders/wall/). Shared by GLSL and C++.
+#ifndef HEMO_INTERFACE_WALL_H
+#define HEMO_INTERFACE_WALL_H
+
+// Wall particles have kind HEMO_KIND_WALL (interface/sph.h).
+
+// Spring record (std430, 32 bytes), mirrored by hemo::sim::GpuSpring:
+//   uint  a, b          particle ids of the ends, a < b
+//   float restLength    m
+//   float stiffness     N/m
+//   float damping       N s/m (along the spring)
+//   float maxForce      N: a tension above this breaks the spring for good
+//   uint  broken        0 or 1
+//   uint  pad
+// The force on end a is +f d, on end b -f d, with d = (x_b - x_a) / |x_b - x_a| and
+// f = stiffness (|x_b - x_a| - restLength) + damping (v_b - v_a) . d (positive: tension).
+
+// Per particle id: vec4 (mass in kg, anchored 0/1, 0, 0).
+
+// wall/rupture.comp: one invocation per spring; flags springs whose tension exceeds maxForce.
+#define HEMO_RUPTURE_BINDING_POSITIONS 0
+#define HEMO_RUPTURE_BINDING_VELOCITIES 1
+#define HEMO_RUPTURE_BINDING_SLOT_OF_ID 2
+#define HEMO_RUPTURE_BINDING_SPRINGS 3
+#define HEMO_RUPTURE_BINDING_COUNTERS 4
+#define HEMO_RUPTURE_BINDING_COUNT 5
+
+// wall/spring_forces.comp: one invocation per particle slot; wall particles gather the forces
+// of their unbroken springs through the CSR adjacency (springsOf[first[id] .. first[id + 1]))
+// and get their acceleration (gravity included; zero when anchored) and time-step limit.
+#define HEMO_SPRINGF_BINDING_POSITIONS 0
+#define HEMO_SPRINGF_BINDING_VELOCITIES 1
+#define HEMO_SPRINGF_BINDING_IDS 2
+#define HEMO_SPRINGF_BINDING_SLOT_OF_ID 3
+#define HEMO_SPRINGF_BINDING_SPRINGS 4
+#define HEMO_SPRINGF_BINDING_FIRST 5
+#define HEMO_SPRINGF_BINDING_SPRINGS_OF 6
+#define HEMO_SPRINGF_BINDING_WALL_INFO 7
+#define HEMO_SPRINGF_BINDING_ACCEL 8
+#define HEMO_SPRINGF_BINDING_DT_LIMIT 9
+#define HEMO_SPRINGF_BINDING_COUNT 10
+
+// Counters (uint[4]).
+#define HEMO_WALL_COUNTER_BROKEN 0  // springs broken so far
+
+#endif

@@ -1,0 +1,86 @@
+#pragma once
+// Vessel wall as a mass-spring network on the GPU (compute_shaders/wall/). Wall particles
+// (kind HEMO_KIND_WALL) are boundary particles for the fluid and mass points of the springs.
+// Per force evaluation:
+//   rupture ...... springs whose tension exceeds their maximum force break, for good
+//   spring forces  each wall particle gathers its unbroken springs (CSR by particle id, no
+//                  atomics; the two ends get exactly opposite forces), divides by its mass,
+//                  adds gravity (anchored particles: zero), and writes its time-step limit
+// The SPH integrator then moves wall particles like fluid particles. Attach a network to an
+// SphSolver with SphSolver::attachWall.
+#include "hemo/gpu/pipeline.hpp"
+#include "hemo/sim/particles.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace hemo::gpu {
+class CommandRecorder;
+}
+
+namespace hemo::sim {
+
+struct Spring {
+  std::uint32_t a = 0, b = 0;  // particle ids of the two ends
+  float restLength = 0.0f;     // m
+  float stiffness = 0.0f;      // N/m
+  float damping = 0.0f;        // N s/m, along the spring
+  float maxForce = 3.0e38f;    // N: a tension above this breaks the spring
+};
+
+struct WallPoint {
+  float mass = 0.0f;      // kg
+  bool anchored = false;  // fixed in place (vessel ends)
+};
+
+struct SpringNetwork {
+  std::vector<WallPoint> points;  // indexed by particle id; ids of other particles may be listed
+                                  // too (unused: only wall-kind particles are moved)
+  std::vector<Spring> springs;
+  float timeStepFactor = 0.1f;    // dt <= factor sqrt(m / sum k) per particle
+  // Throws std::invalid_argument naming the spring or point (ids out of range, a spring from a
+  // particle to itself, a duplicate, non-positive rest length or mass, negative stiffness,
+  // damping or maximum force, non-finite values).
+  void validate() const;
+};
+
+// Mirror of the GLSL Spring record (interface/wall.h).
+struct GpuSpring {
+  std::uint32_t a, b;
+  float restLength, stiffness, damping, maxForce;
+  std::uint32_t broken, pad;
+};
+static_assert(sizeof(GpuSpring) == 32);
+
+class MassSpring {
+ public:
+  // `slotOfId`, `accel` and `dtLimit` are the solver's; gravity (m/s^2), acoustic length
+  // C_a h (m) and c0 (m/s) come from the SPH parameters.
+  MassSpring(gpu::Context& context, const ParticleStore& particles, const gpu::Buffer& slotOfId,
+             const gpu::Buffer& accel, const gpu::Buffer& dtLimit, const SpringNetwork& network, glm::vec3 gravity,
+             float acousticLength, float soundSpeed);
+
+  void recordReset(gpu::CommandRecorder& rec);  // broken counter to zero (flags stay)
+  // Rupture, then spring forces for the first n slots (after the SPH force pass, whose
+  // accelerations of wall particles this replaces).
+  void record(gpu::CommandRecorder& rec, std::uint32_t n);
+
+  std::uint32_t springCount() const { return springCount_; }
+  std::uint32_t readBrokenCount() const;             // since the last reset (a readback)
+  std::vector<GpuSpring> readSprings() const;        // with their broken flags (a readback)
+
+ private:
+  const ParticleStore* particles_;
+  std::uint32_t springCount_;
+  std::uint32_t idCount_;
+  float gravity_[4];
+  float timeStepFactor_, acousticLength_, soundSpeed_;
+  gpu::Buffer springs_, first_, springsOf_, wallInfo_, counters_;
+  const gpu::ComputePipeline* rupture_;
+  const gpu::ComputePipeline* forces_;
+  gpu::DescriptorSet ruptureSet_, forcesSet_;
+};
+
+}  // namespace hemo::sim

@@ -1,0 +1,148 @@
+#include "hemo/sim/wall.hpp"
+
+#include "hemo/gpu/commands.hpp"
+#include "hemo/gpu/pipeline_cache.hpp"
+#include "interface/wall.h"
+
+#include <glm/vec4.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace hemo::sim {
+
+namespace {
+constexpr std::uint32_t kWorkgroup = 256;
+
+struct RupturePush {
+  std::uint32_t springCount;
+};
+struct ForcesPush {
+  float gravity[4];
+  std::uint32_t n, idCount;
+  float timeStepFactor, acousticLength, c0;
+};
+static_assert(sizeof(ForcesPush) == 36);
+
+bool finiteNonNegative(float x) { return std::isfinite(x) && x >= 0.0f; }
+}  // namespace
+
+void SpringNetwork::validate() const {
+  const auto n = points.size();
+  if (n >= 0xffffffffull) throw std::invalid_argument("spring network: too many points");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!(std::isfinite(points[i].mass) && points[i].mass > 0.0f)) {
+      throw std::invalid_argument("wall point " + std::to_string(i) + ": mass must be positive (kg)");
+    }
+  }
+  if (!(std::isfinite(timeStepFactor) && timeStepFactor > 0.0f && timeStepFactor <= 1.0f)) {
+    throw std::invalid_argument("spring network: time-step factor must be in (0, 1]");
+  }
+  std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
+  for (std::size_t k = 0; k < springs.size(); ++k) {
+    const Spring& s = springs[k];
+    const std::string name = "spring " + std::to_string(k) + " (" + std::to_string(s.a) + "-" + std::to_string(s.b) + ")";
+    if (s.a >= n || s.b >= n) throw std::invalid_argument(name + ": particle id beyond the " + std::to_string(n) + " wall points");
+    if (s.a == s.b) throw std::invalid_argument(name + ": connects a particle to itself");
+    if (!seen.insert({std::min(s.a, s.b), std::max(s.a, s.b)}).second) throw std::invalid_argument(name + ": duplicate spring");
+    if (!(std::isfinite(s.restLength) && s.restLength > 0.0f)) throw std::invalid_argument(name + ": rest length must be positive (m)");
+    if (!finiteNonNegative(s.stiffness)) throw std::invalid_argument(name + ": stiffness must be >= 0 (N/m)");
+    if (!finiteNonNegative(s.damping)) throw std::invalid_argument(name + ": damping must be >= 0 (N s/m)");
+    if (!(s.maxForce >= 0.0f) || std::isnan(s.maxForce)) throw std::invalid_argument(name + ": maximum force must be >= 0 (N)");
+  }
+}
+
+MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, const gpu::Buffer& slotOfId,
+                       const gpu::Buffer& accel, const gpu::Buffer& dtLimit, const SpringNetwork& network,
+                       glm::vec3 gravity, float acousticLength, float soundSpeed)
+    : particles_(&particles),
+      springCount_(static_cast<std::uint32_t>(network.springs.size())),
+      idCount_(static_cast<std::uint32_t>(network.points.size())),
+      gravity_{gravity.x, gravity.y, gravity.z, 0.0f},
+      timeStepFactor_(network.timeStepFactor),
+      acousticLength_(acousticLength),
+      soundSpeed_(soundSpeed),
+      springs_(context, std::max<std::uint64_t>(network.springs.size(), 1) * sizeof(GpuSpring), gpu::MemoryUse::Device, "springs"),
+      first_(context, (std::uint64_t(network.points.size()) + 1) * 4, gpu::MemoryUse::Device, "springs of each point: first"),
+      springsOf_(context, std::max<std::uint64_t>(network.springs.size() * 2, 1) * 4, gpu::MemoryUse::Device, "springs of each point"),
+      wallInfo_(context, std::max<std::uint64_t>(network.points.size(), 1) * 16, gpu::MemoryUse::Device, "wall mass and anchors"),
+      counters_(context, 16, gpu::MemoryUse::Device, "wall counters") {
+  network.validate();
+  if (idCount_ > particles.capacity()) {
+    throw std::invalid_argument("spring network: " + std::to_string(idCount_) + " points but the particle store holds " +
+                                std::to_string(particles.capacity()));
+  }
+  // Springs with canonical ends (a < b), and the CSR adjacency by particle id.
+  std::vector<GpuSpring> gpuSprings;
+  std::vector<std::uint32_t> count(idCount_ + 1, 0);
+  for (const Spring& s : network.springs) {
+    gpuSprings.push_back({std::min(s.a, s.b), std::max(s.a, s.b), s.restLength, s.stiffness, s.damping, s.maxForce, 0u, 0u});
+    ++count[s.a];
+    ++count[s.b];
+  }
+  std::vector<std::uint32_t> first(idCount_ + 1, 0);
+  for (std::uint32_t i = 0; i < idCount_; ++i) first[i + 1] = first[i] + count[i];
+  std::vector<std::uint32_t> springsOf(std::max<std::size_t>(network.springs.size() * 2, 1), 0);
+  std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
+  for (std::uint32_t k = 0; k < springCount_; ++k) {  // ascending spring index per point: a fixed summation order
+    springsOf[fill[gpuSprings[k].a]++] = k;
+    springsOf[fill[gpuSprings[k].b]++] = k;
+  }
+  std::vector<glm::vec4> info(std::max<std::size_t>(idCount_, 1), glm::vec4(0.0f));
+  for (std::uint32_t i = 0; i < idCount_; ++i) info[i] = glm::vec4(network.points[i].mass, network.points[i].anchored ? 1.0f : 0.0f, 0.0f, 0.0f);
+  if (!gpuSprings.empty()) springs_.upload(gpuSprings);
+  first_.upload(first);
+  springsOf_.upload(springsOf);
+  wallInfo_.upload(info);
+
+  auto& cache = context.pipelines();
+  rupture_ = &cache.get({"wall/rupture", HEMO_RUPTURE_BINDING_COUNT, sizeof(RupturePush), kWorkgroup, {}});
+  forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, {}});
+  const ParticleArrays& a = particles.live();
+  ruptureSet_ = rupture_->makeSet({{HEMO_RUPTURE_BINDING_POSITIONS, &a.positions},
+                                   {HEMO_RUPTURE_BINDING_VELOCITIES, &a.velocities},
+                                   {HEMO_RUPTURE_BINDING_SLOT_OF_ID, &slotOfId},
+                                   {HEMO_RUPTURE_BINDING_SPRINGS, &springs_},
+                                   {HEMO_RUPTURE_BINDING_COUNTERS, &counters_}});
+  forcesSet_ = forces_->makeSet({{HEMO_SPRINGF_BINDING_POSITIONS, &a.positions},
+                                 {HEMO_SPRINGF_BINDING_VELOCITIES, &a.velocities},
+                                 {HEMO_SPRINGF_BINDING_IDS, &a.ids},
+                                 {HEMO_SPRINGF_BINDING_SLOT_OF_ID, &slotOfId},
+                                 {HEMO_SPRINGF_BINDING_SPRINGS, &springs_},
+                                 {HEMO_SPRINGF_BINDING_FIRST, &first_},
+                                 {HEMO_SPRINGF_BINDING_SPRINGS_OF, &springsOf_},
+                                 {HEMO_SPRINGF_BINDING_WALL_INFO, &wallInfo_},
+                                 {HEMO_SPRINGF_BINDING_ACCEL, &accel},
+                                 {HEMO_SPRINGF_BINDING_DT_LIMIT, &dtLimit}});
+}
+
+void MassSpring::recordReset(gpu::CommandRecorder& rec) {
+  rec.fill(counters_, 0);
+  rec.transferToCompute();
+}
+
+void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t n) {
+  if (springCount_ > 0) {
+    rec.dispatch(*rupture_, ruptureSet_, RupturePush{springCount_}, rupture_->groupsFor(springCount_));
+    rec.computeToCompute();
+  }
+  const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, n, idCount_, timeStepFactor_, acousticLength_,
+                        soundSpeed_};
+  rec.dispatch(*forces_, forcesSet_, push, forces_->groupsFor(n));
+  rec.computeToCompute();
+}
+
+std::uint32_t MassSpring::readBrokenCount() const {
+  return counters_.readback<std::uint32_t>(4)[HEMO_WALL_COUNTER_BROKEN];
+}
+
+std::vector<GpuSpring> MassSpring::readSprings() const {
+  if (springCount_ == 0) return {};
+  return springs_.readback<GpuSpring>(springCount_);
+}
+
+}  // namespace hemo::sim
