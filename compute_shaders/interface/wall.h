@@ -27,7 +27,9 @@
 
 // wall/spring_forces.comp: one invocation per particle slot; wall particles gather the forces
 // of their unbroken springs through the CSR adjacency (springsOf[first[id] .. first[id + 1]))
-// and get their acceleration (gravity included; zero when anchored) and time-step limit.
+// plus the exact reaction of every force the fluid felt from them (pressure, viscosity,
+// repulsion: the pair terms of sph/forces.comp, negated), and get their acceleration (gravity
+// included; zero when anchored) and time-step limit.
 #define HEMO_SPRINGF_BINDING_POSITIONS 0
 #define HEMO_SPRINGF_BINDING_VELOCITIES 1
 #define HEMO_SPRINGF_BINDING_IDS 2
@@ -38,7 +40,13 @@
 #define HEMO_SPRINGF_BINDING_WALL_INFO 7
 #define HEMO_SPRINGF_BINDING_ACCEL 8
 #define HEMO_SPRINGF_BINDING_DT_LIMIT 9
-#define HEMO_SPRINGF_BINDING_COUNT 10
+#define HEMO_SPRINGF_BINDING_PARAMS 10    // SphParams
+#define HEMO_SPRINGF_BINDING_STATE 11     // (rho, p) per slot
+#define HEMO_SPRINGF_BINDING_NCOUNT 12    // neighbour list (a wall particle's: its fluid neighbours)
+#define HEMO_SPRINGF_BINDING_NLIST 13
+#define HEMO_SPRINGF_BINDING_NORMALS 14
+#define HEMO_SPRINGF_BINDING_WALL_VEL 15  // the no-slip velocity the fluid's viscous term used
+#define HEMO_SPRINGF_BINDING_COUNT 16
 
 // Counters (uint[4]).
 #define HEMO_WALL_COUNTER_BROKEN 0  // springs broken so far

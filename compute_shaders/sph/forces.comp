@@ -14,7 +14,8 @@
 //  SPS        when enabled: a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW_ij (fluid
 //             pairs; the stresses come from sps_stress.comp)
 //  gravity and body force.
-// Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc).
+// accel.w keeps the repulsion's normalisation 1 / max(sum T, 1), so a wall particle can apply
+// the exact reaction of its share. Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc).
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -121,9 +122,10 @@ void main() {
       }
     }
   }
-  a += repulsion / max(repulsionWeight, 1.0);
+  const float repulsionScale = 1.0 / max(repulsionWeight, 1.0);
+  a += repulsion * repulsionScale;
   a += params.gravity.xyz;
-  accel[i] = vec4(a, 0.0);
+  accel[i] = vec4(a, repulsionScale);  // w: for the wall's reaction (wall/spring_forces.comp)
   if (diagnose && finiteInput && (any(isnan(a)) || any(isinf(a)))) {
     atomicMin(status[HEMO_STATUS_BAD_FORCE_ID], ids[i]);
   }

@@ -10,6 +10,8 @@
 #include "interface/wall.h"
 #include "common/index.glsl"
 #include "wall/spring.glsl"
+#include "common/kernel.glsl"
+#include "common/sph_params.glsl"
 
 layout(std430, binding = HEMO_SPRINGF_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
@@ -19,8 +21,58 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS) readonly buffer Springs {
 layout(std430, binding = HEMO_SPRINGF_BINDING_FIRST) readonly buffer First { uint first[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS_OF) readonly buffer SpringsOf { uint springsOf[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_INFO) readonly buffer WallInfo { vec4 wallInfo[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_ACCEL) writeonly buffer Accel { vec4 accel[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_ACCEL) buffer Accel { vec4 accel[]; };  // fluid's read, wall's written
 layout(std430, binding = HEMO_SPRINGF_BINDING_DT_LIMIT) writeonly buffer DtLimit { float dtLimit[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_STATE) readonly buffer State { vec4 state[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_VEL) readonly buffer WallVel { vec4 wallVel[]; };
+
+// The force (N) the fluid exerts on wall particle w: minus the sum, over its fluid neighbours
+// f, of m_f times the pair terms sph/forces.comp gave f for w (same formulas, same inputs),
+// the repulsion with f's normalisation 1 / max(sum T, 1) from accel[f].w.
+vec3 hemo_fluid_reaction(uint w) {
+  const HemoPairParams pp = hemo_pair_params();
+  const float twoMu = 2.0 * params.mu;
+  const float etaSq = params.etaSq;
+  const float cutoff = params.repulsionCutoff;
+  const float wallSpacing = params.wallSpacing;
+  const float psi = params.psi;
+  const vec4 xw = positions[w];  // w: SPH mass
+  const vec2 sw = state[w].xy;
+  const float pOverRho2W = sw.y / (sw.x * sw.x);
+  const vec3 vw = wallVel[w].xyz;
+  const vec3 nrm = normals[w].xyz;
+  vec3 force = vec3(0.0);
+  const uint count = neighbourCount[w];
+  for (uint k = 0u; k < count; ++k) {
+    const uint f = neighbourList[hemo_list_slot(w, k, pp)];
+    const vec4 xf = positions[f];
+    const vec3 d = hemo_min_image(xf.xyz - xw.xyz, pp);  // from w to f, as f sees it
+    const float r2 = dot(d, d);
+    if (r2 >= pp.support2 || r2 == 0.0) {
+      continue;
+    }
+    const float r = sqrt(r2);
+    const vec3 gradW = d * (hemo_kernel_dwdr(r, pp.h, pp.kernelNorm) / r);
+    const vec2 sf = state[f].xy;
+    const float pOverRho2F = sf.y / (sf.x * sf.x);
+    const float invRhoFW = 1.0 / (sf.x * sw.x);
+    vec3 a = -(xw.w * (pOverRho2F + pOverRho2W)) * gradW;
+    a += (xw.w * twoMu * invRhoFW * dot(d, gradW) / (r2 + etaSq)) * (velocities[f].xyz - vw);
+    const float x = dot(d, nrm);
+    const float y = length(d - x * nrm);
+    if (x < cutoff && y < wallSpacing) {
+      const float q = max(x / (2.0 * pp.h), 1.0e-3);
+      a += nrm * (psi * (1.0 - q) / sqrt(q) * (1.0 - y / wallSpacing)) * accel[f].w;
+    }
+    force -= xf.w * a;
+  }
+  return force;
+}
+
 layout(push_constant) uniform Push {
   vec4 gravity;
   uint n;
@@ -45,7 +97,7 @@ void main() {
     dtLimit[slot] = 3.0e38;
     return;
   }
-  vec3 force = vec3(0.0);
+  vec3 force = hemo_fluid_reaction(slot);
   float stiffness = 0.0;
   const uint end = first[id + 1u];
   for (uint e = first[id]; e < end; ++e) {

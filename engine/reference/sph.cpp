@@ -126,8 +126,14 @@ std::vector<glm::dvec3> viscousVelocities(const std::vector<SphParticle>& partic
 }
 
 std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp,
-                                      const SphModel& m) {
+                                      const SphModel& m, std::vector<glm::dvec3>* reactions) {
   std::vector<glm::dvec3> out(particles.size(), glm::dvec3(0.0));
+  if (reactions) reactions->assign(particles.size(), glm::dvec3(0.0));
+  struct BoundaryPair {
+    std::size_t j;
+    glm::dvec3 pairAccel, repulsion;
+  };
+  std::vector<BoundaryPair> boundaryPairs;
   const auto vv = viscousVelocities(particles, m);
   const double support = 2.0 * m.h;
   const double etaSq = 0.01 * m.h * m.h;
@@ -137,6 +143,7 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
     if (pi.kind != 0) continue;
     glm::dvec3 a(0.0), repulsion(0.0);
     double weight = 0.0;
+    boundaryPairs.clear();
     for (std::size_t j = 0; j < particles.size(); ++j) {
       if (j == i) continue;
       const SphParticle& pj = particles[j];
@@ -148,8 +155,9 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
       const double rhoJ = rp[j].x;
       const double pOverRho2I = rp[i].y / (rp[i].x * rp[i].x);
       const double pOverRho2J = rp[j].y / (rp[j].x * rp[j].x);
-      a -= pj.mass * (pOverRho2I + pOverRho2J) * gradW;
-      a += pj.mass * 2.0 * m.mu / (rp[i].x * rhoJ) * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[j]);
+      const glm::dvec3 pairAccel = -pj.mass * (pOverRho2I + pOverRho2J) * gradW +
+                                   pj.mass * 2.0 * m.mu / (rp[i].x * rhoJ) * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[j]);
+      a += pairAccel;
       if (m.sps && fluidJ) {
         // a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW, with tau / rho stored
         for (int c = 0; c < 3; ++c) {
@@ -163,15 +171,22 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
       if (!fluidJ) {
         const double x = glm::dot(d, pj.normal);
         const double y = glm::length(d - x * pj.normal);
+        glm::dvec3 push(0.0);
         if (x < m.repulsionCutoff && y < m.wallSpacing) {
           const double w = 1.0 - y / m.wallSpacing;
           const double q = std::max(x / (2.0 * m.h), 1.0e-3);
-          repulsion += pj.normal * (m.psi * (1.0 - q) / std::sqrt(q) * w);
+          push = pj.normal * (m.psi * (1.0 - q) / std::sqrt(q) * w);
+          repulsion += push;
           weight += w;
         }
+        boundaryPairs.push_back({j, pairAccel, push});
       }
     }
-    out[i] = a + repulsion / std::max(weight, 1.0) + m.gravity;
+    const double scale = 1.0 / std::max(weight, 1.0);
+    out[i] = a + repulsion * scale + m.gravity;
+    if (reactions) {
+      for (const BoundaryPair& b : boundaryPairs) (*reactions)[b.j] -= pi.mass * (b.pairAccel + b.repulsion * scale);
+    }
   }
   return out;
 }

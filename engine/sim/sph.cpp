@@ -236,8 +236,10 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
 void SphSolver::attachWall(const SpringNetwork& network) {
-  wall_ = std::make_unique<MassSpring>(*context_, *particles_, grid_.slotOfId(), accel_, dtLimit_, network,
-                                       settings_.gravity, params_.cflAcoustic * params_.h, params_.c0);
+  const FluidBuffers fluid{&grid_.slotOfId(), &accel_,  &dtLimit_, &paramsBuffer_,
+                           &state_,            &ncount_, &nlist_,   &wallVel_};
+  wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
+                                       params_.cflAcoustic * params_.h, params_.c0);
 }
 
 void SphSolver::recordReset(gpu::CommandRecorder& rec) {

@@ -56,9 +56,8 @@ void SpringNetwork::validate() const {
   }
 }
 
-MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, const gpu::Buffer& slotOfId,
-                       const gpu::Buffer& accel, const gpu::Buffer& dtLimit, const SpringNetwork& network,
-                       glm::vec3 gravity, float acousticLength, float soundSpeed)
+MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, const FluidBuffers& fluid,
+                       const SpringNetwork& network, glm::vec3 gravity, float acousticLength, float soundSpeed)
     : particles_(&particles),
       springCount_(static_cast<std::uint32_t>(network.springs.size())),
       idCount_(static_cast<std::uint32_t>(network.points.size())),
@@ -105,19 +104,25 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   const ParticleArrays& a = particles.live();
   ruptureSet_ = rupture_->makeSet({{HEMO_RUPTURE_BINDING_POSITIONS, &a.positions},
                                    {HEMO_RUPTURE_BINDING_VELOCITIES, &a.velocities},
-                                   {HEMO_RUPTURE_BINDING_SLOT_OF_ID, &slotOfId},
+                                   {HEMO_RUPTURE_BINDING_SLOT_OF_ID, fluid.slotOfId},
                                    {HEMO_RUPTURE_BINDING_SPRINGS, &springs_},
                                    {HEMO_RUPTURE_BINDING_COUNTERS, &counters_}});
   forcesSet_ = forces_->makeSet({{HEMO_SPRINGF_BINDING_POSITIONS, &a.positions},
                                  {HEMO_SPRINGF_BINDING_VELOCITIES, &a.velocities},
                                  {HEMO_SPRINGF_BINDING_IDS, &a.ids},
-                                 {HEMO_SPRINGF_BINDING_SLOT_OF_ID, &slotOfId},
+                                 {HEMO_SPRINGF_BINDING_SLOT_OF_ID, fluid.slotOfId},
                                  {HEMO_SPRINGF_BINDING_SPRINGS, &springs_},
                                  {HEMO_SPRINGF_BINDING_FIRST, &first_},
                                  {HEMO_SPRINGF_BINDING_SPRINGS_OF, &springsOf_},
                                  {HEMO_SPRINGF_BINDING_WALL_INFO, &wallInfo_},
-                                 {HEMO_SPRINGF_BINDING_ACCEL, &accel},
-                                 {HEMO_SPRINGF_BINDING_DT_LIMIT, &dtLimit}});
+                                 {HEMO_SPRINGF_BINDING_ACCEL, fluid.accel},
+                                 {HEMO_SPRINGF_BINDING_DT_LIMIT, fluid.dtLimit},
+                                 {HEMO_SPRINGF_BINDING_PARAMS, fluid.params},
+                                 {HEMO_SPRINGF_BINDING_STATE, fluid.state},
+                                 {HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts},
+                                 {HEMO_SPRINGF_BINDING_NLIST, fluid.neighbourList},
+                                 {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
+                                 {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.wallVelocities}});
 }
 
 void MassSpring::recordReset(gpu::CommandRecorder& rec) {

@@ -1,6 +1,7 @@
 // The vessel wall's mass-spring stages: against the double-precision reference on random
 // networks, and against analytic spring dynamics (period, hanging chain, rupture).
 #include "gpu_test.hpp"
+#include "hemo/reference/sph.hpp"
 #include "hemo/reference/springs.hpp"
 #include "hemo/sim/sph.hpp"
 #include "interface/sph.h"
@@ -158,6 +159,189 @@ TEST_F(WallTest, RandomNetworkMatchesReference) {
     const double want = anchored[i] ? 3.0e38 : stiffness[i] > 0 ? std::min(acoustic, 0.1 * std::sqrt(mass[i] / stiffness[i])) : acoustic;
     EXPECT_NEAR(limits[slot], want, 1e-5 * want) << "time-step limit of point " << i;
   }
+}
+
+// A sheet of wall particles (two layers, springs to the lattice and diagonal neighbours and
+// across the layers, random masses, a few anchored) under a jittered, compressed block of fluid with random velocities.
+struct CoupledCase {
+  std::vector<glm::vec4> pos, vel, normals;  // ids = index: wall particles first
+  std::uint32_t wall = 0;
+  sim::SpringNetwork net;
+};
+
+CoupledCase coupledCase(std::mt19937_64& rng, const sim::SphSettings& s, int nx, int ny, int nz, float speed,
+                        float wallSpeed = 0.1f, float restJitter = 0.1f, float squeeze = 0.95f) {
+  CoupledCase c;
+  const float dp = s.spacing, m = s.particleMass();
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  auto index = [&](int i, int j, int layer) { return std::uint32_t((layer * (ny + 4) + (j + 2)) * (nx + 4) + (i + 2)); };
+  for (int layer = 0; layer < 2; ++layer)
+    for (int j = -2; j < ny + 2; ++j)
+      for (int i = -2; i < nx + 2; ++i) {
+        c.pos.emplace_back((i + 0.5f) * dp, (j + 0.5f) * dp, -(layer + 0.5f) * dp, m);
+        c.vel.emplace_back(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f) * wallSpeed, float(HEMO_KIND_WALL));
+        c.normals.emplace_back(0.0f, 0.0f, 1.0f, 0.0f);
+        c.net.points.push_back({0.5f * m + m * u(rng), u(rng) < 0.05f});
+      }
+  c.wall = static_cast<std::uint32_t>(c.pos.size());
+  for (int layer = 0; layer < 2; ++layer)
+    for (int j = -2; j < ny + 2; ++j)
+      for (int i = -2; i < nx + 2; ++i) {
+        const std::uint32_t a = index(i, j, layer);
+        auto link = [&](std::uint32_t b) {
+          const float rest = glm::length(glm::vec3(c.pos[a]) - glm::vec3(c.pos[b])) * (1.0f + restJitter * (2.0f * u(rng) - 1.0f));
+          c.net.springs.push_back({a, b, rest, 50.0f + 50.0f * u(rng), 0.01f * u(rng), 3.0e38f});
+        };
+        if (i + 1 < nx + 2) link(index(i + 1, j, layer));
+        if (j + 1 < ny + 2) link(index(i, j + 1, layer));
+        if (i + 1 < nx + 2 && j + 1 < ny + 2) link(index(i + 1, j + 1, layer));  // shear
+        if (i + 1 < nx + 2 && j > -2) link(index(i + 1, j - 1, layer));
+        if (layer == 0) {
+          link(index(i, j, 1));
+          if (i + 1 < nx + 2) link(index(i + 1, j, 1));  // bending: diagonals between the layers
+          if (i > -2) link(index(i - 1, j, 1));
+          if (j + 1 < ny + 2) link(index(i, j + 1, 1));
+          if (j > -2) link(index(i, j - 1, 1));
+        }
+      }
+  std::uniform_real_distribution<float> jitter(-0.15f * dp, 0.15f * dp);
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const glm::vec3 x = glm::vec3((i + 0.5f) * dp, (j + 0.5f) * dp, (k + 0.45f) * dp) * squeeze +
+                            glm::vec3(jitter(rng), jitter(rng), jitter(rng));
+        c.pos.emplace_back(x, m);
+        c.vel.emplace_back(glm::vec3(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f) * speed, float(HEMO_KIND_FLUID));
+        c.normals.emplace_back(0.0f);
+      }
+  return c;
+}
+
+// Fluid over a wall sheet: the fluid's accelerations (wall particles act as boundary
+// particles) and the wall's (springs + the reaction of every force the fluid felt from it,
+// over its mass, + gravity) match the double-precision references.
+TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
+  auto rng = rngFor();
+  sim::SphSettings s = wallSettings({0.0f, -1.0f, -9.81f});
+  s.soundSpeed = 20.0f;
+  s.viscosity = 0.05f;  // large, so the viscous reaction is visible
+  const CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.6f);
+  const auto n = static_cast<std::uint32_t>(c.pos.size());
+  store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
+  store_->upload(c.pos, c.vel, {}, c.normals);
+  solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, glm::vec3(-0.05f), glm::vec3(0.15f), s);
+  solver_->attachWall(c.net);
+  rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
+  rec_->begin();
+  solver_->recordReset(*rec_);
+  solver_->recordNeighbours(*rec_);
+  solver_->recordDensity(*rec_);
+  solver_->recordForces(*rec_);
+  rec_->end();
+  rec_->submitAndWait();
+
+  // References: the fluid model (all wall particles as boundary particles), then the springs.
+  const sim::SphParams& p = solver_->params();
+  reference::SphModel model;
+  model.gravity = {p.gravity[0], p.gravity[1], p.gravity[2]};
+  model.h = p.h;
+  model.rho0 = p.rho0;
+  model.taitB = p.taitB;
+  model.mu = p.mu;
+  model.psi = p.psi;
+  model.repulsionCutoff = p.repulsionCutoff;
+  model.wallSpacing = p.wallSpacing;
+  model.clampNegativePressure = p.clampNegativePressure != 0;
+  std::vector<reference::SphParticle> ref(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    ref[i] = {glm::dvec3(c.pos[i]), glm::dvec3(c.vel[i]), glm::dvec3(c.normals[i]), c.pos[i].w, i < c.wall ? 1 : 0};
+  }
+  const auto rp = reference::densityPressure(ref, model);
+  std::vector<glm::dvec3> reactions;
+  const auto fluidAcc = reference::accelerations(ref, rp, model, &reactions);
+  std::vector<reference::RefSpring> springs;
+  for (const auto& sp : c.net.springs) {
+    springs.push_back({std::min(sp.a, sp.b), std::max(sp.a, sp.b), sp.restLength, sp.stiffness, sp.damping, sp.maxForce, false});
+  }
+  std::vector<glm::dvec3> wx(c.wall), wv(c.wall);
+  std::vector<double> mass(c.wall);
+  std::vector<bool> anchored(c.wall);
+  for (std::uint32_t i = 0; i < c.wall; ++i) {
+    wx[i] = ref[i].x, wv[i] = ref[i].v, mass[i] = c.net.points[i].mass, anchored[i] = c.net.points[i].anchored;
+  }
+  const auto wallAcc = reference::springAccelerations(springs, wx, wv, mass, anchored, glm::dvec3(s.gravity));
+
+  const auto ids = store_->readIds();
+  const auto accel = solver_->accel().readback<glm::vec4>(n);
+  double fluidScale = 0.0, wallScale = 0.0, reactionScale = 0.0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (i < c.wall) {
+      wallScale = std::max(wallScale, glm::length(wallAcc[i]));
+      if (!anchored[i]) reactionScale = std::max(reactionScale, glm::length(reactions[i] / mass[i]));
+    } else {
+      fluidScale = std::max(fluidScale, glm::length(fluidAcc[i]));
+    }
+  }
+  ASSERT_GT(reactionScale, 10.0) << "the fluid must push the wall noticeably";
+  std::size_t pushed = 0;
+  for (std::uint32_t slot = 0; slot < n; ++slot) {
+    const std::uint32_t i = ids[slot];
+    if (i >= c.wall) {
+      EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - fluidAcc[i]), 2e-4 * fluidScale) << "fluid particle " << i;
+      continue;
+    }
+    const glm::dvec3 want = anchored[i] ? glm::dvec3(0.0) : wallAcc[i] + reactions[i] / mass[i];
+    pushed += glm::length(reactions[i]) > 0.0;
+    EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - want), 2e-4 * (wallScale + reactionScale)) << "wall particle " << i;
+  }
+  EXPECT_GT(pushed, 100u);
+}
+
+// Fluid thrown at a free wall sheet (no anchors, no gravity): fluid and wall exchange momentum
+// through exactly opposite pair forces and the springs are internal, so the total momentum
+// (SPH masses for the fluid, spring masses for the wall) stays put over 1,000 steps.
+TEST_F(WallTest, FluidAndFreeWallConserveMomentum) {
+  auto rng = rngFor();
+  sim::SphSettings s = wallSettings(glm::vec3(0.0f));
+  s.soundSpeed = 20.0f;
+  s.viscosity = 0.01f;
+  s.clampNegativePressure = false;
+  s.neighbourCapacity = 256;  // the free sheet bends where the fluid hits it and crowds together
+  CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.1f, 0.01f, 0.0f, 1.0f);  // relaxed sheet, fluid at rest density
+  for (auto& point : c.net.points) point.anchored = false;
+  for (std::uint32_t i = c.wall; i < c.pos.size(); ++i) c.vel[i].z -= 0.3f;  // towards the sheet
+  const auto n = static_cast<std::uint32_t>(c.pos.size());
+  store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
+  store_->upload(c.pos, c.vel, {}, c.normals);
+  solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, glm::vec3(-0.2f), glm::vec3(0.3f), s);
+  solver_->attachWall(c.net);
+  rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
+  rec_->begin();
+  solver_->recordReset(*rec_);
+  rec_->end();
+  rec_->submitAndWait();
+  auto momentum = [&]() {
+    const auto vel = store_->readVelocities();
+    const auto pos = store_->readPositions();
+    const auto ids = store_->readIds();
+    glm::dvec3 fluid(0.0), wall(0.0);
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = ids[slot];
+      if (i < c.wall) wall += double(c.net.points[i].mass) * glm::dvec3(vel[slot]);
+      else fluid += double(pos[slot].w) * glm::dvec3(vel[slot]);
+    }
+    return std::pair{fluid, wall};
+  };
+  const auto [fluid0, wall0] = momentum();
+  const glm::dvec3 p0 = fluid0 + wall0;
+  steps(1000);
+  EXPECT_EQ(solver_->readStatus().neighbourOverflow, 0u) << "the case must stay within the list capacity";
+  const auto [fluid1, wall1] = momentum();
+  const double moved = glm::length(wall1 - wall0);
+  EXPECT_GT(moved, 0.1 * glm::length(p0)) << "the fluid must hand the wall a good share of its momentum";
+  EXPECT_LT(glm::length(fluid1 + wall1 - p0), 1e-5 * glm::length(p0))
+      << "total momentum drifted; fluid gave " << glm::length(fluid1 - fluid0) << ", wall got " << moved;
+  EXPECT_EQ(solver_->readStatus().nonFinite, 0u);
 }
 
 // One spring from an anchored point: a mass oscillates with period 2 pi sqrt(m/k) (0.5%).

@@ -54,9 +54,12 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
 // extrapolation of Adami, Hu & Adams (2012, eq. 22-23).
 std::vector<glm::dvec3> viscousVelocities(const std::vector<SphParticle>& particles, const SphModel& model);
 
-// Acceleration per particle (zero for boundary particles).
+// Acceleration per particle (zero for boundary particles). With `reactions`, also the force
+// (N) on each boundary particle: minus the sum of m_f times the pair terms each fluid
+// particle f got from it (pressure, viscosity, its share of the normalised repulsion).
 std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
-                                      const std::vector<glm::dvec2>& densityPressure, const SphModel& model);
+                                      const std::vector<glm::dvec2>& densityPressure, const SphModel& model,
+                                      std::vector<glm::dvec3>* reactions = nullptr);
 
 // Total linear momentum of the fluid particles.
 glm::dvec3 fluidMomentum(const std::vector<SphParticle>& particles);

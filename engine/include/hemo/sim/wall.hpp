@@ -4,8 +4,10 @@
 // Per force evaluation:
 //   rupture ...... springs whose tension exceeds their maximum force break, for good
 //   spring forces  each wall particle gathers its unbroken springs (CSR by particle id, no
-//                  atomics; the two ends get exactly opposite forces), divides by its mass,
-//                  adds gravity (anchored particles: zero), and writes its time-step limit
+//                  atomics; the two ends get exactly opposite forces) and the reaction of
+//                  every force the fluid felt from it (gathered over its fluid neighbours),
+//                  divides by its mass, adds gravity (anchored particles: zero), and writes
+//                  its time-step limit
 // The SPH integrator then moves wall particles like fluid particles. Attach a network to an
 // SphSolver with SphSolver::attachWall.
 #include "hemo/gpu/pipeline.hpp"
@@ -54,13 +56,24 @@ struct GpuSpring {
 };
 static_assert(sizeof(GpuSpring) == 32);
 
+// The SPH solver's buffers the wall stages read (and accel / dtLimit, which they write for
+// wall particles).
+struct FluidBuffers {
+  const gpu::Buffer* slotOfId;
+  const gpu::Buffer* accel;
+  const gpu::Buffer* dtLimit;
+  const gpu::Buffer* params;
+  const gpu::Buffer* state;
+  const gpu::Buffer* neighbourCounts;
+  const gpu::Buffer* neighbourList;
+  const gpu::Buffer* wallVelocities;
+};
+
 class MassSpring {
  public:
-  // `slotOfId`, `accel` and `dtLimit` are the solver's; gravity (m/s^2), acoustic length
-  // C_a h (m) and c0 (m/s) come from the SPH parameters.
-  MassSpring(gpu::Context& context, const ParticleStore& particles, const gpu::Buffer& slotOfId,
-             const gpu::Buffer& accel, const gpu::Buffer& dtLimit, const SpringNetwork& network, glm::vec3 gravity,
-             float acousticLength, float soundSpeed);
+  // Gravity (m/s^2), acoustic length C_a h (m) and c0 (m/s) come from the SPH parameters.
+  MassSpring(gpu::Context& context, const ParticleStore& particles, const FluidBuffers& fluid,
+             const SpringNetwork& network, glm::vec3 gravity, float acousticLength, float soundSpeed);
 
   void recordReset(gpu::CommandRecorder& rec);  // broken counter to zero (flags stay)
   // Rupture, then spring forces for the first n slots (after the SPH force pass, whose
