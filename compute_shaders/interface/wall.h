@@ -46,9 +46,12 @@
 #define HEMO_SPRINGF_BINDING_NLIST 13
 #define HEMO_SPRINGF_BINDING_NORMALS 14
 #define HEMO_SPRINGF_BINDING_WALL_VEL 15  // the no-slip velocity the fluid's viscous term used
-#define HEMO_SPRINGF_BINDING_COUNT 16
+#define HEMO_SPRINGF_BINDING_COUNTERS 16
+#define HEMO_SPRINGF_BINDING_COUNT 17
 
 // Counters (uint[4]).
-#define HEMO_WALL_COUNTER_BROKEN 0  // springs broken so far
+#define HEMO_WALL_COUNTER_BROKEN 0    // springs broken so far
+#define HEMO_WALL_COUNTER_DETACHED 1  // wall particles whose springs are all broken (mass and normal
+                                      // set to zero: no longer part of the fluid's boundary)
 
 #endif

@@ -122,7 +122,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  {HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts},
                                  {HEMO_SPRINGF_BINDING_NLIST, fluid.neighbourList},
                                  {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
-                                 {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.wallVelocities}});
+                                 {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.wallVelocities},
+                                 {HEMO_SPRINGF_BINDING_COUNTERS, &counters_}});
 }
 
 void MassSpring::recordReset(gpu::CommandRecorder& rec) {
@@ -143,6 +144,10 @@ void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t n) {
 
 std::uint32_t MassSpring::readBrokenCount() const {
   return counters_.readback<std::uint32_t>(4)[HEMO_WALL_COUNTER_BROKEN];
+}
+
+std::uint32_t MassSpring::readDetachedCount() const {
+  return counters_.readback<std::uint32_t>(4)[HEMO_WALL_COUNTER_DETACHED];
 }
 
 std::vector<GpuSpring> MassSpring::readSprings() const {

@@ -297,6 +297,82 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
   EXPECT_GT(pushed, 100u);
 }
 
+// A wall particle under the fluid whose springs all break detaches: it is counted, loses its
+// SPH mass and normal, the fluid's forces from then on are those of a wall without it (the
+// reference with the particle removed), and it only falls.
+TEST_F(WallTest, ParticleWithAllSpringsBrokenDetachesFromTheWall) {
+  auto rng = rngFor();
+  sim::SphSettings s = wallSettings({0.0f, 0.0f, -9.81f});
+  s.soundSpeed = 20.0f;
+  CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.3f, 0.0f, 0.0f, 0.97f);
+  for (auto& point : c.net.points) point.anchored = false;
+  // The top-layer particle under the middle of the block: its springs start stretched to twice
+  // their rest length and break at the first force evaluation.
+  const std::uint32_t victim = std::uint32_t((0 * (7 + 4) + (3 + 2)) * (8 + 4) + (4 + 2));
+  std::size_t cut = 0;
+  for (auto& sp : c.net.springs) {
+    if (sp.a == victim || sp.b == victim) sp.restLength *= 0.5f, sp.maxForce = 0.1f, ++cut;
+  }
+  ASSERT_GE(cut, 5u);
+  const auto n = static_cast<std::uint32_t>(c.pos.size());
+  store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
+  store_->upload(c.pos, c.vel, {}, c.normals);
+  solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, glm::vec3(-0.05f), glm::vec3(0.15f), s);
+  solver_->attachWall(c.net);
+  rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
+  rec_->begin();
+  solver_->recordReset(*rec_);
+  solver_->recordNeighbours(*rec_);
+  solver_->recordDensity(*rec_);
+  solver_->recordForces(*rec_);  // breaks the springs and detaches the particle
+  solver_->recordDensity(*rec_);
+  solver_->recordForces(*rec_);  // the fluid without it
+  rec_->end();
+  rec_->submitAndWait();
+  EXPECT_EQ(solver_->wall()->readBrokenCount(), cut);
+  EXPECT_EQ(solver_->wall()->readDetachedCount(), 1u);
+
+  const sim::SphParams& p = solver_->params();
+  reference::SphModel model;
+  model.gravity = {p.gravity[0], p.gravity[1], p.gravity[2]};
+  model.h = p.h;
+  model.rho0 = p.rho0;
+  model.taitB = p.taitB;
+  model.mu = p.mu;
+  model.psi = p.psi;
+  model.repulsionCutoff = p.repulsionCutoff;
+  model.wallSpacing = p.wallSpacing;
+  model.clampNegativePressure = p.clampNegativePressure != 0;
+  std::vector<reference::SphParticle> ref;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (i == victim) continue;
+    ref.push_back({glm::dvec3(c.pos[i]), glm::dvec3(c.vel[i]), glm::dvec3(c.normals[i]), c.pos[i].w, i < c.wall ? 1 : 0});
+  }
+  const auto rp = reference::densityPressure(ref, model);
+  const auto acc = reference::accelerations(ref, rp, model);
+  double scale = 0.0;
+  for (const auto& a : acc) scale = std::max(scale, glm::length(a));
+  const auto ids = store_->readIds();
+  const auto pos = store_->readPositions();
+  const auto normals = store_->readNormals();
+  const auto accel = solver_->accel().readback<glm::vec4>(n);
+  bool sawVictim = false;
+  for (std::uint32_t slot = 0; slot < n; ++slot) {
+    const std::uint32_t i = ids[slot];
+    if (i == victim) {
+      sawVictim = true;
+      EXPECT_EQ(pos[slot].w, 0.0f) << "SPH mass of the detached particle";
+      EXPECT_EQ(glm::vec3(normals[slot]), glm::vec3(0.0f)) << "normal of the detached particle";
+      EXPECT_EQ(glm::vec3(accel[slot]), s.gravity) << "a detached particle only falls";
+      continue;
+    }
+    if (i < c.wall) continue;
+    const std::size_t r = i - 1;  // the reference lacks the victim (a wall particle, id < i)
+    EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - acc[r]), 2e-4 * scale) << "fluid particle " << i;
+  }
+  EXPECT_TRUE(sawVictim);
+}
+
 // Fluid thrown at a free wall sheet (no anchors, no gravity): fluid and wall exchange momentum
 // through exactly opposite pair forces and the springs are internal, so the total momentum
 // (SPH masses for the fluid, spring masses for the wall) stays put over 1,000 steps.

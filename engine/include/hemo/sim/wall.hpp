@@ -75,13 +75,16 @@ class MassSpring {
   MassSpring(gpu::Context& context, const ParticleStore& particles, const FluidBuffers& fluid,
              const SpringNetwork& network, glm::vec3 gravity, float acousticLength, float soundSpeed);
 
-  void recordReset(gpu::CommandRecorder& rec);  // broken counter to zero (flags stay)
+  void recordReset(gpu::CommandRecorder& rec);  // counters to zero (flags stay)
   // Rupture, then spring forces for the first n slots (after the SPH force pass, whose
   // accelerations of wall particles this replaces).
   void record(gpu::CommandRecorder& rec, std::uint32_t n);
 
   std::uint32_t springCount() const { return springCount_; }
   std::uint32_t readBrokenCount() const;             // since the last reset (a readback)
+  // Wall particles detached since the last reset: all their springs broken, so their SPH mass
+  // and normal were set to zero and the fluid no longer sees them (a readback).
+  std::uint32_t readDetachedCount() const;
   std::vector<GpuSpring> readSprings() const;        // with their broken flags (a readback)
 
  private:
