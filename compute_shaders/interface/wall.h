@@ -47,7 +47,12 @@
 #define HEMO_SPRINGF_BINDING_NORMALS 14
 #define HEMO_SPRINGF_BINDING_WALL_VEL 15  // the no-slip velocity the fluid's viscous term used
 #define HEMO_SPRINGF_BINDING_COUNTERS 16
-#define HEMO_SPRINGF_BINDING_COUNT 17
+#define HEMO_SPRINGF_BINDING_FRAMES 17    // uvec2 per id: the normal's two frame points
+#define HEMO_SPRINGF_BINDING_COUNT 18
+
+// A wall particle's normal follows the deformed wall: n = normalize((x_A - x) x (x_B - x)) for
+// its frame points A and B (ids; HEMO_NO_FRAME keeps the normal it has).
+#define HEMO_NO_FRAME 0xffffffffu
 
 // Counters (uint[4]).
 #define HEMO_WALL_COUNTER_BROKEN 0    // springs broken so far

@@ -29,6 +29,7 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_NCOUNT) readonly buffer Counts { u
 layout(std430, binding = HEMO_SPRINGF_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_NORMALS) buffer Normals { vec4 normals[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_COUNTERS) buffer Counters { uint counters[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_FRAMES) readonly buffer Frames { uvec2 frames[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_VEL) readonly buffer WallVel { vec4 wallVel[]; };
 
 // The force (N) the fluid exerts on wall particle w: minus the sum, over its fluid neighbours
@@ -74,6 +75,22 @@ vec3 hemo_fluid_reaction(uint w) {
   return force;
 }
 
+// The normal of the deformed wall from the particle's frame points, for the fluid's next force
+// evaluation (this one, and the reaction, used the previous normal). Detached particles and
+// particles without a frame keep theirs.
+void updateNormal(uint slot, uint id) {
+  const uvec2 frame = frames[id];
+  if (positions[slot].w == 0.0 || frame.x == HEMO_NO_FRAME) {
+    return;
+  }
+  const vec3 x = positions[slot].xyz;
+  const vec3 n = cross(positions[slotOfId[frame.x]].xyz - x, positions[slotOfId[frame.y]].xyz - x);
+  const float len = length(n);
+  if (len > 0.0) {
+    normals[slot] = vec4(n / len, 0.0);
+  }
+}
+
 layout(push_constant) uniform Push {
   vec4 gravity;
   uint n;
@@ -96,6 +113,7 @@ void main() {
   if (info.y != 0.0) {
     accel[slot] = vec4(0.0);  // anchored
     dtLimit[slot] = 3.0e38;
+    updateNormal(slot, id);
     return;
   }
   vec3 force = hemo_fluid_reaction(slot);
@@ -123,6 +141,8 @@ void main() {
     positions[slot].w = 0.0;
     normals[slot] = vec4(0.0);
     atomicAdd(counters[HEMO_WALL_COUNTER_DETACHED], 1u);
+  } else {
+    updateNormal(slot, id);
   }
   accel[slot] = vec4(force / info.x + pc.gravity.xyz, 0.0);
   const float acoustic = pc.acousticLength / (pc.c0 + length(velocities[slot].xyz));

@@ -35,8 +35,14 @@ void SpringNetwork::validate() const {
   const auto n = points.size();
   if (n >= 0xffffffffull) throw std::invalid_argument("spring network: too many points");
   for (std::size_t i = 0; i < n; ++i) {
-    if (!(std::isfinite(points[i].mass) && points[i].mass > 0.0f)) {
+    const WallPoint& p = points[i];
+    if (!(std::isfinite(p.mass) && p.mass > 0.0f)) {
       throw std::invalid_argument("wall point " + std::to_string(i) + ": mass must be positive (kg)");
+    }
+    const bool none = p.frameA == WallPoint::kNoFrame && p.frameB == WallPoint::kNoFrame;
+    if (!none && (p.frameA >= n || p.frameB >= n || p.frameA == p.frameB || p.frameA == i || p.frameB == i)) {
+      throw std::invalid_argument("wall point " + std::to_string(i) +
+                                  ": its normal's frame needs two other points of the network (or none)");
     }
   }
   if (!(std::isfinite(timeStepFactor) && timeStepFactor > 0.0f && timeStepFactor <= 1.0f)) {
@@ -69,6 +75,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
       first_(context, (std::uint64_t(network.points.size()) + 1) * 4, gpu::MemoryUse::Device, "springs of each point: first"),
       springsOf_(context, std::max<std::uint64_t>(network.springs.size() * 2, 1) * 4, gpu::MemoryUse::Device, "springs of each point"),
       wallInfo_(context, std::max<std::uint64_t>(network.points.size(), 1) * 16, gpu::MemoryUse::Device, "wall mass and anchors"),
+      frames_(context, std::max<std::uint64_t>(network.points.size(), 1) * 8, gpu::MemoryUse::Device, "wall normal frames"),
       counters_(context, 16, gpu::MemoryUse::Device, "wall counters") {
   network.validate();
   if (idCount_ > particles.capacity()) {
@@ -91,6 +98,12 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
     springsOf[fill[gpuSprings[k].a]++] = k;
     springsOf[fill[gpuSprings[k].b]++] = k;
   }
+  std::vector<std::uint32_t> frames(std::max<std::size_t>(idCount_, 1) * 2, WallPoint::kNoFrame);
+  for (std::uint32_t i = 0; i < idCount_; ++i) {
+    frames[2 * i] = network.points[i].frameA;
+    frames[2 * i + 1] = network.points[i].frameB;
+  }
+  frames_.upload(frames);
   std::vector<glm::vec4> info(std::max<std::size_t>(idCount_, 1), glm::vec4(0.0f));
   for (std::uint32_t i = 0; i < idCount_; ++i) info[i] = glm::vec4(network.points[i].mass, network.points[i].anchored ? 1.0f : 0.0f, 0.0f, 0.0f);
   if (!gpuSprings.empty()) springs_.upload(gpuSprings);
@@ -123,7 +136,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  {HEMO_SPRINGF_BINDING_NLIST, fluid.neighbourList},
                                  {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
                                  {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.wallVelocities},
-                                 {HEMO_SPRINGF_BINDING_COUNTERS, &counters_}});
+                                 {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
+                                 {HEMO_SPRINGF_BINDING_FRAMES, &frames_}});
 }
 
 void MassSpring::recordReset(gpu::CommandRecorder& rec) {

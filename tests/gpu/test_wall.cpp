@@ -420,6 +420,56 @@ TEST_F(WallTest, FluidAndFreeWallConserveMomentum) {
   EXPECT_EQ(solver_->readStatus().nonFinite, 0u);
 }
 
+// Normals follow the deformed wall: a 6 x 5 sheet (frame points along +x and +y, so the
+// normals start as +z), rotated rigidly and one corner anchored: after one force evaluation
+// every framed normal is the rotated +z; the point without a frame keeps its normal.
+TEST_F(WallTest, NormalsFollowTheDeformedWall) {
+  const int nx = 6, ny = 5;
+  const float dp = 0.01f;
+  sim::SpringNetwork net;
+  std::vector<glm::vec3> x, v;
+  const glm::vec3 axis = glm::normalize(glm::vec3(1.0f, 2.0f, 0.5f));
+  const float angle = 0.7f;
+  auto rotate = [&](glm::vec3 p) {  // Rodrigues
+    return p * std::cos(angle) + glm::cross(axis, p) * std::sin(angle) + axis * glm::dot(axis, p) * (1.0f - std::cos(angle));
+  };
+  auto id = [&](int i, int j) { return std::uint32_t(j * nx + i); };
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      sim::WallPoint p{0.001f, i == 0 && j == 0};
+      // A then B with (x_A - x) x (x_B - x) along +z: right-handed pairs of lattice directions.
+      const int di = i + 1 < nx ? 1 : -1, dj = j + 1 < ny ? 1 : -1;
+      p.frameA = di * dj > 0 ? id(i + di, j) : id(i, j + dj);
+      p.frameB = di * dj > 0 ? id(i, j + dj) : id(i + di, j);
+      if (i == 3 && j == 2) p.frameA = p.frameB = sim::WallPoint::kNoFrame;
+      net.points.push_back(p);
+      x.push_back(rotate(glm::vec3(i * dp, j * dp, 0.0f)));
+      v.emplace_back(0.0f);
+      if (i + 1 < nx) net.springs.push_back({id(i, j), id(i + 1, j), dp, 10.0f, 0.0f, 3.0e38f});
+      if (j + 1 < ny) net.springs.push_back({id(i, j), id(i, j + 1), dp, 10.0f, 0.0f, 3.0e38f});
+    }
+  setUp(x, v, net, wallSettings(glm::vec3(0.0f)), glm::vec3(-0.1f), glm::vec3(0.1f));
+  // Start every normal at +x, so only the update can produce the rotated +z.
+  store_->live().normals.upload(std::vector<glm::vec4>(x.size(), glm::vec4(1.0f, 0.0f, 0.0f, 0.0f)));
+  rec_->begin();
+  solver_->recordNeighbours(*rec_);
+  solver_->recordDensity(*rec_);
+  solver_->recordForces(*rec_);
+  rec_->end();
+  rec_->submitAndWait();
+  const auto ids = store_->readIds();
+  const auto normals = store_->readNormals();
+  const glm::vec3 want = rotate(glm::vec3(0.0f, 0.0f, 1.0f));
+  for (std::size_t slot = 0; slot < ids.size(); ++slot) {
+    const glm::vec3 n(normals[slot]);
+    if (ids[slot] == id(3, 2)) {
+      EXPECT_EQ(n, glm::vec3(1.0f, 0.0f, 0.0f)) << "a point without a frame keeps its normal";
+    } else {
+      EXPECT_LT(glm::length(n - want), 1e-5f) << "normal of point " << ids[slot];
+    }
+  }
+}
+
 // One spring from an anchored point: a mass oscillates with period 2 pi sqrt(m/k) (0.5%).
 TEST_F(WallTest, SpringOscillatesWithTheAnalyticPeriod) {
   const float m = 0.01f, k = 100.0f, rest = 0.05f, amplitude = 0.01f;

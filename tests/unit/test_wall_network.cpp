@@ -55,6 +55,15 @@ TEST(SpringNetwork, BadSpringsAndPointsAreNamed) {
   n = triangle();
   n.timeStepFactor = 0.0f;
   expectRejected(n, "time-step factor");
+  n = triangle();
+  n.points[1].frameA = 0;  // frameB missing
+  expectRejected(n, "wall point 1: its normal's frame needs two other points");
+  n.points[1].frameB = 1;  // itself
+  expectRejected(n, "wall point 1: its normal's frame");
+  n.points[1].frameB = 9;  // out of range
+  expectRejected(n, "wall point 1: its normal's frame");
+  n.points[1].frameB = 2;
+  EXPECT_NO_THROW(n.validate());
 }
 
 }  // namespace

@@ -33,8 +33,13 @@ struct Spring {
 };
 
 struct WallPoint {
+  static constexpr std::uint32_t kNoFrame = 0xffffffffu;
   float mass = 0.0f;      // kg
   bool anchored = false;  // fixed in place (vessel ends)
+  // The normal follows the deformed wall: n = normalize((x_A - x) x (x_B - x)) with frame
+  // points A and B (ids, ordered so that n points into the fluid); kNoFrame keeps the
+  // particle's normal as it is.
+  std::uint32_t frameA = kNoFrame, frameB = kNoFrame;
 };
 
 struct SpringNetwork {
@@ -44,7 +49,8 @@ struct SpringNetwork {
   float timeStepFactor = 0.1f;    // dt <= factor sqrt(m / sum k) per particle
   // Throws std::invalid_argument naming the spring or point (ids out of range, a spring from a
   // particle to itself, a duplicate, non-positive rest length or mass, negative stiffness,
-  // damping or maximum force, non-finite values).
+  // damping or maximum force, non-finite values, a frame with missing, repeated or
+  // out-of-range points).
   void validate() const;
 };
 
@@ -93,7 +99,7 @@ class MassSpring {
   std::uint32_t idCount_;
   float gravity_[4];
   float timeStepFactor_, acousticLength_, soundSpeed_;
-  gpu::Buffer springs_, first_, springsOf_, wallInfo_, counters_;
+  gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_;
   const gpu::ComputePipeline* rupture_;
   const gpu::ComputePipeline* forces_;
   gpu::DescriptorSet ruptureSet_, forcesSet_;
