@@ -23,7 +23,8 @@
 #define HEMO_RUPTURE_BINDING_SLOT_OF_ID 2
 #define HEMO_RUPTURE_BINDING_SPRINGS 3
 #define HEMO_RUPTURE_BINDING_COUNTERS 4
-#define HEMO_RUPTURE_BINDING_COUNT 5
+#define HEMO_RUPTURE_BINDING_PARAMS 5  // SphParams (the period, for the minimum image)
+#define HEMO_RUPTURE_BINDING_COUNT 6
 
 // wall/spring_forces.comp: one invocation per particle slot; wall particles gather the forces
 // of their unbroken springs through the CSR adjacency (springsOf[first[id] .. first[id + 1]))

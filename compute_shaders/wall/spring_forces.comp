@@ -84,7 +84,9 @@ void updateNormal(uint slot, uint id) {
     return;
   }
   const vec3 x = positions[slot].xyz;
-  const vec3 n = cross(positions[slotOfId[frame.x]].xyz - x, positions[slotOfId[frame.y]].xyz - x);
+  const HemoPairParams pp = hemo_pair_params();
+  const vec3 n = cross(hemo_min_image(positions[slotOfId[frame.x]].xyz - x, pp),
+                       hemo_min_image(positions[slotOfId[frame.y]].xyz - x, pp));
   const float len = length(n);
   if (len > 0.0) {
     normals[slot] = vec4(n / len, 0.0);
@@ -116,6 +118,7 @@ void main() {
     updateNormal(slot, id);
     return;
   }
+  const HemoPairParams pp = hemo_pair_params();
   vec3 force = hemo_fluid_reaction(slot);
   float stiffness = 0.0;
   uint intact = 0u;
@@ -128,8 +131,9 @@ void main() {
     const uint sa = slotOfId[s.a];
     const uint sb = slotOfId[s.b];
     float tension;
-    const vec3 fa = hemo_spring_force_on_a(positions[sa].xyz, positions[sb].xyz, velocities[sa].xyz,
-                                           velocities[sb].xyz, s.restLength, s.stiffness, s.damping, tension);
+    const vec3 delta = hemo_min_image(positions[sb].xyz - positions[sa].xyz, pp);
+    const vec3 fa = hemo_spring_force_on_a(delta, velocities[sa].xyz, velocities[sb].xyz, s.restLength, s.stiffness,
+                                           s.damping, tension);
     force += id == s.a ? fa : -fa;
     stiffness += s.stiffness;
     ++intact;

@@ -119,7 +119,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                    {HEMO_RUPTURE_BINDING_VELOCITIES, &a.velocities},
                                    {HEMO_RUPTURE_BINDING_SLOT_OF_ID, fluid.slotOfId},
                                    {HEMO_RUPTURE_BINDING_SPRINGS, &springs_},
-                                   {HEMO_RUPTURE_BINDING_COUNTERS, &counters_}});
+                                   {HEMO_RUPTURE_BINDING_COUNTERS, &counters_},
+                                   {HEMO_RUPTURE_BINDING_PARAMS, fluid.params}});
   forcesSet_ = forces_->makeSet({{HEMO_SPRINGF_BINDING_POSITIONS, &a.positions},
                                  {HEMO_SPRINGF_BINDING_VELOCITIES, &a.velocities},
                                  {HEMO_SPRINGF_BINDING_IDS, &a.ids},
