@@ -57,7 +57,7 @@
 
 // Counters (uint[4]).
 #define HEMO_WALL_COUNTER_BROKEN 0    // springs broken so far
-#define HEMO_WALL_COUNTER_DETACHED 1  // wall particles whose springs are all broken (mass and normal
-                                      // set to zero: no longer part of the fluid's boundary)
+#define HEMO_WALL_COUNTER_DETACHED 1  // wall particles whose springs are all broken (SPH mass set to
+                                      // zero: no longer part of the fluid's boundary)
 
 #endif

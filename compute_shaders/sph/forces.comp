@@ -112,7 +112,7 @@ void main() {
       const vec3 nrm = normals[j].xyz;
       const float x = dot(d, nrm);
       const float y = length(d - x * nrm);
-      if (x < cutoff && y < wallSpacing && dot(nrm, nrm) > 0.0) {  // detached wall particles: no normal
+      if (x < cutoff && y < wallSpacing && pj.w > 0.0) {  // detached wall particles (no SPH mass) do not repel
         const float w = 1.0 - y / wallSpacing;
         // r = x / 2h, kept >= 1e-3 so a particle at (or behind) the wall plane is pushed out
         // with a large but finite force.

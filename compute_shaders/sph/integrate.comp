@@ -50,6 +50,14 @@ layout(push_constant) uniform Push {
   uint midpointLookahead;
 } pc;
 
+// A wall particle whose springs all broke is marked by the wall stage with accel.w < 0 (fluid
+// particles keep a positive value there): from now on it has no SPH mass, so the fluid no
+// longer sees it. (Written here, not by the wall stage, whose other invocations read the
+// positions.)
+float hemo_sph_mass(float mass, float accelW) {
+  return accelW < 0.0 ? 0.0 : mass;
+}
+
 // Fluid and wall particles move (walls with the acceleration of wall/spring_forces.comp);
 // rigid boundary particles do not.
 bool hemo_moves(float kind) {
@@ -87,8 +95,9 @@ void main() {
       const vec4 x = positions[i];
       savedPos[i] = x;
       savedVel[i] = v;
-      velocities[i] = vec4(v.xyz + accel[i].xyz * (0.5 * dt), v.w);
-      positions[i] = vec4(hemo_wrap_position(x.xyz + v.xyz * (0.5 * dt)), x.w);
+      const vec4 a = accel[i];
+      velocities[i] = vec4(v.xyz + a.xyz * (0.5 * dt), v.w);
+      positions[i] = vec4(hemo_wrap_position(x.xyz + v.xyz * (0.5 * dt)), hemo_sph_mass(x.w, a.w));
     }
     return;
   }
@@ -133,6 +142,7 @@ void main() {
     atomicAdd(status[HEMO_STATUS_NONFINITE], 1u);
   }
   velocities[i] = v;
+  x.w = hemo_sph_mass(x.w, accel[i].w);
   positions[i] = x;
   writeReach(i, x.xyz, v.xyz);
 }

@@ -13,7 +13,7 @@
 #include "common/kernel.glsl"
 #include "common/sph_params.glsl"
 
-layout(std430, binding = HEMO_SPRINGF_BINDING_POSITIONS) buffer Positions { vec4 positions[]; };  // w of a detaching particle written
+layout(std430, binding = HEMO_SPRINGF_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_IDS) readonly buffer Ids { uint ids[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_SLOT_OF_ID) readonly buffer SlotOfId { uint slotOfId[]; };
@@ -27,7 +27,7 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_PARAMS) readonly buffer Params { S
 layout(std430, binding = HEMO_SPRINGF_BINDING_STATE) readonly buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_NORMALS) buffer Normals { vec4 normals[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_NORMALS) buffer Normals { vec4 normals[]; };  // own slot only
 layout(std430, binding = HEMO_SPRINGF_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_FRAMES) readonly buffer Frames { uvec2 frames[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_VEL) readonly buffer WallVel { vec4 wallVel[]; };
@@ -66,7 +66,7 @@ vec3 hemo_fluid_reaction(uint w) {
     a += (xw.w * twoMu * invRhoFW * dot(d, gradW) / (r2 + etaSq)) * (velocities[f].xyz - vw);
     const float x = dot(d, nrm);
     const float y = length(d - x * nrm);
-    if (x < cutoff && y < wallSpacing && dot(nrm, nrm) > 0.0) {
+    if (x < cutoff && y < wallSpacing && xw.w > 0.0) {  // detached particles (no SPH mass) do not repel
       const float q = max(x / (2.0 * pp.h), 1.0e-3);
       a += nrm * (psi * (1.0 - q) / sqrt(q) * (1.0 - y / wallSpacing)) * accel[f].w;
     }
@@ -122,6 +122,7 @@ void main() {
   vec3 force = hemo_fluid_reaction(slot);
   float stiffness = 0.0;
   uint intact = 0u;
+  float marker = 0.0;
   const uint end = first[id + 1u];
   for (uint e = first[id]; e < end; ++e) {
     const Spring s = springs[springsOf[e]];
@@ -139,16 +140,16 @@ void main() {
     ++intact;
   }
   if (intact == 0u && end > first[id] && positions[slot].w != 0.0) {
-    // All its springs are broken: the particle detaches from the wall for good. With no SPH
-    // mass and no normal it no longer counts in the fluid's density, pressure, viscosity or
-    // repulsion (the wall stops holding the fluid there); it drifts on as debris.
-    positions[slot].w = 0.0;
-    normals[slot] = vec4(0.0);
+    // All its springs are broken: the particle detaches from the wall for good. The integrator
+    // sets its SPH mass to zero (marker accel.w < 0), so it no longer counts in the fluid's
+    // density, pressure, viscosity or repulsion (the wall stops holding the fluid there); it
+    // drifts on as debris.
+    marker = -1.0;
     atomicAdd(counters[HEMO_WALL_COUNTER_DETACHED], 1u);
   } else {
     updateNormal(slot, id);
   }
-  accel[slot] = vec4(force / info.x + pc.gravity.xyz, 0.0);
+  accel[slot] = vec4(force / info.x + pc.gravity.xyz, marker);
   const float acoustic = pc.acousticLength / (pc.c0 + length(velocities[slot].xyz));
   dtLimit[slot] = stiffness > 0.0 ? min(acoustic, pc.timeStepFactor * sqrt(info.x / stiffness)) : acoustic;
 }

@@ -89,7 +89,8 @@ class MassSpring {
   std::uint32_t springCount() const { return springCount_; }
   std::uint32_t readBrokenCount() const;             // since the last reset (a readback)
   // Wall particles detached since the last reset: all their springs broken, so their SPH mass
-  // and normal were set to zero and the fluid no longer sees them (a readback).
+  // is set to zero (by the integrator, at the end of that step) and the fluid no longer sees
+  // them (a readback).
   std::uint32_t readDetachedCount() const;
   std::vector<GpuSpring> readSprings() const;        // with their broken flags (a readback)
 
