@@ -3,6 +3,7 @@
 #include "gpu_test.hpp"
 #include "hemo/reference/sph.hpp"
 #include "hemo/reference/springs.hpp"
+#include "hemo/scene/tube.hpp"
 #include "hemo/sim/sph.hpp"
 #include "interface/sph.h"
 
@@ -481,6 +482,63 @@ TEST_F(WallTest, NormalsFollowTheDeformedWall) {
       EXPECT_LT(glm::length(n - want), 1e-5f) << "normal of point " << ids[slot];
     }
   }
+}
+
+// A tube of two wall layers, periodic along its axis, filled with agitated fluid (random
+// velocities of 0.2 m/s, 10% of c0): for 2,000 steps no fluid particle crosses the wall's
+// inner layer, no spring breaks (none may: no maximum force) and the state stays finite.
+TEST_F(WallTest, TubeKeepsItsFluidInside) {
+  auto rng = rngFor();
+  std::normal_distribution<float> agitation(0.0f, 0.2f);
+  sim::SphSettings s = wallSettings(glm::vec3(0.0f));
+  s.spacing = 0.001f;
+  s.soundSpeed = 2.0f;
+  s.viscosity = 1e-3f;
+  s.periodic = {true, false, false};
+  scene::TubeSpec t;
+  t.length = 9 * s.spacing;  // three neighbour-list radii
+  t.radius = 5 * s.spacing;
+  t.spacing = s.spacing;
+  t.pointMass = 1e-3f;       // a heavy wall (a thousand fluid particles)
+  t.stiffness = 100.0f;
+  t.damping = 0.01f;
+  t.periodic = true;
+  t.fluidMass = s.particleMass();
+  scene::TubeBuild tube = scene::buildTube(t);
+  ASSERT_GT(tube.particles.fluid, 500u);
+  for (std::uint32_t i = tube.wall; i < tube.particles.size(); ++i) {
+    tube.particles.velocities[i] = glm::vec4(agitation(rng), agitation(rng), agitation(rng), float(HEMO_KIND_FLUID));
+  }
+  const auto n = tube.particles.size();
+  store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
+  store_->upload(tube.particles.positions, tube.particles.velocities, tube.particles.ids, tube.particles.normals);
+  const float outer = t.radius + 4.0f * s.spacing;
+  solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, glm::vec3(0.0f, -outer, -outer),
+                                             glm::vec3(t.length, outer, outer), s);
+  solver_->attachWall(tube.network);
+  rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
+  rec_->begin();
+  solver_->recordReset(*rec_);
+  rec_->end();
+  rec_->submitAndWait();
+  steps(2000);
+  const auto status = solver_->readStatus();
+  EXPECT_EQ(status.nonFinite, 0u);
+  EXPECT_EQ(status.neighbourOverflow, 0u);
+  EXPECT_EQ(solver_->wall()->readBrokenCount(), 0u);
+  const auto pos = store_->readPositions();
+  const auto vel = store_->readVelocities();
+  double worst = 0.0;
+  std::size_t fluid = 0;
+  for (std::size_t k = 0; k < pos.size(); ++k) {
+    if (vel[k].w != float(HEMO_KIND_FLUID)) continue;
+    ++fluid;
+    worst = std::max(worst, double(std::hypot(pos[k].y, pos[k].z)));
+  }
+  EXPECT_EQ(fluid, tube.particles.fluid);
+  EXPECT_LT(worst, t.radius + 0.5 * s.spacing) << "a fluid particle crossed the wall's inner layer";
+  RecordProperty("largest_fluid_radius_over_inner_radius", std::to_string(worst / t.radius));
+  std::printf("tube: %.4f s, largest fluid radius %.3f R, %u rebuilds\n", time(), worst / t.radius, solver_->readRebuilds());
 }
 
 // One spring from an anchored point: a mass oscillates with period 2 pi sqrt(m/k) (0.5%).

@@ -68,3 +68,75 @@ TEST(SpringNetwork, BadSpringsAndPointsAreNamed) {
 
 }  // namespace
 }  // namespace hemo::sim
+
+// The tube builder: lattice counts, springs at their built lengths, frames that give the
+// inward normal, anchors at the ends, fluid strictly inside, bad specs named.
+#include "hemo/scene/tube.hpp"
+
+#include <glm/geometric.hpp>
+
+namespace hemo::scene {
+namespace {
+
+TubeSpec smallTube() {
+  TubeSpec t;
+  t.length = 0.012f;
+  t.radius = 0.005f;
+  t.spacing = 0.001f;
+  t.layers = 2;
+  t.pointMass = 1e-4f;
+  t.stiffness = 10.0f;
+  t.fluidMass = 1e-6f;
+  return t;
+}
+
+TEST(Tube, LatticeSpringsFramesAndFluid) {
+  for (bool periodic : {false, true}) {
+    TubeSpec t = smallTube();
+    t.periodic = periodic;
+    const TubeBuild b = buildTube(t);
+    EXPECT_EQ(b.along, 12u);
+    EXPECT_EQ(b.around, 31u);  // round(2 pi 5)
+    EXPECT_EQ(b.wall, 2u * 12u * 31u);
+    EXPECT_EQ(b.network.points.size(), b.wall);
+    const auto& x = b.particles.positions;
+    std::size_t anchored = 0;
+    for (std::uint32_t i = 0; i < b.wall; ++i) {
+      const auto& p = b.network.points[i];
+      anchored += p.anchored;
+      glm::vec3 a = glm::vec3(x[p.frameA]) - glm::vec3(x[i]), c = glm::vec3(x[p.frameB]) - glm::vec3(x[i]);
+      if (periodic) a.x -= t.length * std::round(a.x / t.length), c.x -= t.length * std::round(c.x / t.length);
+      const glm::vec3 n = glm::normalize(glm::cross(a, c));
+      const glm::vec3 inward = glm::normalize(glm::vec3(0.0f, -x[i].y, -x[i].z));
+      EXPECT_GT(glm::dot(n, inward), 0.99f) << "frame of wall point " << i;
+      EXPECT_GT(glm::dot(glm::vec3(b.particles.normals[i]), inward), 0.999f);
+    }
+    EXPECT_EQ(anchored, periodic ? 0u : 2u * 2u * 31u) << "the end rings of both layers";
+    for (const auto& s : b.network.springs) {
+      glm::vec3 d = glm::vec3(x[s.b]) - glm::vec3(x[s.a]);
+      if (periodic) d.x -= t.length * std::round(d.x / t.length);
+      EXPECT_NEAR(s.restLength, glm::length(d), 1e-6f);
+      EXPECT_LT(s.restLength, 2.0f * t.spacing);
+    }
+    for (std::uint32_t i = b.wall; i < b.particles.size(); ++i) {
+      EXPECT_LE(std::hypot(x[i].y, x[i].z), t.radius - 0.5f * t.spacing + 1e-7f);
+    }
+    EXPECT_EQ(b.particles.fluid, 12u * 60u);  // 60 lattice points per slice inside r < 4.5 dp
+  }
+}
+
+TEST(Tube, BadSpecsAreRejected) {
+  TubeSpec t = smallTube();
+  t.radius = 0.0f;
+  EXPECT_THROW(buildTube(t), std::invalid_argument);
+  t = smallTube();
+  t.periodic = true;
+  t.length = 0.0125f;  // 12.5 spacings
+  EXPECT_THROW(buildTube(t), std::invalid_argument);
+  t = smallTube();
+  t.layers = 0;
+  EXPECT_THROW(buildTube(t), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hemo::scene

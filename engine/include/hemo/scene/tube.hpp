@@ -1,0 +1,41 @@
+#pragma once
+// A straight vessel: a tube wall of wall particles on a cylindrical lattice (several layers),
+// its spring network, and the fluid filling it. The tube's axis is parallel to x.
+#include "hemo/scene/builders.hpp"
+#include "hemo/sim/wall.hpp"
+
+#include <glm/vec2.hpp>
+
+namespace hemo::scene {
+
+struct TubeSpec {
+  float x0 = 0.0f;                    // m, where the tube starts
+  float length = 0.0f;                // m, along +x (a whole number of spacings if periodic)
+  glm::vec2 centreYZ{0.0f};           // m, the axis
+  float radius = 0.0f;                // m, inner radius: the fluid fills r < radius
+  float spacing = 0.0f;               // m, particle spacing dp (fluid and wall)
+  std::uint32_t layers = 2;           // wall layers at radii radius + (l + 1/2) dp
+  float pointMass = 0.0f;             // kg, mass of each wall point (for the springs)
+  float stiffness = 0.0f;             // N/m, every spring
+  float damping = 0.0f;               // N s/m, every spring
+  float maxForce = 3.0e38f;           // N, every spring
+  bool periodic = false;              // the lattice wraps along x (length = the period)
+  bool anchorEnds = true;             // non-periodic: the first and last rings are anchored
+  float fluidMass = 0.0f;             // kg, SPH mass of every particle
+};
+
+struct TubeBuild {
+  ParticleSet particles;  // wall particles first (ids 0 .. wall-1), then the fluid
+  sim::SpringNetwork network;
+  std::uint32_t wall = 0;
+  std::uint32_t around = 0;  // points per ring
+  std::uint32_t along = 0;   // rings along x
+};
+
+// Springs: along x, around, both diagonals of every lattice cell of a layer, and from each
+// point to the next layer's point at the same place and its four lattice neighbours there
+// (against shearing and bending of the wall); rest lengths are the built distances. Each
+// point's normal frame gives the inward normal. Throws std::invalid_argument on bad specs.
+TubeBuild buildTube(const TubeSpec& spec);
+
+}  // namespace hemo::scene

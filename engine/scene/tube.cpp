@@ -1,0 +1,114 @@
+#include "hemo/scene/tube.hpp"
+
+#include "interface/sph.h"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace hemo::scene {
+
+TubeBuild buildTube(const TubeSpec& t) {
+  auto positive = [](float v) { return std::isfinite(v) && v > 0.0f; };
+  if (!positive(t.spacing) || !positive(t.radius) || !positive(t.length) || !positive(t.pointMass) ||
+      !positive(t.fluidMass)) {
+    throw std::invalid_argument("tube: spacing, radius, length and masses must be positive");
+  }
+  if (t.layers < 1 || t.layers > 4) throw std::invalid_argument("tube: layers must be 1 to 4");
+  if (t.radius < 2.0f * t.spacing) throw std::invalid_argument("tube: the radius must be at least two spacings");
+  const double dp = t.spacing;
+  const auto along = static_cast<std::uint32_t>(std::lround(t.length / dp));
+  if (t.periodic && std::abs(double(along) * dp - t.length) > 1e-3 * dp) {
+    throw std::invalid_argument("tube: a periodic tube's length must be a whole number of spacings");
+  }
+  const auto around = static_cast<std::uint32_t>(std::lround(2.0 * std::numbers::pi * t.radius / dp));
+  if (along < 3 || around < 8) throw std::invalid_argument("tube: too short or too thin for its spacing");
+  const double dx = double(t.length) / along;
+
+  TubeBuild b;
+  b.along = along;
+  b.around = around;
+  auto id = [&](std::uint32_t i, std::uint32_t k, std::uint32_t l) { return (l * along + i) * around + k; };
+  auto position = [&](std::uint32_t i, std::uint32_t k, std::uint32_t l) {
+    const double r = t.radius + (l + 0.5) * dp;
+    const double theta = 2.0 * std::numbers::pi * k / around;
+    return glm::dvec3(t.x0 + (i + 0.5) * dx, t.centreYZ.x + r * std::cos(theta), t.centreYZ.y + r * std::sin(theta));
+  };
+  // Separation b - a along the tube, across the seam if periodic.
+  auto separation = [&](glm::dvec3 a, glm::dvec3 bb) {
+    glm::dvec3 d = bb - a;
+    if (t.periodic) d.x -= double(t.length) * std::round(d.x / t.length);
+    return d;
+  };
+  ParticleSet& set = b.particles;
+  for (std::uint32_t l = 0; l < t.layers; ++l)
+    for (std::uint32_t i = 0; i < along; ++i)
+      for (std::uint32_t k = 0; k < around; ++k) {
+        const glm::dvec3 p = position(i, k, l);
+        const glm::dvec3 inward = glm::normalize(glm::dvec3(0.0, t.centreYZ.x - p.y, t.centreYZ.y - p.z));
+        set.positions.emplace_back(glm::vec3(p), t.fluidMass);
+        set.velocities.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL));
+        set.normals.emplace_back(glm::vec3(inward), 0.0f);
+        sim::WallPoint w;
+        w.mass = t.pointMass;
+        w.anchored = !t.periodic && t.anchorEnds && (i == 0 || i + 1 == along);
+        // Inward normal: (x_A - x) x (x_B - x) with A the next point along x and B the next
+        // around (x-hat x theta-hat points to the axis); at the last ring, the previous along x
+        // with the order swapped.
+        const bool last = !t.periodic && i + 1 == along;
+        const std::uint32_t alongNext = last ? id(i - 1, k, l) : id((i + 1) % along, k, l);
+        const std::uint32_t aroundNext = id(i, (k + 1) % around, l);
+        w.frameA = last ? aroundNext : alongNext;
+        w.frameB = last ? alongNext : aroundNext;
+        b.network.points.push_back(w);
+      }
+  b.wall = static_cast<std::uint32_t>(set.positions.size());
+  auto link = [&](std::uint32_t a, std::uint32_t c) {
+    const double rest = glm::length(separation(glm::dvec3(set.positions[a]), glm::dvec3(set.positions[c])));
+    b.network.springs.push_back({a, c, float(rest), t.stiffness, t.damping, t.maxForce});
+  };
+  const std::uint32_t rings = t.periodic ? along : along - 1;  // cells along x
+  for (std::uint32_t l = 0; l < t.layers; ++l)
+    for (std::uint32_t i = 0; i < along; ++i)
+      for (std::uint32_t k = 0; k < around; ++k) {
+        const std::uint32_t k1 = (k + 1) % around;
+        link(id(i, k, l), id(i, k1, l));  // around
+        if (i < rings) {
+          const std::uint32_t i1 = (i + 1) % along;
+          link(id(i, k, l), id(i1, k, l));    // along
+          link(id(i, k, l), id(i1, k1, l));   // shear diagonals
+          link(id(i, k1, l), id(i1, k, l));
+        }
+        if (l + 1 < t.layers) {  // to the next layer: straight out and to its four neighbours
+          link(id(i, k, l), id(i, k, l + 1));
+          link(id(i, k, l), id(i, k1, l + 1));
+          link(id(i, k, l), id(i, (k + around - 1) % around, l + 1));
+          if (t.periodic || i + 1 < along) link(id(i, k, l), id((i + 1) % along, k, l + 1));
+          if (t.periodic || i > 0) link(id(i, k, l), id((i + along - 1) % along, k, l + 1));
+        }
+      }
+  // Fluid: the dp lattice inside r < radius - dp/2 (half a spacing from the wall's first layer
+  // at radius + dp/2, so the fluid-wall gap is one spacing as between fluid particles).
+  const int reach = int(std::ceil(t.radius / dp));
+  const double limit = t.radius - 0.5 * dp;
+  for (std::uint32_t i = 0; i < along; ++i)
+    for (int j = -reach; j <= reach; ++j)
+      for (int k = -reach; k <= reach; ++k) {
+        const double y = (j + 0.5) * dp, z = (k + 0.5) * dp;
+        if (y * y + z * z > limit * limit) continue;
+        set.positions.emplace_back(float(t.x0 + (i + 0.5) * dx), float(t.centreYZ.x + y), float(t.centreYZ.y + z), t.fluidMass);
+        set.velocities.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_FLUID));
+        set.normals.emplace_back(0.0f);
+      }
+  set.fluid = set.size() - b.wall;
+  set.boundary = 0;
+  set.ids.resize(set.size());
+  for (std::uint32_t i = 0; i < set.size(); ++i) set.ids[i] = i;
+  b.network.validate();
+  return b;
+}
+
+}  // namespace hemo::scene
