@@ -1,5 +1,6 @@
 // SPH stages on the GPU against the double-precision reference on random inputs.
 #include "gpu_test.hpp"
+#include "sph_model.hpp"
 #include "hemo/reference/sph.hpp"
 #include "hemo/sim/sph.hpp"
 
@@ -60,23 +61,6 @@ Case makeCase(std::mt19937_64& rng, const sim::SphSettings& s, int nx, int ny, i
   return c;
 }
 
-reference::SphModel modelOf(const sim::SphParams& p) {
-  reference::SphModel m;
-  m.gravity = {p.gravity[0], p.gravity[1], p.gravity[2]};
-  m.h = p.h;
-  m.rho0 = p.rho0;
-  m.taitB = p.taitB;
-  m.mu = p.mu;
-  m.psi = p.psi;
-  m.repulsionCutoff = p.repulsionCutoff;
-  m.wallSpacing = p.wallSpacing;
-  m.clampNegativePressure = p.clampNegativePressure != 0;
-  m.sps = p.spsEnabled != 0;
-  m.spsSmagorinsky = p.spsSmagorinsky;
-  m.spsBlinn = p.spsBlinn;
-  m.period = {p.period[0], p.period[1], p.period[2]};
-  return m;
-}
 
 class SphStageTest : public GpuTest {
  protected:

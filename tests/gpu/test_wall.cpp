@@ -1,6 +1,7 @@
 // The vessel wall's mass-spring stages: against the double-precision reference on random
 // networks, and against analytic spring dynamics (period, hanging chain, rupture).
 #include "gpu_test.hpp"
+#include "sph_model.hpp"
 #include "hemo/reference/sph.hpp"
 #include "hemo/reference/springs.hpp"
 #include "hemo/scene/tube.hpp"
@@ -38,22 +39,36 @@ struct WallRun {
 
 class WallTest : public GpuTest {
  protected:
-  // Wall particles at `x` (ids = index) with velocities `v`, the network attached.
-  void setUp(const std::vector<glm::vec3>& x, const std::vector<glm::vec3>& v, const sim::SpringNetwork& net,
-             const sim::SphSettings& s, glm::vec3 lo, glm::vec3 hi) {
-    const auto n = static_cast<std::uint32_t>(x.size());
-    store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
-    std::vector<glm::vec4> pos(n), vel(n);
-    for (std::uint32_t i = 0; i < n; ++i) {
-      pos[i] = glm::vec4(x[i], s.particleMass());
-      vel[i] = glm::vec4(v[i], float(HEMO_KIND_WALL));
-    }
-    store_->upload(pos, vel);
+  // Uploads the particles (ids = index), builds the solver on [lo, hi], attaches the network
+  // and resets.
+  void setUp(const std::vector<glm::vec4>& pos, const std::vector<glm::vec4>& vel, const std::vector<glm::vec4>& normals,
+             const sim::SpringNetwork& net, const sim::SphSettings& s, glm::vec3 lo, glm::vec3 hi) {
+    store_ = std::make_unique<sim::ParticleStore>(ctx(), static_cast<std::uint32_t>(pos.size()));
+    store_->upload(pos, vel, {}, normals);
     solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, lo, hi, s);
     solver_->attachWall(net);
     rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
     rec_->begin();
     solver_->recordReset(*rec_);
+    rec_->end();
+    rec_->submitAndWait();
+  }
+  // Wall particles only, at `x` with velocities `v`.
+  void setUp(const std::vector<glm::vec3>& x, const std::vector<glm::vec3>& v, const sim::SpringNetwork& net,
+             const sim::SphSettings& s, glm::vec3 lo, glm::vec3 hi) {
+    std::vector<glm::vec4> pos(x.size()), vel(x.size());
+    for (std::size_t i = 0; i < x.size(); ++i) {
+      pos[i] = glm::vec4(x[i], s.particleMass());
+      vel[i] = glm::vec4(v[i], float(HEMO_KIND_WALL));
+    }
+    setUp(pos, vel, {}, net, s, lo, hi);
+  }
+  // One force evaluation from scratch (grid, list, density, forces with the wall stages).
+  void evaluate() {
+    rec_->begin();
+    solver_->recordNeighbours(*rec_);
+    solver_->recordDensity(*rec_);
+    solver_->recordForces(*rec_);
     rec_->end();
     rec_->submitAndWait();
   }
@@ -133,12 +148,7 @@ TEST_F(WallTest, RandomNetworkMatchesReference) {
   std::size_t acrossSeam = 0;
   for (const auto& r : ref) acrossSeam += std::abs(dx[r.a].x - dx[r.b].x) > 0.05;
   EXPECT_GT(acrossSeam, 100u);
-  rec_->begin();
-  solver_->recordNeighbours(*rec_);
-  solver_->recordDensity(*rec_);
-  solver_->recordForces(*rec_);
-  rec_->end();
-  rec_->submitAndWait();
+  evaluate();
 
   const std::uint32_t broke = reference::rupture(ref, dx, dv, period);
   EXPECT_EQ(broke, weak);
@@ -236,31 +246,11 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
   s.viscosity = 0.05f;  // large, so the viscous reaction is visible
   const CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.6f);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
-  store_->upload(c.pos, c.vel, {}, c.normals);
-  solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, glm::vec3(-0.05f), glm::vec3(0.15f), s);
-  solver_->attachWall(c.net);
-  rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
-  rec_->begin();
-  solver_->recordReset(*rec_);
-  solver_->recordNeighbours(*rec_);
-  solver_->recordDensity(*rec_);
-  solver_->recordForces(*rec_);
-  rec_->end();
-  rec_->submitAndWait();
+  setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.05f), glm::vec3(0.15f));
+  evaluate();
 
   // References: the fluid model (all wall particles as boundary particles), then the springs.
-  const sim::SphParams& p = solver_->params();
-  reference::SphModel model;
-  model.gravity = {p.gravity[0], p.gravity[1], p.gravity[2]};
-  model.h = p.h;
-  model.rho0 = p.rho0;
-  model.taitB = p.taitB;
-  model.mu = p.mu;
-  model.psi = p.psi;
-  model.repulsionCutoff = p.repulsionCutoff;
-  model.wallSpacing = p.wallSpacing;
-  model.clampNegativePressure = p.clampNegativePressure != 0;
+  const reference::SphModel model = modelOf(solver_->params());
   std::vector<reference::SphParticle> ref(n);
   for (std::uint32_t i = 0; i < n; ++i) {
     ref[i] = {glm::dvec3(c.pos[i]), glm::dvec3(c.vel[i]), glm::dvec3(c.normals[i]), c.pos[i].w, i < c.wall ? 1 : 0};
@@ -324,13 +314,8 @@ TEST_F(WallTest, ParticleWithAllSpringsBrokenDetachesFromTheWall) {
   }
   ASSERT_GE(cut, 5u);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
-  store_->upload(c.pos, c.vel, {}, c.normals);
-  solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, glm::vec3(-0.05f), glm::vec3(0.15f), s);
-  solver_->attachWall(c.net);
-  rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
+  setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.05f), glm::vec3(0.15f));
   rec_->begin();
-  solver_->recordReset(*rec_);
   solver_->recordNeighbours(*rec_);
   solver_->recordDensity(*rec_);
   solver_->recordForces(*rec_);  // breaks the springs and marks the particle
@@ -340,17 +325,7 @@ TEST_F(WallTest, ParticleWithAllSpringsBrokenDetachesFromTheWall) {
   rec_->end();
   rec_->submitAndWait();
 
-  const sim::SphParams& p = solver_->params();
-  reference::SphModel model;
-  model.gravity = {p.gravity[0], p.gravity[1], p.gravity[2]};
-  model.h = p.h;
-  model.rho0 = p.rho0;
-  model.taitB = p.taitB;
-  model.mu = p.mu;
-  model.psi = p.psi;
-  model.repulsionCutoff = p.repulsionCutoff;
-  model.wallSpacing = p.wallSpacing;
-  model.clampNegativePressure = p.clampNegativePressure != 0;
+  const reference::SphModel model = modelOf(solver_->params());
   // The reference at the state of the second evaluation (after the integration step).
   const auto ids = store_->readIds();
   const auto pos = store_->readPositions();
@@ -401,15 +376,7 @@ TEST_F(WallTest, FluidAndFreeWallConserveMomentum) {
   for (auto& point : c.net.points) point.anchored = false;
   for (std::uint32_t i = c.wall; i < c.pos.size(); ++i) c.vel[i].z -= 0.3f;  // towards the sheet
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
-  store_->upload(c.pos, c.vel, {}, c.normals);
-  solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, glm::vec3(-0.2f), glm::vec3(0.3f), s);
-  solver_->attachWall(c.net);
-  rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
-  rec_->begin();
-  solver_->recordReset(*rec_);
-  rec_->end();
-  rec_->submitAndWait();
+  setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.2f), glm::vec3(0.3f));
   auto momentum = [&]() {
     const auto vel = store_->readVelocities();
     const auto pos = store_->readPositions();
@@ -465,12 +432,7 @@ TEST_F(WallTest, NormalsFollowTheDeformedWall) {
   setUp(x, v, net, wallSettings(glm::vec3(0.0f)), glm::vec3(-0.1f), glm::vec3(0.1f));
   // Start every normal at +x, so only the update can produce the rotated +z.
   store_->live().normals.upload(std::vector<glm::vec4>(x.size(), glm::vec4(1.0f, 0.0f, 0.0f, 0.0f)));
-  rec_->begin();
-  solver_->recordNeighbours(*rec_);
-  solver_->recordDensity(*rec_);
-  solver_->recordForces(*rec_);
-  rec_->end();
-  rec_->submitAndWait();
+  evaluate();
   const auto ids = store_->readIds();
   const auto normals = store_->readNormals();
   const glm::vec3 want = rotate(glm::vec3(0.0f, 0.0f, 1.0f));
@@ -509,18 +471,9 @@ TEST_F(WallTest, TubeKeepsItsFluidInside) {
   for (std::uint32_t i = tube.wall; i < tube.particles.size(); ++i) {
     tube.particles.velocities[i] = glm::vec4(agitation(rng), agitation(rng), agitation(rng), float(HEMO_KIND_FLUID));
   }
-  const auto n = tube.particles.size();
-  store_ = std::make_unique<sim::ParticleStore>(ctx(), n);
-  store_->upload(tube.particles.positions, tube.particles.velocities, tube.particles.ids, tube.particles.normals);
   const float outer = t.radius + 4.0f * s.spacing;
-  solver_ = std::make_unique<sim::SphSolver>(ctx(), *store_, glm::vec3(0.0f, -outer, -outer),
-                                             glm::vec3(t.length, outer, outer), s);
-  solver_->attachWall(tube.network);
-  rec_ = std::make_unique<gpu::CommandRecorder>(ctx());
-  rec_->begin();
-  solver_->recordReset(*rec_);
-  rec_->end();
-  rec_->submitAndWait();
+  setUp(tube.particles.positions, tube.particles.velocities, tube.particles.normals, tube.network, s,
+        glm::vec3(0.0f, -outer, -outer), glm::vec3(t.length, outer, outer));
   steps(2000);
   const auto status = solver_->readStatus();
   EXPECT_EQ(status.nonFinite, 0u);

@@ -1,0 +1,27 @@
+#pragma once
+// The reference model (engine/reference/sph.hpp) of a solver's parameter block, for tests that
+// compare GPU stages with the double-precision twins.
+#include "hemo/reference/sph.hpp"
+#include "hemo/sim/sph.hpp"
+
+namespace hemo::test {
+
+inline reference::SphModel modelOf(const sim::SphParams& p) {
+  reference::SphModel m;
+  m.gravity = {p.gravity[0], p.gravity[1], p.gravity[2]};
+  m.h = p.h;
+  m.rho0 = p.rho0;
+  m.taitB = p.taitB;
+  m.mu = p.mu;
+  m.psi = p.psi;
+  m.repulsionCutoff = p.repulsionCutoff;
+  m.wallSpacing = p.wallSpacing;
+  m.clampNegativePressure = p.clampNegativePressure != 0;
+  m.sps = p.spsEnabled != 0;
+  m.spsSmagorinsky = p.spsSmagorinsky;
+  m.spsBlinn = p.spsBlinn;
+  m.period = {p.period[0], p.period[1], p.period[2]};
+  return m;
+}
+
+}  // namespace hemo::test
