@@ -28,6 +28,10 @@ struct SphParams {
   vec4 origin;     // xyz: domain origin (m), where periodic axes start
   vec4 period;     // xyz: period (m) on periodic axes, 0 on the others
   vec4 invPeriod;  // xyz: 1 / period, 0 on non-periodic axes
+  float backgroundPressure;  // Pa, added to the Tait pressure once ramped up
+  float backgroundRamp;      // s, linear ramp of the background pressure from t = 0 (0: none)
+  float reserved0;
+  float reserved1;
 };
 
 // The parameters the neighbour loops use, read once into registers: llvmpipe does not hoist

@@ -40,6 +40,10 @@
 //   vec4  origin             xyz: domain origin (m), where periodic axes start
 //   vec4  period             xyz: period (m) on periodic axes, 0 on the others
 //   vec4  invPeriod          xyz: 1 / period, 0 on non-periodic axes
+//   float backgroundPressure p_bg (Pa): added to the Tait pressure, p = B((rho/rho0)^7 - 1) + p_bg;
+//                            the transmural (lumen) pressure of a vessel
+//   float backgroundRamp     (s): p_bg rises linearly from 0 at t = 0 to its value at this time
+//   float reserved0, reserved1
 
 // sph/mark_fluid_cells.comp: flags (non-zero) every grid cell that holds a fluid particle, so
 // boundary particles with no fluid in their 27 cells skip the list build.
@@ -66,7 +70,8 @@
 #define HEMO_DENSITY_BINDING_STATE 3
 #define HEMO_DENSITY_BINDING_NCOUNT 4
 #define HEMO_DENSITY_BINDING_NLIST 5
-#define HEMO_DENSITY_BINDING_COUNT 6
+#define HEMO_DENSITY_BINDING_CLOCK 6  // the solver's clock (ramped background pressure)
+#define HEMO_DENSITY_BINDING_COUNT 7
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).
@@ -77,7 +82,8 @@
 #define HEMO_BPRESSURE_BINDING_NCOUNT 4
 #define HEMO_BPRESSURE_BINDING_NLIST 5
 #define HEMO_BPRESSURE_BINDING_WALL_VEL 6  // vec4: velocity shown to the viscous term (no-slip)
-#define HEMO_BPRESSURE_BINDING_COUNT 7
+#define HEMO_BPRESSURE_BINDING_CLOCK 7
+#define HEMO_BPRESSURE_BINDING_COUNT 8
 
 // sph/sps_stress.comp: the SPS stress tau/rho of each fluid particle from its strain rate.
 #define HEMO_SPS_BINDING_POSITIONS 0

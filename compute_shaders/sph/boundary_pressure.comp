@@ -3,12 +3,12 @@
 // 2012, "A generalized wall boundary condition for SPH", eq. 27), for a rigid wall at rest:
 //   p_b = ( sum_f p_f W_bf + g . sum_f rho_f (x_b - x_f) W_bf ) / sum_f W_bf
 // with g the gravity + body force, and the density from the inverse Tait equation,
-//   rho_b = rho0 (p_b / B + 1)^(1/7).
+//   rho_b = rho0 ((p_b - p_bg) / B + 1)^(1/7)   (p_bg: background pressure, common/tait.glsl).
 // For the viscous term the boundary particle shows the no-slip velocity of the same paper
 // (eq. 22-23): v = 2 v_wall - sum_f v_f W_bf / sum_f W_bf, so the shear across the wall is
 // that of a velocity that vanishes at the wall (a zero velocity gives about half of it, and
 // the fluid slips).
-// A boundary particle without fluid neighbours keeps (rho0, 0) and its own velocity. The force pass then treats
+// A boundary particle without fluid neighbours keeps (rho0, p_bg) and its own velocity. The force pass then treats
 // boundary particles like fluid ones in the symmetric pressure term, which holds a fluid
 // column at the hydrostatic pressure without the wall having to be penetrated.
 #extension GL_GOOGLE_include_directive : require
@@ -16,6 +16,8 @@
 #include "common/index.glsl"
 #include "common/kernel.glsl"
 #include "common/sph_params.glsl"
+#include "common/clock.glsl"
+#include "common/tait.glsl"
 
 layout(std430, binding = HEMO_BPRESSURE_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
@@ -24,7 +26,11 @@ layout(std430, binding = HEMO_BPRESSURE_BINDING_STATE) buffer State { vec4 state
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_WALL_VEL) writeonly buffer WallVel { vec4 wallVel[]; };
-layout(push_constant) uniform Push { uint n; } pc;
+layout(std430, binding = HEMO_BPRESSURE_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
+layout(push_constant) uniform Push {
+  uint n;
+  uint clockIn;
+} pc;
 
 void main() {
   const uint b = hemo_global_index();
@@ -57,7 +63,7 @@ void main() {
     sumV += velocities[f].xyz * w;
   }
   if (sumW <= 0.0) {
-    state[b] = vec4(params.rho0, 0.0, 0.0, 0.0);
+    state[b] = vec4(params.rho0, hemo_background_pressure(clocks[pc.clockIn].time, params), 0.0, 0.0);
     wallVel[b] = vec4(vb.xyz, 0.0);
     return;
   }
@@ -66,6 +72,6 @@ void main() {
   if (params.clampNegativePressure != 0u) {
     p = max(p, 0.0);
   }
-  const float rho = params.rho0 * pow(max(p / params.taitB + 1.0, 1.0e-6), 1.0 / 7.0);
+  const float rho = hemo_tait_density(p, hemo_background_pressure(clocks[pc.clockIn].time, params), params);
   state[b] = vec4(rho, p, 0.0, 0.0);
 }

@@ -3,13 +3,15 @@
 // particles act as virtual fluid particles so the density does not drop at walls), and the
 // Tait pressure (Monaghan 1994; Batchelor's gamma = 7):
 //   rho_i = sum_j m_j W(|x_i - x_j|, h)   (j includes i)
-//   p_i   = B ((rho_i / rho0)^7 - 1),  B = c0^2 rho0 / 7,  optionally clamped at 0
+//   p_i   = B ((rho_i / rho0)^7 - 1) + p_bg,  B = c0^2 rho0 / 7,  optionally clamped at 0
+// with p_bg the (ramped) background pressure of common/tait.glsl.
 // Fluid particles only; boundary particles get theirs from boundary_pressure.comp.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/kernel.glsl"
 #include "common/sph_params.glsl"
+#include "common/clock.glsl"
 #include "common/tait.glsl"
 
 layout(std430, binding = HEMO_DENSITY_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
@@ -18,7 +20,11 @@ layout(std430, binding = HEMO_DENSITY_BINDING_PARAMS) readonly buffer Params { S
 layout(std430, binding = HEMO_DENSITY_BINDING_STATE) writeonly buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
-layout(push_constant) uniform Push { uint n; } pc;
+layout(std430, binding = HEMO_DENSITY_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
+layout(push_constant) uniform Push {
+  uint n;
+  uint clockIn;  // the record this step reads
+} pc;
 
 void main() {
   const uint i = hemo_global_index();
@@ -37,5 +43,6 @@ void main() {
       rho += pj.w * hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
     }
   }
-  state[i] = vec4(rho, hemo_tait_pressure(rho, params), 0.0, 0.0);
+  const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
+  state[i] = vec4(rho, hemo_tait_pressure(rho, background, params), 0.0, 0.0);
 }

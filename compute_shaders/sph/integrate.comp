@@ -18,6 +18,7 @@
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/sph_params.glsl"
+#include "common/clock.glsl"
 
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POSITIONS) buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_VELOCITIES) buffer Velocities { vec4 velocities[]; };
@@ -26,12 +27,6 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_PARAMS) readonly buffer Params {
 layout(std430, binding = HEMO_INTEGRATE_BINDING_DT) readonly buffer Dt { vec2 dtMinMax; };
 // Two clock records: this step reads clocks[in] and invocation 0 writes clocks[1 - in], so no
 // invocation can see a half-advanced clock (workgroups run in any order).
-struct ClockRecord {
-  float time;
-  float compensation;
-  float lastDt;
-  uint steps;
-};
 layout(std430, binding = HEMO_INTEGRATE_BINDING_CLOCK) buffer Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STATUS) buffer Status { uint status[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_LOG) writeonly buffer Log { vec2 stepLog[]; };

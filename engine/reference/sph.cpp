@@ -40,7 +40,7 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
       const double r = glm::length(separation(m, particles[i].x, pj.x));
       if (r < support) rho += pj.mass * kernelW(r, m.h);
     }
-    double p = m.taitB * (std::pow(rho / m.rho0, 7.0) - 1.0);
+    double p = m.taitB * (std::pow(rho / m.rho0, 7.0) - 1.0) + m.backgroundPressure;
     if (m.clampNegativePressure) p = std::max(p, 0.0);
     out[i] = {rho, p};
   }
@@ -60,12 +60,12 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
       sumRhoR += out[f].x * d * w;
     }
     if (sumW <= 0.0) {
-      out[b] = {m.rho0, 0.0};
+      out[b] = {m.rho0, m.backgroundPressure};
       continue;
     }
     double p = (sumP + glm::dot(m.gravity, sumRhoR)) / sumW;
     if (m.clampNegativePressure) p = std::max(p, 0.0);
-    out[b] = {m.rho0 * std::pow(std::max(p / m.taitB + 1.0, 1e-6), 1.0 / 7.0), p};
+    out[b] = {m.rho0 * std::pow(std::max((p - m.backgroundPressure) / m.taitB + 1.0, 1e-6), 1.0 / 7.0), p};
   }
   return out;
 }

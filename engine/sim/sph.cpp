@@ -16,6 +16,9 @@ constexpr std::uint32_t kWorkgroup = 256;
 struct CountPush {
   std::uint32_t n;
 };
+struct ClockedPush {
+  std::uint32_t n, clockIn;
+};
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
@@ -55,6 +58,9 @@ void SphSettings::validate() const {
   require(std::isfinite(dampingUntil) && dampingUntil >= 0.0f, "settling time must be >= 0 (s)");
   require(std::isfinite(smagorinsky) && smagorinsky >= 0.0f && smagorinsky <= 1.0f, "Smagorinsky constant must be in [0, 1]");
   require(std::isfinite(blinn) && blinn >= 0.0f && blinn <= 1.0f, "Blinn constant must be in [0, 1]");
+  require(std::isfinite(backgroundPressure), "background pressure must be finite (Pa)");
+  require(std::isfinite(backgroundPressureRamp) && backgroundPressureRamp >= 0.0f,
+          "background pressure ramp must be >= 0 (s)");
 }
 
 float SphSettings::particleMass() const {
@@ -117,6 +123,8 @@ SphParams makeParams(const SphSettings& s) {
   p.spsEnabled = s.sps ? 1u : 0u;
   p.spsSmagorinsky = float(double(s.smagorinsky) * s.spacing * double(s.smagorinsky) * s.spacing);
   p.spsBlinn = float(double(s.blinn) * s.spacing * s.spacing);
+  p.backgroundPressure = s.backgroundPressure;
+  p.backgroundRamp = s.backgroundPressureRamp;
   return p;
 }
 
@@ -166,8 +174,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   auto& cache = context.pipelines();
   markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
-  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
-  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {}});
+  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {}});
   spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
@@ -188,14 +196,16 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
                                    {HEMO_DENSITY_BINDING_STATE, &state_},
                                    {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
-                                   {HEMO_DENSITY_BINDING_NLIST, &nlist_}});
+                                   {HEMO_DENSITY_BINDING_NLIST, &nlist_},
+                                   {HEMO_DENSITY_BINDING_CLOCK, &clock_}});
   boundarySet_ = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
                                              {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
                                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
                                              {HEMO_BPRESSURE_BINDING_STATE, &state_},
                                              {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
                                              {HEMO_BPRESSURE_BINDING_NLIST, &nlist_},
-                                             {HEMO_BPRESSURE_BINDING_WALL_VEL, &wallVel_}});
+                                             {HEMO_BPRESSURE_BINDING_WALL_VEL, &wallVel_},
+                                             {HEMO_BPRESSURE_BINDING_CLOCK, &clock_}});
   spsSet_ = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
                                  {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
@@ -267,10 +277,10 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQuerie
 
 void SphSolver::recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
-  rec.dispatch(*density_, densitySet_, CountPush{n}, density_->groupsFor(n));
+  rec.dispatch(*density_, densitySet_, ClockedPush{n, clockParity_}, density_->groupsFor(n));
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
-  rec.dispatch(*boundaryPressure_, boundarySet_, CountPush{n}, boundaryPressure_->groupsFor(n));
+  rec.dispatch(*boundaryPressure_, boundarySet_, ClockedPush{n, clockParity_}, boundaryPressure_->groupsFor(n));
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "boundary pressure");
 }

@@ -4,9 +4,12 @@
 #include "hemo/reference/sph.hpp"
 #include "hemo/sim/sph.hpp"
 
+#include <algorithm>
+
 namespace hemo::test {
 
-inline reference::SphModel modelOf(const sim::SphParams& p) {
+// `time`: the solver's clock (s), for the ramped background pressure.
+inline reference::SphModel modelOf(const sim::SphParams& p, double time = 0.0) {
   reference::SphModel m;
   m.gravity = {p.gravity[0], p.gravity[1], p.gravity[2]};
   m.h = p.h;
@@ -21,6 +24,8 @@ inline reference::SphModel modelOf(const sim::SphParams& p) {
   m.spsSmagorinsky = p.spsSmagorinsky;
   m.spsBlinn = p.spsBlinn;
   m.period = {p.period[0], p.period[1], p.period[2]};
+  const double ramp = p.backgroundRamp > 0.0f ? std::clamp(time / p.backgroundRamp, 0.0, 1.0) : 1.0;
+  m.backgroundPressure = p.backgroundPressure * ramp;
   return m;
 }
 

@@ -100,9 +100,18 @@ class SphStageTest : public GpuTest {
 
 TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
   auto rng = rngFor();
-  for (bool clamp : {true, false}) {
+  // Clamped, unclamped, and clamped with a background pressure (a vessel's lumen pressure) of
+  // about 5% of B, so the clamp cuts at a negative Tait pressure.
+  struct Variant {
+    bool clamp;
+    float background;
+  };
+  for (const Variant variant : {Variant{true, 0.0f}, Variant{false, 0.0f}, Variant{true, 3000.0f}}) {
+    const bool clamp = variant.clamp;
     sim::SphSettings s = settings();
     s.clampNegativePressure = clamp;
+    s.backgroundPressure = variant.background;
+    SCOPED_TRACE(testing::Message() << "clamp " << clamp << ", background " << variant.background << " Pa");
     const Case c = makeCase(rng, s, 9, 8, 7);
     const auto n = static_cast<std::uint32_t>(c.pos.size());
     const Stages st = runStages(c, s, glm::vec3(0.15f));
@@ -143,6 +152,9 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
     EXPECT_GT(positive, 50u) << "the case must exercise positive pressure";
     if (!clamp) {
       EXPECT_GT(negative, 10u) << "the free surface must give negative pressure without clamping";
+    }
+    if (variant.background > 0.0f) {
+      EXPECT_EQ(model.backgroundPressure, variant.background);
     }
     const auto status = solver.readStatus();
     EXPECT_EQ(status.neighbourOverflow, 0u);

@@ -31,6 +31,7 @@ struct SphModel {
   double spsSmagorinsky = 0.0;   // (C_s dp)^2
   double spsBlinn = 0.0;         // C_I dp^2
   glm::dvec3 period{0.0};        // m on periodic axes (minimum image), 0 on the others
+  double backgroundPressure = 0.0;  // Pa, added to the Tait pressure (already ramped)
 };
 
 // x_i - x_j, by the minimum image on periodic axes.

@@ -57,6 +57,9 @@ struct SphSettings {
   float smagorinsky = 0.12f;        // C_s
   float blinn = 0.0066f;            // C_I
   glm::bvec3 periodic{false};       // axes on which the domain [min, max) is periodic
+  float backgroundPressure = 0.0f;  // p_bg (Pa) added to the Tait pressure: a vessel's lumen
+                                    // (transmural) pressure; 0 for free surfaces
+  float backgroundPressureRamp = 0.0f;  // s: p_bg rises linearly from 0 over this time (0: at once)
 
   float h() const { return smoothingRatio * spacing; }
   float supportRadius() const { return 2.0f * h(); }
@@ -87,8 +90,9 @@ struct SphParams {
   float spsSmagorinsky, spsBlinn;
   std::uint32_t listStride;  // set by the solver: the store's capacity
   float origin[4], period[4], invPeriod[4];  // set by the solver from its grid
+  float backgroundPressure, backgroundRamp, reserved0, reserved1;
 };
-static_assert(sizeof(SphParams) == 160);
+static_assert(sizeof(SphParams) == 176);
 
 SphParams makeParams(const SphSettings& s);
 
