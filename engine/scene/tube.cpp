@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -109,6 +110,23 @@ TubeBuild buildTube(const TubeSpec& t) {
   for (std::uint32_t i = 0; i < set.size(); ++i) set.ids[i] = i;
   b.network.validate();
   return b;
+}
+
+double hoopRupturePressure(const TubeSpec& t, const TubeBuild& b) {
+  const auto& pos = b.particles.positions;
+  auto radial = [&](std::uint32_t i) {
+    return glm::normalize(glm::dvec3(0.0, double(pos[i].y) - t.centreYZ.x, double(pos[i].z) - t.centreYZ.y));
+  };
+  double sumKg2 = 0.0, uStar = std::numeric_limits<double>::infinity();
+  for (const sim::Spring& s : b.network.springs) {
+    glm::dvec3 d = glm::dvec3(pos[s.b]) - glm::dvec3(pos[s.a]);
+    if (t.periodic) d.x -= double(t.length) * std::round(d.x / t.length);
+    const double g = glm::dot(glm::normalize(d), radial(s.b) - radial(s.a));  // dL/du
+    sumKg2 += double(s.stiffness) * g * g;
+    if (g > 1e-9 && s.stiffness > 0.0f) uStar = std::min(uStar, double(s.maxForce) / (double(s.stiffness) * g));
+  }
+  if (!std::isfinite(uStar) || sumKg2 <= 0.0) throw std::invalid_argument("tube: no spring stretches when it widens");
+  return uStar * sumKg2 / (2.0 * std::numbers::pi * double(t.radius) * double(t.length));
 }
 
 }  // namespace hemo::scene

@@ -38,4 +38,16 @@ struct TubeBuild {
 // point's normal frame gives the inward normal. Throws std::invalid_argument on bad specs.
 TubeBuild buildTube(const TubeSpec& spec);
 
+// The rupture pressure that Laplace's law predicts for this spring layout (Pa): the lumen
+// pressure P at which the most stretched spring reaches its maximum force when the tube
+// widens uniformly. Virtual work for a uniform radial displacement u of every wall point:
+// spring s stretches by g_s u (g_s = dL_s/du, from the built geometry), so equilibrium with
+// the pressure on the inner surface 2 pi R L gives P(u) = u sum_s k_s g_s^2 / (2 pi R L), and
+// the first spring breaks at u* = min_s f_max,s / (k_s g_s). For the default layout (two
+// layers, diagonals of cell dx x c) this is close to P* = 5 f_max / (R dx): per lattice cell,
+// the hoop spring, the two shear diagonals of each layer and the two between-layer diagonals
+// share the hoop load (docs/physics.md). Meant for periodic tubes (anchored ends stiffen the
+// ends). Throws std::invalid_argument if no spring stretches.
+double hoopRupturePressure(const TubeSpec& spec, const TubeBuild& tube);
+
 }  // namespace hemo::scene
