@@ -116,8 +116,8 @@ int main(int argc, char** argv) {
     ctxOptions.device = args.text("--device");
     hemo::gpu::Context ctx(ctxOptions);
     hemo::sim::Simulation sim(ctx, scene);
-    std::fprintf(stderr, "hemo-run: %s on %s: %u fluid + %u boundary particles\n", scene.name.c_str(),
-                 ctx.info().name.c_str(), sim.fluidParticles(), sim.boundaryParticles());
+    std::fprintf(stderr, "hemo-run: %s on %s: %u fluid + %u boundary + %u wall particles, %u springs\n", scene.name.c_str(),
+                 ctx.info().name.c_str(), sim.fluidParticles(), sim.boundaryParticles(), sim.wallParticles(), sim.springs());
     const bool tty = isatty(2);
     double lastPrint = -1.0;
     options.onBatch = [&](const hemo::sim::Progress& p) {
@@ -162,10 +162,10 @@ int main(int argc, char** argv) {
                {"device", ctx.info().name},
                {"fluid_particles", sim.fluidParticles()},
                {"boundary_particles", sim.boundaryParticles()},
-               {"wall_particles", 0},
-               {"springs", 0},
-               {"broken_springs", 0},
-               {"detached_particles", 0},
+               {"wall_particles", sim.wallParticles()},
+               {"springs", sim.springs()},
+               {"broken_springs", sim.brokenSprings()},
+               {"detached_particles", sim.detachedParticles()},
                {"escaped_particles", finite ? sim.escapedParticles() : 0},
                {"lost_particles", 0},
                {"steps", sim.steps()},

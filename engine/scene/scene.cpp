@@ -53,7 +53,9 @@ const std::vector<Field>& schema() {
            {"turbulence", Kind::Choice, "", 0, 0, false, "none", "Sub-particle-scale turbulence model (Dalrymple & Rogers 2006), or none.", {"none", "sps"}},
            {"smagorinsky_constant", Kind::Number, "1", 0, 1, false, 0.12, "C_s of the SPS eddy viscosity nu_t = (C_s dp)^2 |S|."},
            {"blinn_constant", Kind::Number, "1", 0, 1, false, 0.0066, "C_I of the SPS isotropic term -2/3 C_I dp^2 |S|^2."},
-           {"blocks", Kind::Objects, "", 1, kInf, false, nullptr, "Boxes filled with fluid particles on the dp lattice.", {},
+           {"background_pressure_Pa", Kind::Number, "Pa", 0, 1e8, false, 0.0, "Lumen (background) pressure p_bg added to the Tait pressure of every particle: what pressurises a vessel. Uniform, so it pushes only where the fluid meets a wall or ends."},
+           {"background_pressure_ramp_s", Kind::Number, "s", 0, 1e6, false, 0.0, "p_bg rises linearly from 0 over this time (0: from the start)."},
+           {"blocks", Kind::Objects, "", 0, kInf, false, Json::array(), "Boxes filled with fluid particles on the dp lattice (a vessel fills itself).", {},
             {
                 {"min_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Lower corner."},
                 {"max_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Upper corner."},
@@ -71,6 +73,23 @@ const std::vector<Field>& schema() {
             }},
            {"repulsion_scale", Kind::Number, "1", 0, 10, false, 0.01, "Psi = scale c0^2 / (2h): strength of the repulsive boundary force."},
            {"repulsion_cutoff_ratio", Kind::Number, "1", 0, 6, true, 0.5, "D = ratio x dp: no repulsion beyond this normal distance (at most 2h/dp). Below the rest spacing (1) so it guards against penetration without carrying the fluid at rest."},
+       }},
+      {"vessel", Kind::Section, "", 0, 0, false, Json::object(), "A vessel wall of wall particles joined by springs, filled with fluid; its axis runs along +x. Omit it for scenes without walls (no spring stage runs).", {},
+       {
+           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, or none.", {"none", "tube", "saccular_aneurysm"}},
+           {"start_m", Kind::Vec3, "m", -1e6, 1e6, false, Json::array({0.0, 0.0, 0.0}), "Start of the axis. With a periodic x axis the tube spans the domain: start x = domain min x."},
+           {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length along +x (with a periodic x axis: the domain's period)."},
+           {"radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Inner radius; the wall's layers lie at radius + (l + 1/2) dp."},
+           {"layers", Kind::Integer, "1", 1, 4, false, 2, "Wall layers."},
+           {"point_mass_kg", Kind::Number, "kg", 0, 1e6, false, 0.0, "Mass of each wall point (for the springs)."},
+           {"stiffness_N_m", Kind::Number, "N/m", 0, 1e12, false, 0.0, "Stiffness of every tube spring."},
+           {"damping_N_s_m", Kind::Number, "N s/m", 0, 1e12, false, 0.0, "Damping of every spring, along the spring."},
+           {"max_force_N", Kind::Number, "N", 0, 1e30, false, 1e30, "A spring whose tension exceeds this breaks, for good."},
+           {"anchor_ends", Kind::Bool, "", 0, 0, false, true, "Fix the first and last rings of a non-periodic tube."},
+           {"sac_radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "saccular_aneurysm: inner radius of the sac."},
+           {"neck_width_m", Kind::Number, "m", 0, 1e3, false, 0.0, "saccular_aneurysm: width of the opening between tube and sac."},
+           {"sac_stiffness_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "saccular_aneurysm: sac springs' stiffness / the tube's."},
+           {"sac_strength_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "saccular_aneurysm: sac springs' maximum force / the tube's."},
        }},
       {"forces", Kind::Section, "", 0, 0, false, Json::object(), "Body forces.", {},
        {
@@ -238,6 +257,72 @@ bool inside(const Box& inner, const Box& outer, float slack) {
   return true;
 }
 
+// `v`: the checked section (defaults filled in); `raw`: what the file gave.
+void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
+  const std::string shape = v["shape"].get<std::string>();
+  auto given = [&](const char* key) { return raw.contains(key); };
+  if (shape == "none") {
+    for (auto it = raw.begin(); it != raw.end(); ++it) {
+      if (it.key() != "shape") c.fail("vessel." + it.key(), "is set but vessel.shape is not (\"tube\" or \"saccular_aneurysm\")");
+    }
+    return;
+  }
+  Vessel w;
+  w.shape = shape == "tube" ? Vessel::Shape::Tube : Vessel::Shape::SaccularAneurysm;
+  w.start = vec3(v["start_m"]);
+  w.length = v["length_m"].get<float>();
+  w.radius = v["radius_m"].get<float>();
+  w.layers = v["layers"].get<std::uint32_t>();
+  w.pointMass = v["point_mass_kg"].get<float>();
+  w.stiffness = v["stiffness_N_m"].get<float>();
+  w.damping = v["damping_N_s_m"].get<float>();
+  w.maxForce = v["max_force_N"].get<float>();
+  w.anchorEnds = v["anchor_ends"].get<bool>();
+  w.sacRadius = v["sac_radius_m"].get<float>();
+  w.neckWidth = v["neck_width_m"].get<float>();
+  w.sacStiffnessScale = v["sac_stiffness_scale"].get<float>();
+  w.sacStrengthScale = v["sac_strength_scale"].get<float>();
+  for (const char* key : {"length_m", "radius_m", "point_mass_kg", "stiffness_N_m"}) {
+    if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
+  }
+  if (w.shape == Vessel::Shape::Tube) {
+    for (const char* key : {"sac_radius_m", "neck_width_m", "sac_stiffness_scale", "sac_strength_scale"}) {
+      if (given(key)) c.fail(std::string("vessel.") + key, "only applies to vessel.shape \"saccular_aneurysm\"");
+    }
+  } else {
+    for (const char* key : {"sac_radius_m", "neck_width_m"}) {
+      if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a saccular_aneurysm");
+    }
+  }
+  if (w.radius < 2.0f * s.sph.spacing) c.fail("vessel.radius_m", "must be at least two particle spacings (" + fmt(2.0 * s.sph.spacing) + " m)");
+  w.periodic = s.sph.periodic[0];
+  if (s.sph.periodic[1] || s.sph.periodic[2]) c.fail("domain.periodic", "a vessel allows only x to be periodic (its axis)");
+  const float slack = 1e-4f * s.sph.spacing;
+  if (w.periodic) {
+    if (std::abs(w.start.x - s.domain.min.x) > slack || std::abs(w.start.x + w.length - s.domain.max.x) > slack) {
+      c.fail("vessel.length_m", "a periodic vessel must span the domain along x (start_m x = domain min x, length_m = " +
+                                    fmt(double(s.domain.max.x) - s.domain.min.x) + " m)");
+    }
+  }
+  // The wall's outer layer reaches radius + layers dp; one more spacing of room around it.
+  const float room = float(w.layers + 1) * s.sph.spacing;
+  float halfWidth = w.radius + room, top = w.radius + room;
+  if (w.shape == Vessel::Shape::SaccularAneurysm) {
+    const double hw = 0.5 * w.neckWidth;
+    if (hw >= w.radius || hw >= w.sacRadius) c.fail("vessel.neck_width_m", "must be narrower than the tube's and the sac's diameters");
+    const double centre = std::sqrt(double(w.radius) * w.radius - hw * hw) + std::sqrt(double(w.sacRadius) * w.sacRadius - hw * hw);
+    top = float(centre) + w.sacRadius + room;
+    halfWidth = std::max(halfWidth, w.sacRadius + room);
+  }
+  const Box need{glm::vec3(w.start.x, w.start.y - halfWidth, w.start.z - w.radius - room),
+                 glm::vec3(w.start.x + w.length, w.start.y + halfWidth, w.start.z + top)};
+  if (!inside(need, s.domain, slack)) {
+    c.fail("vessel", "the vessel with its wall (x " + fmt(need.min.x) + ".." + fmt(need.max.x) + ", y " + fmt(need.min.y) + ".." +
+                         fmt(need.max.y) + ", z " + fmt(need.min.z) + ".." + fmt(need.max.z) + " m) reaches outside the domain");
+  }
+  s.vessel = w;
+}
+
 }  // namespace
 
 void checkPeriodicAxes(const Scene& s, const std::string& source, int onlyAxis) {
@@ -298,6 +383,8 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.sph.sps = fluid["turbulence"].get<std::string>() == "sps";
   s.sph.smagorinsky = fluid["smagorinsky_constant"].get<float>();
   s.sph.blinn = fluid["blinn_constant"].get<float>();
+  s.sph.backgroundPressure = fluid["background_pressure_Pa"].get<float>();
+  s.sph.backgroundPressureRamp = fluid["background_pressure_ramp_s"].get<float>();
   for (std::size_t k = 0; k < fluid["blocks"].size(); ++k) {
     const std::string p = "fluid.blocks[" + std::to_string(k) + "]";
     const Json& b = fluid["blocks"][k];
@@ -338,6 +425,8 @@ Scene parseScene(const std::string& text, const std::string& source) {
     for (auto& t : s.tanks) t.periodic[a] = true;
   }
   checkPeriodicAxes(s, source);
+  parseVessel(c, j["vessel"], raw.contains("vessel") ? raw["vessel"] : Json::object(), s);
+  if (s.blocks.empty() && !s.vessel) c.fail("fluid.blocks", "needs at least 1 entry (or a vessel to fill)");
   for (std::size_t k = 0; k < s.blocks.size(); ++k) {
     if (!inside(s.blocks[k].box, s.domain, slack)) {
       c.fail("fluid.blocks[" + std::to_string(k) + "]", "lies (partly) outside the domain");

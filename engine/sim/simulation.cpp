@@ -13,7 +13,7 @@ std::string mib(std::uint64_t bytes) { return std::to_string(bytes / (1024 * 102
 
 Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : context_(&context), scene_(scene) {
   // Fit check before building anything: the largest per-particle buffer is the neighbour list.
-  const std::uint64_t count = scene::countParticles(scene);
+  const std::uint64_t count = scene::countSceneParticles(scene);
   const std::uint64_t listBytes = count * scene.sph.neighbourCapacity * 4;
   const std::uint64_t limit = context.limits().maxStorageBufferRange;
   if (count > 0xffffffffull / 2 || listBytes > limit) {
@@ -23,14 +23,18 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
         << mib(limit) << " per buffer (increase the spacing or lower particles.neighbour_capacity)";
     throw scene::SceneError(scene.name + ": " + msg.str());
   }
-  const scene::ParticleSet set = scene::buildParticles(scene);
-  if (set.fluid == 0) throw scene::SceneError(scene.name + ": fluid.blocks: the blocks hold no particles");
+  const scene::SceneBuild build = scene::buildScene(scene);
+  const scene::ParticleSet& set = build.particles;
+  if (set.fluid == 0) throw scene::SceneError(scene.name + ": fluid.blocks: the scene holds no fluid particles");
   fluid_ = set.fluid;
   boundary_ = set.boundary;
+  wall_ = build.wall;
+  springs_ = build.network ? static_cast<std::uint32_t>(build.network->springs.size()) : 0;
   store_ = std::make_unique<ParticleStore>(context, set.size());
   store_->upload(set.positions, set.velocities, set.ids, set.normals);
   solver_ = std::make_unique<SphSolver>(context, *store_, scene.domain.min, scene.domain.max, scene.sph,
                                         scene.stepsPerBatch);
+  if (build.network) solver_->attachWall(*build.network);  // a scene without walls runs no wall stage
   recorder_ = std::make_unique<gpu::CommandRecorder>(context);
   recorder_->begin();
   solver_->recordReset(*recorder_);
@@ -161,15 +165,13 @@ std::uint32_t Simulation::escapedParticles() const {
   const auto vel = store_->readVelocities();
   std::uint32_t escaped = 0;
   for (std::size_t i = 0; i < pos.size(); ++i) {
-    if (vel[i].w != float(ParticleKind::Fluid)) continue;
-    for (int a = 0; a < 3; ++a) {
-      if (!(pos[i][a] >= scene_.domain.min[a] && pos[i][a] <= scene_.domain.max[a])) {
-        ++escaped;
-        break;
-      }
-    }
+    if (vel[i].w == float(ParticleKind::Fluid) && scene::escaped(scene_, glm::vec3(pos[i]))) ++escaped;
   }
   return escaped;
 }
+
+std::uint32_t Simulation::brokenSprings() const { return solver_->wall() ? solver_->wall()->readBrokenCount() : 0; }
+
+std::uint32_t Simulation::detachedParticles() const { return solver_->wall() ? solver_->wall()->readDetachedCount() : 0; }
 
 }  // namespace hemo::sim

@@ -8,6 +8,7 @@
 #include <glm/vector_relational.hpp>
 
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -39,6 +40,28 @@ struct Tank {
   glm::bvec3 periodic{false};  // set from the domain: no walls across these axes
 };
 
+// A vessel built of wall particles and springs, its axis along +x from `start`; filled with
+// fluid. Shapes: a straight tube, or a tube with a saccular aneurysm (a spherical sac on its
+// +z side, halfway along). Periodic along x when the domain is (the tube then spans it).
+struct Vessel {
+  enum class Shape { Tube, SaccularAneurysm };
+  Shape shape = Shape::Tube;
+  glm::vec3 start{0.0f};       // m, where the axis starts
+  float length = 0.0f;         // m
+  float radius = 0.0f;         // m, inner radius (the fluid fills r < radius)
+  std::uint32_t layers = 2;    // wall layers
+  float pointMass = 0.0f;      // kg per wall point
+  float stiffness = 0.0f;      // N/m per spring
+  float damping = 0.0f;        // N s/m per spring
+  float maxForce = 0.0f;       // N: a spring breaks above this tension
+  bool anchorEnds = true;      // non-periodic tubes: end rings fixed
+  bool periodic = false;       // set from the domain
+  float sacRadius = 0.0f;      // m (saccular aneurysm)
+  float neckWidth = 0.0f;      // m
+  float sacStiffnessScale = 1.0f;
+  float sacStrengthScale = 1.0f;
+};
+
 struct Scene {
   std::string name;
   std::string description;
@@ -46,6 +69,7 @@ struct Scene {
   float expectedMaxSpeed = 0.0f;  // m/s (c0 = 10x this unless given)
   std::vector<FluidBlock> blocks;
   std::vector<Tank> tanks;
+  std::optional<Vessel> vessel;
   Box domain;
   double endTime = 1.0;             // s
   std::uint32_t stepsPerBatch = 64;  // steps recorded per submit

@@ -2,7 +2,7 @@
 // A scene on the GPU: builds its particles, assembles the step from what the scene needs,
 // and runs it in batches of many steps per submit. The host waits once per batch (to read
 // the clock and the status), never per step.
-#include "hemo/scene/builders.hpp"
+#include "hemo/scene/build.hpp"
 #include "hemo/sim/sph.hpp"
 
 #include <glm/vec2.hpp>
@@ -68,8 +68,14 @@ class Simulation {
   std::uint32_t boundaryParticles() const { return boundary_; }
   std::uint64_t steps() const { return steps_; }
   double time() const;
-  // Fluid particles outside the scene's domain now.
+  std::uint32_t wallParticles() const { return wall_; }
+  std::uint32_t springs() const { return springs_; }
+  // Fluid particles that have left the scene now: outside the domain, or outside the
+  // vessel's wall (through a rupture).
   std::uint32_t escapedParticles() const;
+  // Springs broken and wall particles detached so far (0 without a wall).
+  std::uint32_t brokenSprings() const;
+  std::uint32_t detachedParticles() const;
   ParticleStore& store() { return *store_; }
   SphSolver& solver() { return *solver_; }
 
@@ -80,6 +86,8 @@ class Simulation {
   scene::Scene scene_;
   std::uint32_t fluid_ = 0;
   std::uint32_t boundary_ = 0;
+  std::uint32_t wall_ = 0;
+  std::uint32_t springs_ = 0;
   std::unique_ptr<ParticleStore> store_;
   std::unique_ptr<SphSolver> solver_;
   std::unique_ptr<gpu::CommandRecorder> recorder_;

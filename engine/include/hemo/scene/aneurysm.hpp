@@ -1,0 +1,51 @@
+#pragma once
+// A saccular aneurysm: a spherical sac on the side (+z) of a straight tube (the seed paper's
+// Fig. 3 model). The tube part is buildTube's lattice and springs; the sac is a layered
+// Fibonacci sphere whose points are joined to their nearest neighbours (a triangulated
+// membrane) and to the tube's points at the neck. The sac's springs may be softer and weaker
+// than the tube's: aneurysm walls are thinner and their collagen is degraded.
+#include "hemo/scene/tube.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <cstdint>
+#include <vector>
+
+namespace hemo::scene {
+
+struct AneurysmSpec {
+  TubeSpec tube;                   // the parent vessel (its springs' parameters too)
+  float sacRadius = 0.0f;          // m, inner radius of the sac
+  float neckWidth = 0.0f;          // m, diameter of the opening between tube and sac
+  float sacStiffnessScale = 1.0f;  // sac springs: stiffness = scale x the tube's
+  float sacStrengthScale = 1.0f;   // sac springs: maximum force = scale x the tube's
+};
+
+struct AneurysmBuild {
+  ParticleSet particles;  // wall particles first (ids 0 .. wall-1), then the fluid
+  sim::SpringNetwork network;
+  std::uint32_t wall = 0;
+  std::vector<std::uint8_t> inSac;  // per wall point: 1 if it belongs to the sac
+  glm::vec3 sacCentre{0.0f};        // m
+  double sacInnerArea = 0.0;        // m^2: 4 pi Rs^2 x the kept fraction of the sac's inner layer
+};
+
+// The sac sits halfway along the tube, its centre at distance
+// sqrt(R^2 - w^2/4) + sqrt(Rs^2 - w^2/4) from the axis (the inner surfaces meet at width w in
+// the cross-section through the centre). A spring is a sac spring if either end is a sac
+// point. Throws std::invalid_argument on bad specs (naming the parameter).
+AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& spec);
+
+// Whether `p` lies outside the vessel's outer wall surface (by more than `margin` m), in the
+// built geometry: fluid there has left the vessel. A spec with sacRadius 0 is a plain tube.
+bool outsideVessel(const AneurysmSpec& spec, glm::vec3 p, float margin);
+
+// The lumen pressure (Pa) at which the sac's most stretched spring reaches its maximum force
+// when the sac widens uniformly about its centre, by the virtual work of the sac springs
+// alone (as hoopRupturePressure for a tube): P* = u* sum k g^2 / A, with A the sac's inner
+// area (its kept fraction of the sphere). Laplace's law for a sphere (T = P r / 2) is why a
+// sac of radius Rs fails at a lower pressure than a tube of radius R < Rs / 2 made of the
+// same springs.
+double sacRupturePressure(const AneurysmBuild& build);
+
+}  // namespace hemo::scene

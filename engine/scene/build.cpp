@@ -1,0 +1,86 @@
+#include "hemo/scene/build.hpp"
+
+#include <stdexcept>
+
+namespace hemo::scene {
+
+AneurysmSpec vesselSpec(const Scene& s) {
+  if (!s.vessel) throw SceneError(s.name + ": the scene has no vessel");
+  const Vessel& v = *s.vessel;
+  AneurysmSpec a;
+  TubeSpec& t = a.tube;
+  t.x0 = v.start.x;
+  t.length = v.length;
+  t.centreYZ = {v.start.y, v.start.z};
+  t.radius = v.radius;
+  t.spacing = s.sph.spacing;
+  t.layers = v.layers;
+  t.pointMass = v.pointMass;
+  t.stiffness = v.stiffness;
+  t.damping = v.damping;
+  t.maxForce = v.maxForce;
+  t.periodic = v.periodic;
+  t.anchorEnds = v.anchorEnds;
+  t.fluidMass = s.sph.particleMass();
+  if (v.shape == Vessel::Shape::SaccularAneurysm) {
+    a.sacRadius = v.sacRadius;
+    a.neckWidth = v.neckWidth;
+    a.sacStiffnessScale = v.sacStiffnessScale;
+    a.sacStrengthScale = v.sacStrengthScale;
+  }
+  return a;
+}
+
+SceneBuild buildScene(const Scene& s) {
+  SceneBuild out;
+  ParticleSet& set = out.particles;
+  if (s.vessel) {
+    const AneurysmSpec spec = vesselSpec(s);
+    try {
+      if (s.vessel->shape == Vessel::Shape::SaccularAneurysm) {
+        AneurysmBuild b = buildSaccularAneurysm(spec);
+        set = std::move(b.particles);
+        out.network = std::move(b.network);
+        out.wall = b.wall;
+      } else {
+        TubeBuild b = buildTube(spec.tube);
+        set = std::move(b.particles);
+        out.network = std::move(b.network);
+        out.wall = b.wall;
+      }
+    } catch (const std::invalid_argument& e) {
+      throw SceneError(s.name + ": vessel: " + e.what());
+    }
+  }
+  const ParticleSet rest = buildParticles(s);
+  // buildParticles gives fluid then boundary; append both after the vessel.
+  for (std::uint32_t i = 0; i < rest.size(); ++i) {
+    set.positions.push_back(rest.positions[i]);
+    set.velocities.push_back(rest.velocities[i]);
+    set.normals.push_back(rest.normals[i]);
+  }
+  set.fluid += rest.fluid;
+  set.boundary += rest.boundary;
+  set.ids.resize(set.size());
+  for (std::uint32_t i = 0; i < set.size(); ++i) set.ids[i] = i;
+  return out;
+}
+
+std::uint64_t countSceneParticles(const Scene& s) {
+  if (!s.vessel) return countParticles(s);
+  // A vessel has thousands to hundreds of thousands of particles: building it is the
+  // simplest exact count.
+  Scene vesselOnly = s;
+  vesselOnly.blocks.clear();
+  vesselOnly.tanks.clear();
+  return countParticles(s) + buildScene(vesselOnly).particles.size();
+}
+
+bool escaped(const Scene& s, glm::vec3 p) {
+  for (int a = 0; a < 3; ++a) {
+    if (!(p[a] >= s.domain.min[a] && p[a] <= s.domain.max[a])) return true;
+  }
+  return s.vessel && outsideVessel(vesselSpec(s), p, s.sph.spacing);
+}
+
+}  // namespace hemo::scene

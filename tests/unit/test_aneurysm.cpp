@@ -1,0 +1,260 @@
+// The saccular aneurysm builder and the vessel section of scene files.
+#include "hemo/scene/aneurysm.hpp"
+#include "hemo/scene/build.hpp"
+#include "hemo/scene/scene.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+namespace hemo::scene {
+namespace {
+
+using Json = nlohmann::json;
+
+// The shipped scene's proportions: R = 5 dp, Rs = 8 dp, neck 6.9 dp, 32 dp long, periodic.
+AneurysmSpec spec() {
+  AneurysmSpec a;
+  TubeSpec& t = a.tube;
+  t.spacing = 3.5e-4f;
+  t.length = 32 * t.spacing;
+  t.radius = 5 * t.spacing;
+  t.layers = 2;
+  t.pointMass = 5e-6f;
+  t.stiffness = 5.0f;
+  t.damping = 2e-3f;
+  t.maxForce = 1.65e-4f;
+  t.periodic = true;
+  t.fluidMass = 4.5e-8f;
+  a.sacRadius = 8 * t.spacing;
+  a.neckWidth = 2.4e-3f;
+  a.sacStrengthScale = 0.5f;
+  return a;
+}
+
+double dist(glm::vec4 a, glm::vec4 b) { return glm::length(glm::dvec3(a) - glm::dvec3(b)); }
+
+TEST(Aneurysm, WallSurfacesSpringsAndFrames) {
+  const AneurysmSpec a = spec();
+  const AneurysmBuild b = buildSaccularAneurysm(a);
+  const double dp = a.tube.spacing;
+  const glm::dvec3 c(b.sacCentre);
+  const auto& x = b.particles.positions;
+  ASSERT_EQ(b.network.points.size(), b.wall);
+  ASSERT_EQ(b.inSac.size(), b.wall);
+  // Centre: sqrt(R^2 - w^2/4) + sqrt(Rs^2 - w^2/4) above the axis, halfway along.
+  EXPECT_NEAR(c.z, std::sqrt(1.75e-3 * 1.75e-3 - 1.44e-6) + std::sqrt(2.8e-3 * 2.8e-3 - 1.44e-6), 1e-7);
+  EXPECT_NEAR(c.x, 16 * dp, 1e-7);
+  std::size_t sac = 0;
+  for (std::uint32_t i = 0; i < b.wall; ++i) {
+    const glm::dvec3 p(x[i]);
+    const double axis = std::hypot(p.y, p.z), centre = glm::length(p - c);
+    // On a layer of its surface: radius + (l + 1/2) dp.
+    const double layer = b.inSac[i] ? (centre - a.sacRadius) / dp - 0.5 : (axis - a.tube.radius) / dp - 0.5;
+    EXPECT_NEAR(layer, std::round(layer), 1e-3) << "wall point " << i;
+    EXPECT_TRUE(layer > -0.01 && layer < a.tube.layers - 0.99) << "wall point " << i;
+    // Not inside the other surface's lumen.
+    if (b.inSac[i]) EXPECT_GE(axis, a.tube.radius + 0.5 * dp - 1e-7) << i;
+    else EXPECT_GE(centre, a.sacRadius + 0.5 * dp - 1e-7) << i;
+    sac += b.inSac[i];
+    // The frame's normal points into the fluid (towards the axis or the sac's centre).
+    const sim::WallPoint& w = b.network.points[i];
+    ASSERT_NE(w.frameA, sim::WallPoint::kNoFrame) << "wall point " << i << " has no frame";
+    glm::dvec3 ea = glm::dvec3(x[w.frameA]) - p, eb = glm::dvec3(x[w.frameB]) - p;
+    ea.x -= a.tube.length * std::round(ea.x / a.tube.length);
+    eb.x -= a.tube.length * std::round(eb.x / a.tube.length);
+    const glm::dvec3 n = glm::normalize(glm::cross(ea, eb));
+    const glm::dvec3 inward = b.inSac[i] ? glm::normalize(c - p) : glm::normalize(glm::dvec3(0.0, -p.y, -p.z));
+    EXPECT_GT(glm::dot(n, inward), 0.5) << "frame of wall point " << i;
+  }
+  EXPECT_GT(sac, 1000u);
+  EXPECT_LT(sac, b.wall);
+  // Springs: built lengths, short, and the sac's with the sac's parameters.
+  std::vector<int> degree(b.wall, 0);
+  for (const auto& s : b.network.springs) {
+    glm::dvec3 d = glm::dvec3(x[s.b]) - glm::dvec3(x[s.a]);
+    d.x -= a.tube.length * std::round(d.x / a.tube.length);
+    EXPECT_NEAR(s.restLength, glm::length(d), 1e-9);
+    EXPECT_LT(s.restLength, 2.0 * dp);
+    const bool sacSpring = b.inSac[s.a] || b.inSac[s.b];
+    EXPECT_FLOAT_EQ(s.maxForce, sacSpring ? 0.5f * a.tube.maxForce : a.tube.maxForce);
+    ++degree[s.a], ++degree[s.b];
+  }
+  for (std::uint32_t i = 0; i < b.wall; ++i) EXPECT_GE(degree[i], 4) << "wall point " << i << " is loosely held";
+}
+
+// No hole in the wall: every point between the two layers of the tube (outside the sac) and
+// of the sac (outside the tube) has a wall point within 0.9 dp, neck included.
+TEST(Aneurysm, WallIsClosedAtTheNeck) {
+  const AneurysmSpec a = spec();
+  const AneurysmBuild b = buildSaccularAneurysm(a);
+  const double dp = a.tube.spacing;
+  const glm::dvec3 c(b.sacCentre);
+  auto nearest = [&](glm::dvec3 p) {
+    double best = 1.0;
+    for (std::uint32_t i = 0; i < b.wall; ++i) best = std::min(best, glm::length(glm::dvec3(b.particles.positions[i]) - p));
+    return best;
+  };
+  const double mid = dp;  // between the layers at +dp/2 and +3dp/2
+  int probes = 0;
+  for (int i = 0; i < 64; ++i)
+    for (int k = 0; k < 48; ++k) {
+      const double theta = 2.0 * std::numbers::pi * k / 48;
+      const glm::dvec3 p((i + 0.5) * a.tube.length / 64, (a.tube.radius + mid) * std::cos(theta), (a.tube.radius + mid) * std::sin(theta));
+      if (glm::length(p - c) < a.sacRadius + mid) continue;
+      EXPECT_LT(nearest(p), 0.9 * dp) << "hole in the tube wall at " << p.x << " " << p.y << " " << p.z;
+      ++probes;
+    }
+  for (int k = 0; k < 2000; ++k) {
+    const double z = 1.0 - (2.0 * k + 1.0) / 2000, r = std::sqrt(1.0 - z * z), phi = 2.39996 * k;
+    const glm::dvec3 p = c + (a.sacRadius + mid) * glm::dvec3(r * std::cos(phi), r * std::sin(phi), z);
+    if (std::hypot(p.y, p.z) < a.tube.radius + mid) continue;
+    EXPECT_LT(nearest(p), 0.9 * dp) << "hole in the sac wall at " << p.x << " " << p.y << " " << p.z;
+    ++probes;
+  }
+  EXPECT_GT(probes, 3000);
+}
+
+TEST(Aneurysm, FluidFillsTubeAndSacClearOfTheWall) {
+  const AneurysmSpec a = spec();
+  const AneurysmBuild b = buildSaccularAneurysm(a);
+  const double dp = a.tube.spacing;
+  const glm::dvec3 c(b.sacCentre);
+  std::size_t inSac = 0;
+  for (std::uint32_t f = b.wall; f < b.particles.size(); ++f) {
+    const glm::dvec3 p(b.particles.positions[f]);
+    EXPECT_EQ(b.particles.velocities[f].w, 0.0f);
+    const bool tube = std::hypot(p.y, p.z) < a.tube.radius, sac = glm::length(p - c) < a.sacRadius;
+    EXPECT_TRUE(tube || sac) << "fluid outside the lumen at " << p.x << " " << p.y << " " << p.z;
+    inSac += !tube;
+    for (std::uint32_t w = 0; w < b.wall; ++w) ASSERT_GE(dist(b.particles.positions[f], b.particles.positions[w]), 0.8 * dp - 1e-9);
+  }
+  // The sac's lumen outside the tube: about (4/3 pi Rs^3 - overlap) / dp^3; at least half.
+  EXPECT_GT(double(inSac), 0.5 * 4.0 / 3.0 * std::numbers::pi * std::pow(8.0, 3.0) * 0.7);
+  EXPECT_EQ(b.particles.fluid + b.wall, b.particles.size());
+}
+
+// Laplace's law for a sphere (T = P r / 2): the sac's rupture pressure from its springs falls
+// like 1 / Rs, and lies below the tube's (T = P R) with the shipped proportions.
+TEST(Aneurysm, SacRupturePressureFollowsLaplace) {
+  AneurysmSpec a = spec();
+  const double small = sacRupturePressure(buildSaccularAneurysm(a));
+  const double tube = hoopRupturePressure(a.tube, buildTube(a.tube));
+  EXPECT_LT(small, 0.5 * tube);
+  a.sacStrengthScale = 1.0f;
+  const double strong = sacRupturePressure(buildSaccularAneurysm(a));
+  EXPECT_NEAR(strong / small, 2.0, 1e-6);
+  a.tube.length = 48 * a.tube.spacing;
+  a.sacRadius = 12 * a.tube.spacing;
+  a.neckWidth = 2.4e-3f;
+  const double large = sacRupturePressure(buildSaccularAneurysm(a));
+  EXPECT_NEAR(large / strong, 8.0 / 12.0, 0.1 * 8.0 / 12.0) << strong << " Pa at Rs = 8 dp, " << large << " Pa at 12 dp";
+}
+
+TEST(Aneurysm, BadSpecsAreRejected) {
+  AneurysmSpec a = spec();
+  a.sacRadius = 0.0f;
+  EXPECT_THROW(buildSaccularAneurysm(a), std::invalid_argument);
+  a = spec();
+  a.neckWidth = 2.0f * a.tube.radius;
+  EXPECT_THROW(buildSaccularAneurysm(a), std::invalid_argument);
+  a = spec();
+  a.tube.length = 16 * a.tube.spacing;  // shorter than the sac
+  EXPECT_THROW(buildSaccularAneurysm(a), std::invalid_argument);
+  a = spec();
+  a.sacStrengthScale = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(buildSaccularAneurysm(a), std::invalid_argument);
+}
+
+TEST(Aneurysm, OutsideVesselSeparatesLumenFromTheOutside) {
+  const AneurysmSpec a = spec();
+  const AneurysmBuild b = buildSaccularAneurysm(a);
+  const float dp = a.tube.spacing;
+  for (std::uint32_t i = 0; i < b.particles.size(); ++i) EXPECT_FALSE(outsideVessel(a, glm::vec3(b.particles.positions[i]), dp)) << i;
+  EXPECT_TRUE(outsideVessel(a, b.sacCentre + glm::vec3(0.0f, 0.0f, a.sacRadius + 4 * dp), dp));
+  EXPECT_TRUE(outsideVessel(a, glm::vec3(0.001f, 0.0f, -a.tube.radius - 4 * dp), dp));
+  EXPECT_FALSE(outsideVessel(a, glm::vec3(0.001f, 0.0f, 0.0f), dp));
+}
+
+Json vesselScene() {
+  return Json::parse(R"({
+    "scene": "v",
+    "particles": { "spacing_m": 3.5e-4 },
+    "fluid": { "expected_max_speed_m_s": 0.5, "background_pressure_Pa": 100.0, "background_pressure_ramp_s": 0.01 },
+    "vessel": { "shape": "saccular_aneurysm", "length_m": 0.0112, "radius_m": 0.00175, "point_mass_kg": 5e-6,
+                "stiffness_N_m": 5.0, "max_force_N": 1e-3, "sac_radius_m": 0.0028, "neck_width_m": 0.0024 },
+    "forces": { "gravity_m_s2": [0, 0, 0] },
+    "domain": { "min_m": [0.0, -0.005, -0.0035], "max_m": [0.0112, 0.005, 0.012], "periodic": ["x"] }
+  })");
+}
+
+void expectError(const Json& j, std::initializer_list<const char*> fragments) {
+  try {
+    parseScene(j.dump(), "bad.json");
+    FAIL() << "accepted: " << j.dump();
+  } catch (const SceneError& e) {
+    const std::string m = e.what();
+    for (const char* f : fragments) EXPECT_NE(m.find(f), std::string::npos) << "'" << f << "' not in: " << m;
+  }
+}
+
+TEST(VesselScene, LoadsBuildsAndCounts) {
+  const Scene s = parseScene(vesselScene().dump(), "v.json");
+  ASSERT_TRUE(s.vessel);
+  EXPECT_TRUE(s.vessel->periodic);
+  EXPECT_FLOAT_EQ(s.sph.backgroundPressure, 100.0f);
+  EXPECT_FLOAT_EQ(s.sph.backgroundPressureRamp, 0.01f);
+  EXPECT_TRUE(s.blocks.empty());
+  const SceneBuild b = buildScene(s);
+  ASSERT_TRUE(b.network);
+  EXPECT_EQ(b.network->points.size(), b.wall);
+  EXPECT_EQ(b.particles.size(), countSceneParticles(s));
+  EXPECT_EQ(b.particles.size(), b.wall + b.particles.fluid);
+  for (std::uint32_t i = 0; i < b.particles.size(); ++i) {
+    EXPECT_EQ(b.particles.ids[i], i);
+    EXPECT_EQ(b.particles.velocities[i].w, i < b.wall ? 2.0f : 0.0f);
+  }
+  Json tube = vesselScene();
+  tube["vessel"]["shape"] = "tube";
+  for (const char* key : {"sac_radius_m", "neck_width_m"}) tube["vessel"].erase(key);
+  const Scene t = parseScene(tube.dump(), "t.json");
+  EXPECT_EQ(buildScene(t).particles.size(), countSceneParticles(t));
+}
+
+TEST(VesselScene, BadVesselsAreNamed) {
+  Json j = vesselScene();
+  j["vessel"].erase("sac_radius_m");
+  expectError(j, {"vessel.sac_radius_m", "required"});
+  j = vesselScene();
+  j["vessel"]["shape"] = "tube";
+  expectError(j, {"vessel.sac_radius_m", "saccular_aneurysm"});
+  j = vesselScene();
+  j["vessel"].erase("stiffness_N_m");
+  expectError(j, {"vessel.stiffness_N_m", "required"});
+  j = vesselScene();
+  j["vessel"]["length_m"] = 0.01;
+  expectError(j, {"vessel.length_m", "span the domain"});
+  j = vesselScene();
+  j["domain"]["max_m"][2] = 0.006;
+  expectError(j, {"vessel", "outside the domain"});
+  j = vesselScene();
+  j["vessel"]["neck_width_m"] = 0.004;
+  expectError(j, {"vessel.neck_width_m"});
+  j = vesselScene();
+  j["vessel"]["shape"] = "none";
+  expectError(j, {"vessel.", "vessel.shape"});
+  j = vesselScene();
+  j["vessel"]["shape"] = "bulge";
+  expectError(j, {"vessel.shape", "unknown value"});
+  j = vesselScene();
+  j["fluid"]["background_pressure_Pa"] = -1.0;
+  expectError(j, {"fluid.background_pressure_Pa"});
+}
+
+}  // namespace
+}  // namespace hemo::scene
