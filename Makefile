@@ -1,6 +1,6 @@
 # The two quick-start commands (see README.md). Both install missing Debian packages,
 # configure once, build incrementally, then run.
-#   make run    the main job (for now: the GPU neighbour-search demo), headless
+#   make run    the main job: the aneurysm scene, headless, on the default device
 #   make test   the whole test suite (ctest), every GPU test with the validation layer on
 PRESET ?= release
 BUILD := build/$(PRESET)
@@ -8,7 +8,7 @@ BUILD := build/$(PRESET)
 .PHONY: run test build deps bench clean
 
 run: build
-	$(BUILD)/apps/hemo-neighbours
+	$(BUILD)/apps/hemo-run scenes/aneurysm.json --out out/aneurysm
 
 test: build
 	ctest --test-dir $(BUILD) --output-on-failure
