@@ -166,11 +166,7 @@ AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& a) {
   // (nearer, and the fluid starts compressed; much further, and it starts with a gap that
   // it rushes to fill).
   ParticleSet& set = b.particles;
-  for (std::uint32_t i = 0; i < b.wall; ++i) {
-    set.positions.emplace_back(glm::vec3(pos[i]), t.fluidMass);
-    set.velocities.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL));
-    set.normals.emplace_back(glm::vec3(inward[i]), 0.0f);
-  }
+  for (std::uint32_t i = 0; i < b.wall; ++i) set.add(glm::vec3(pos[i]), t.fluidMass, float(HEMO_KIND_WALL), glm::vec3(inward[i]));
   const double dx = double(t.length) / tube.along;
   const double tubeLimit = t.radius + (0.5 - kFluidClearance) * dp, sacLimit = a.sacRadius + (0.5 - kFluidClearance) * dp;
   const int reach = int(std::ceil(t.radius / dp));
@@ -183,14 +179,11 @@ AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& a) {
         bool clash = false;
         for (std::uint32_t w = 0; w < b.wall && !clash; ++w) clash = glm::length(pos[w] - p) < kFluidClearance * dp;
         if (clash) continue;
-        set.positions.emplace_back(glm::vec3(p), t.fluidMass);
-        set.velocities.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_FLUID));
-        set.normals.emplace_back(0.0f);
+        set.add(glm::vec3(p), t.fluidMass, float(HEMO_KIND_FLUID));
       }
   set.fluid = set.size() - b.wall;
   set.boundary = 0;
-  set.ids.resize(set.size());
-  for (std::uint32_t i = 0; i < set.size(); ++i) set.ids[i] = i;
+  set.numberIds();
   net.validate();
   return b;
 }

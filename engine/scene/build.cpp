@@ -61,8 +61,7 @@ SceneBuild buildScene(const Scene& s) {
   }
   set.fluid += rest.fluid;
   set.boundary += rest.boundary;
-  set.ids.resize(set.size());
-  for (std::uint32_t i = 0; i < set.size(); ++i) set.ids[i] = i;
+  set.numberIds();
   return out;
 }
 

@@ -50,9 +50,7 @@ TubeBuild buildTube(const TubeSpec& t) {
       for (std::uint32_t k = 0; k < around; ++k) {
         const glm::dvec3 p = position(i, k, l);
         const glm::dvec3 inward = glm::normalize(glm::dvec3(0.0, t.centreYZ.x - p.y, t.centreYZ.y - p.z));
-        set.positions.emplace_back(glm::vec3(p), t.fluidMass);
-        set.velocities.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL));
-        set.normals.emplace_back(glm::vec3(inward), 0.0f);
+        set.add(glm::vec3(p), t.fluidMass, float(HEMO_KIND_WALL), glm::vec3(inward));
         sim::WallPoint w;
         w.mass = t.pointMass;
         w.anchored = !t.periodic && t.anchorEnds && (i == 0 || i + 1 == along);
@@ -100,14 +98,12 @@ TubeBuild buildTube(const TubeSpec& t) {
       for (int k = -reach; k <= reach; ++k) {
         const double y = (j + 0.5) * dp, z = (k + 0.5) * dp;
         if (y * y + z * z > limit * limit) continue;
-        set.positions.emplace_back(float(t.x0 + (i + 0.5) * dx), float(t.centreYZ.x + y), float(t.centreYZ.y + z), t.fluidMass);
-        set.velocities.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_FLUID));
-        set.normals.emplace_back(0.0f);
+        set.add(glm::vec3(float(t.x0 + (i + 0.5) * dx), float(t.centreYZ.x + y), float(t.centreYZ.y + z)), t.fluidMass,
+                float(HEMO_KIND_FLUID));
       }
   set.fluid = set.size() - b.wall;
   set.boundary = 0;
-  set.ids.resize(set.size());
-  for (std::uint32_t i = 0; i < set.size(); ++i) set.ids[i] = i;
+  set.numberIds();
   b.network.validate();
   return b;
 }

@@ -2,6 +2,7 @@
 #include "hemo/scene/aneurysm.hpp"
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/scene.hpp"
+#include "scene_errors.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -193,15 +194,6 @@ Json vesselScene() {
   })");
 }
 
-void expectError(const Json& j, std::initializer_list<const char*> fragments) {
-  try {
-    parseScene(j.dump(), "bad.json");
-    FAIL() << "accepted: " << j.dump();
-  } catch (const SceneError& e) {
-    const std::string m = e.what();
-    for (const char* f : fragments) EXPECT_NE(m.find(f), std::string::npos) << "'" << f << "' not in: " << m;
-  }
-}
 
 TEST(VesselScene, LoadsBuildsAndCounts) {
   const Scene s = parseScene(vesselScene().dump(), "v.json");

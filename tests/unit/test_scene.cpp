@@ -1,6 +1,7 @@
 // Scene files: every kind of bad input gets one clear message naming the field.
 #include "hemo/scene/builders.hpp"
 #include "hemo/scene/scene.hpp"
+#include "scene_errors.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -24,17 +25,6 @@ Json validScene() {
   })");
 }
 
-// Expects parseScene to throw a SceneError whose message contains every fragment.
-void expectError(const Json& j, std::initializer_list<const char*> fragments) {
-  try {
-    parseScene(j.dump(), "bad.json");
-    FAIL() << "accepted: " << j.dump();
-  } catch (const SceneError& e) {
-    const std::string m = e.what();
-    EXPECT_NE(m.find("bad.json"), std::string::npos) << m;
-    for (const char* f : fragments) EXPECT_NE(m.find(f), std::string::npos) << "'" << f << "' not in: " << m;
-  }
-}
 
 TEST(Scene, ValidSceneLoadsWithDefaultsAndDerivedSoundSpeed) {
   const Scene s = parseScene(validScene().dump(), "ok.json");

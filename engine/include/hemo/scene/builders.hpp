@@ -19,6 +19,17 @@ struct ParticleSet {
   std::uint32_t fluid = 0;
   std::uint32_t boundary = 0;
   std::uint32_t size() const { return static_cast<std::uint32_t>(positions.size()); }
+  // Appends a particle at rest.
+  void add(glm::vec3 position, float mass, float kind, glm::vec3 normal = glm::vec3(0.0f)) {
+    positions.emplace_back(position, mass);
+    velocities.emplace_back(0.0f, 0.0f, 0.0f, kind);
+    normals.emplace_back(normal, 0.0f);
+  }
+  // ids = input order.
+  void numberIds() {
+    ids.resize(size());
+    for (std::uint32_t i = 0; i < size(); ++i) ids[i] = i;
+  }
 };
 
 // Particle count the scene will produce, without building (for memory checks).
