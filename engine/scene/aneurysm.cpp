@@ -28,9 +28,7 @@ constexpr double kFluidClearance = 0.8;
 constexpr std::uint32_t kDropped = 0xffffffffu;
 
 glm::dvec3 centreOf(const AneurysmSpec& a) {
-  const double hw = 0.5 * a.neckWidth;
-  const double R = a.tube.radius, Rs = a.sacRadius;
-  const double d = std::sqrt(R * R - hw * hw) + std::sqrt(Rs * Rs - hw * hw);
+  const double d = sacCentreOffset(a.tube.radius, a.sacRadius, a.neckWidth);
   return {double(a.tube.x0) + 0.5 * a.tube.length, a.tube.centreYZ.x, double(a.tube.centreYZ.y) + d};
 }
 
@@ -57,6 +55,11 @@ void check(const AneurysmSpec& a) {
 }
 
 }  // namespace
+
+double sacCentreOffset(double R, double Rs, double w) {
+  const double hw = 0.5 * w;
+  return std::sqrt(R * R - hw * hw) + std::sqrt(Rs * Rs - hw * hw);
+}
 
 AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& a) {
   check(a);
@@ -116,21 +119,20 @@ AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& a) {
   // Springs: the tube's between kept points, then each sac point to its near wall points.
   sim::SpringNetwork& net = b.network;
   std::vector<std::vector<std::uint32_t>> adjacent(b.wall);
-  auto add = [&](std::uint32_t i, std::uint32_t j, float stiffness, float maxForce) {
-    net.springs.push_back({i, j, float(glm::length(pos[j] - pos[i])), stiffness, t.damping, maxForce});
-    adjacent[i].push_back(j);
-    adjacent[j].push_back(i);
+  auto add = [&](const sim::Spring& s) {
+    net.springs.push_back(s);
+    adjacent[s.a].push_back(s.b);
+    adjacent[s.b].push_back(s.a);
   };
   for (const sim::Spring& s : tube.network.springs) {
     if (remap[s.a] == kDropped || remap[s.b] == kDropped) continue;
-    net.springs.push_back({remap[s.a], remap[s.b], s.restLength, s.stiffness, s.damping, s.maxForce});
-    adjacent[remap[s.a]].push_back(remap[s.b]);
-    adjacent[remap[s.b]].push_back(remap[s.a]);
+    add({remap[s.a], remap[s.b], s.restLength, s.stiffness, s.damping, s.maxForce});
   }
   const float sacK = t.stiffness * a.sacStiffnessScale, sacF = t.maxForce * a.sacStrengthScale;
   for (std::uint32_t i = tubeKept; i < b.wall; ++i)
     for (std::uint32_t j = 0; j < i; ++j) {
-      if (glm::length(pos[j] - pos[i]) < kSacLinkRadius * dp) add(j, i, sacK, sacF);
+      const double length = glm::length(pos[i] - pos[j]);
+      if (length < kSacLinkRadius * dp) add({j, i, float(length), sacK, t.damping, sacF});
     }
 
   // Points: tube points keep their frames where both frame points were kept; the others take
@@ -170,9 +172,10 @@ AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& a) {
   const double dx = double(t.length) / tube.along;
   const double tubeLimit = t.radius + (0.5 - kFluidClearance) * dp, sacLimit = a.sacRadius + (0.5 - kFluidClearance) * dp;
   const int reach = int(std::ceil(t.radius / dp));
+  const int side = std::max(reach, int(std::ceil(a.sacRadius / dp)));
   const int top = int(std::ceil((c.z - t.centreYZ.y + a.sacRadius) / dp));
   for (std::uint32_t i = 0; i < tube.along; ++i)
-    for (int j = -std::max(reach, int(std::ceil(a.sacRadius / dp))); j <= std::max(reach, int(std::ceil(a.sacRadius / dp))); ++j)
+    for (int j = -side; j <= side; ++j)
       for (int k = -reach; k <= top; ++k) {
         const glm::dvec3 p(t.x0 + (i + 0.5) * dx, t.centreYZ.x + (j + 0.5) * dp, t.centreYZ.y + (k + 0.5) * dp);
         if (axisDistance(t, p) > tubeLimit && glm::length(p - c) > sacLimit) continue;

@@ -75,11 +75,17 @@ std::uint64_t countSceneParticles(const Scene& s) {
   return countParticles(s) + buildScene(vesselOnly).particles.size();
 }
 
-bool escaped(const Scene& s, glm::vec3 p) {
-  for (int a = 0; a < 3; ++a) {
-    if (!(p[a] >= s.domain.min[a] && p[a] <= s.domain.max[a])) return true;
+std::uint32_t countEscaped(const Scene& s, const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities) {
+  const std::optional<AneurysmSpec> vessel = s.vessel ? std::optional(vesselSpec(s)) : std::nullopt;
+  std::uint32_t escaped = 0;
+  for (std::size_t i = 0; i < positions.size(); ++i) {
+    if (velocities[i].w != float(sim::ParticleKind::Fluid)) continue;
+    const glm::vec3 p(positions[i]);
+    bool out = vessel && outsideVessel(*vessel, p, s.sph.spacing);
+    for (int a = 0; a < 3; ++a) out = out || !(p[a] >= s.domain.min[a] && p[a] <= s.domain.max[a]);
+    escaped += out;
   }
-  return s.vessel && outsideVessel(vesselSpec(s), p, s.sph.spacing);
+  return escaped;
 }
 
 }  // namespace hemo::scene

@@ -1,5 +1,7 @@
 #include "hemo/scene/scene.hpp"
 
+#include "hemo/scene/aneurysm.hpp"
+
 #include <glm/common.hpp>
 #include <nlohmann/json.hpp>
 
@@ -310,8 +312,7 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   if (w.shape == Vessel::Shape::SaccularAneurysm) {
     const double hw = 0.5 * w.neckWidth;
     if (hw >= w.radius || hw >= w.sacRadius) c.fail("vessel.neck_width_m", "must be narrower than the tube's and the sac's diameters");
-    const double centre = std::sqrt(double(w.radius) * w.radius - hw * hw) + std::sqrt(double(w.sacRadius) * w.sacRadius - hw * hw);
-    top = float(centre) + w.sacRadius + room;
+    top = float(sacCentreOffset(w.radius, w.sacRadius, w.neckWidth)) + w.sacRadius + room;
     halfWidth = std::max(halfWidth, w.sacRadius + room);
   }
   const Box need{glm::vec3(w.start.x, w.start.y - halfWidth, w.start.z - w.radius - room),

@@ -161,13 +161,7 @@ Snapshot Simulation::snapshot() const {
 }
 
 std::uint32_t Simulation::escapedParticles() const {
-  const auto pos = store_->readPositions();
-  const auto vel = store_->readVelocities();
-  std::uint32_t escaped = 0;
-  for (std::size_t i = 0; i < pos.size(); ++i) {
-    if (vel[i].w == float(ParticleKind::Fluid) && scene::escaped(scene_, glm::vec3(pos[i]))) ++escaped;
-  }
-  return escaped;
+  return scene::countEscaped(scene_, store_->readPositions(), store_->readVelocities());
 }
 
 std::uint32_t Simulation::brokenSprings() const { return solver_->wall() ? solver_->wall()->readBrokenCount() : 0; }

@@ -30,6 +30,10 @@ struct AneurysmBuild {
   double sacInnerArea = 0.0;        // m^2: 4 pi Rs^2 x the kept fraction of the sac's inner layer
 };
 
+// Distance (m) from the tube's axis to the sac's centre: the inner surfaces (radii R and Rs)
+// meet at width w in the cross-section through the centre. Needs w < 2R and w < 2Rs.
+double sacCentreOffset(double tubeRadius, double sacRadius, double neckWidth);
+
 // The sac sits halfway along the tube, its centre at distance
 // sqrt(R^2 - w^2/4) + sqrt(Rs^2 - w^2/4) from the axis (the inner surfaces meet at width w in
 // the cross-section through the centre). A spring is a sac spring if either end is a sac

@@ -19,8 +19,9 @@ AneurysmSpec vesselSpec(const Scene& scene);
 // Throws SceneError naming the vessel's parameter if the builder rejects it.
 SceneBuild buildScene(const Scene& scene);
 std::uint64_t countSceneParticles(const Scene& scene);
-// Whether a fluid particle at `p` has left the scene: outside the domain, or outside the
-// vessel's wall by more than a spacing.
-bool escaped(const Scene& scene, glm::vec3 p);
+// Fluid particles that have left the scene: outside the domain, or outside the vessel's wall
+// by more than a spacing. `positions` and `velocities` as in ParticleSet (w: mass, kind).
+std::uint32_t countEscaped(const Scene& scene, const std::vector<glm::vec4>& positions,
+                           const std::vector<glm::vec4>& velocities);
 
 }  // namespace hemo::scene
