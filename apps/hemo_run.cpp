@@ -28,7 +28,8 @@ const char* kUsage =
     "  --steps N        run N steps\n"
     "  --until SECONDS  run until this simulated time (default: the scene's time.end_time_s)\n"
     "  --device SEL     Vulkan device index or name part (default: HEMO_DEVICE, else the best)\n"
-    "  --vtk-every N    write DIR/particles_<step>.vtk every N steps (and at the end)\n"
+    "  --vtk-every N    write DIR/particles_<step>.vtk every N steps (and at the end); with a vessel\n"
+    "                   also DIR/springs_<step>.vtk (strain, tension, broken)\n"
     "  --profile N      after the run, time N more steps stage by stage (GPU ms in stage_ms)\n"
     "  --png-every N, --surface-every N  need the renderer and marching cubes (not in this build)\n"
     "hemo-run --describe-scene   prints the scene-file parameter table\n";
@@ -129,7 +130,16 @@ int main(int argc, char** argv) {
     auto writeVtk = [&](const hemo::sim::Progress& p) {
       char name[64];
       std::snprintf(name, sizeof name, "particles_%08llu.vtk", static_cast<unsigned long long>(p.steps));
-      hemo::io::writeParticlesVtk(out / name, sim.snapshot(), p.time);
+      const hemo::sim::Snapshot snap = sim.snapshot();
+      const glm::vec3 period = sim.solver().grid().spec().period;
+      if (const auto* wall = sim.solver().wall()) {
+        const auto springs = wall->readSprings();
+        hemo::io::writeParticlesVtk(out / name, snap, p.time, &springs, period);
+        std::snprintf(name, sizeof name, "springs_%08llu.vtk", static_cast<unsigned long long>(p.steps));
+        hemo::io::writeSpringsVtk(out / name, snap, springs, p.time, period);
+      } else {
+        hemo::io::writeParticlesVtk(out / name, snap, p.time);
+      }
     };
     if (vtkEvery) {
       options.outputEvery = vtkEvery;

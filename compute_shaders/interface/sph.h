@@ -131,7 +131,9 @@
 #define HEMO_INTEGRATE_BINDING_STEP_DT 10
 #define HEMO_INTEGRATE_BINDING_POS_AT_BUILD 11
 #define HEMO_INTEGRATE_BINDING_REACH 12
-#define HEMO_INTEGRATE_BINDING_COUNT 13
+#define HEMO_INTEGRATE_BINDING_INFLOW 13  // InflowParams (common/inflow.glsl): the driven inflow zone
+#define HEMO_INTEGRATE_BINDING_STATE 14  // vec4 (rho, p): the inflow zone's mass supply reads rho
+#define HEMO_INTEGRATE_BINDING_COUNT 15
 
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).

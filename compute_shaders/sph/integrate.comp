@@ -14,11 +14,14 @@
 // list was built, plus (when the next step evaluates forces at a midpoint) the farthest the
 // next half step can take it, |v| min(dtMax, C_a h / (c0 + |v|)) / 2. The step's gate
 // rebuilds the list once the largest reach exceeds half the list's skin.
+// A fluid particle that starts the step in the inflow zone of a vessel moves at the prescribed
+// velocity instead (hemo/sim/inflow.hpp), in every mode: the zone is kinematic.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/sph_params.glsl"
 #include "common/clock.glsl"
+#include "common/inflow.glsl"
 
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POSITIONS) buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_VELOCITIES) buffer Velocities { vec4 velocities[]; };
@@ -35,6 +38,8 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) readonly buffer PosAtBuild { vec4 posAtBuild[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_REACH) writeonly buffer Reach { float reach[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_INFLOW) readonly buffer Inflow { InflowParams inflow; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_STATE) readonly buffer State { vec4 state[]; };
 layout(push_constant) uniform Push {
   uint n;
   uint step;
@@ -68,6 +73,37 @@ void writeReach(uint i, vec3 x, vec3 v) {
   reach[i] = r;
 }
 
+// Mean inflow speed u(t) = U w(t) ramp(t) (m/s).
+float hemo_inflow_mean_speed(float time) {
+  float w = 1.0;
+  if (inflow.period > 0.0 && inflow.samples > 0u) {
+    const float cycles = time / inflow.period;
+    const float phase = (cycles - floor(cycles)) * float(inflow.samples);
+    const uint k = min(uint(phase), inflow.samples - 1u);
+    const float a = inflow.waveform[k];
+    const float b = inflow.waveform[(k + 1u) % inflow.samples];
+    w = a + (b - a) * (phase - float(k));
+  }
+  const float ramp = inflow.ramp > 0.0 ? clamp(time / inflow.ramp, 0.0, 1.0) : 1.0;
+  return inflow.meanSpeed * w * ramp;
+}
+
+// True when a fluid particle at x (start of the step) is in the inflow zone; u: its velocity.
+bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u) {
+  u = vec3(0.0);
+  if (inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || x.x < inflow.zoneStart || x.x >= inflow.zoneEnd) {
+    return false;
+  }
+  const vec2 d = x.yz - vec2(inflow.centreY, inflow.centreZ);
+  const float s2 = dot(d, d) / (inflow.radius * inflow.radius);
+  if (s2 >= 1.0) {
+    return false;  // outside the lumen (escaped blood is never driven)
+  }
+  const float profile = inflow.profile == 1u ? 1.0 : 2.0 * (1.0 - s2);
+  u = vec3(hemo_inflow_mean_speed(time) * profile, 0.0, 0.0);
+  return true;
+}
+
 void main() {
   const uint i = hemo_global_index();
   const ClockRecord clock = clocks[pc.clockIn];
@@ -91,8 +127,15 @@ void main() {
       savedPos[i] = x;
       savedVel[i] = v;
       const vec4 a = accel[i];
-      velocities[i] = vec4(v.xyz + a.xyz * (0.5 * dt), v.w);
-      positions[i] = vec4(hemo_wrap_position(x.xyz + v.xyz * (0.5 * dt)), hemo_sph_mass(x.w, a.w));
+      vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
+      vec3 drift = v.xyz;
+      vec3 u;
+      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u)) {
+        vMid = u;
+        drift = u;
+      }
+      velocities[i] = vec4(vMid, v.w);
+      positions[i] = vec4(hemo_wrap_position(x.xyz + drift * (0.5 * dt)), hemo_sph_mass(x.w, a.w));
     }
     return;
   }
@@ -117,6 +160,8 @@ void main() {
     writeReach(i, x.xyz, v.xyz);
     return;
   }
+  // Where the step started (the inflow zone is judged there).
+  const vec3 start = pc.mode == HEMO_INTEGRATE_RK2_FULL ? savedPos[i].xyz : x.xyz;
   if (pc.mode == HEMO_INTEGRATE_RK2_FULL) {
     // midpoint rule: x1 = x0 + dt v(mid), v1 = v0 + dt a(mid)
     const vec4 v0 = savedVel[i];
@@ -128,7 +173,27 @@ void main() {
   if (clock.time < params.dampingUntil) {
     v.xyz /= 1.0 + params.dampingRate * dt;  // settling phase only (implicit, so never unstable)
   }
-  if (pc.mode != HEMO_INTEGRATE_RK2_FULL) {
+  vec3 u;
+  if (hemo_inflow_driven(start, v.w, clock.time - clock.compensation, u)) {
+    v.xyz = u;
+    x.xyz = start + u * dt;
+    if (inflow.holdPressure != 0u) {
+      // The lumen's supply: the mass moves a tenth of the way each step towards the one that
+      // brings the density (of this step's last density pass) to rho0, between the initial
+      // mass and the cap. Both ways, so the scatter of single densities does not ratchet the
+      // mass up; a tenth, because every zone particle adjusts at once and the full step
+      // overshoots on particle-scale patterns (measured: the zone ended 4% dense).
+      // Only away from the wall (r < R - dp): next to it the summed density reads low (the
+      // wall's two layers do not fill the kernel's support), and the outer ring took up to
+      // 2.6 times its mass while the zone's middle ended 7% dense.
+      const vec2 d = start.yz - vec2(inflow.centreY, inflow.centreZ);
+      const float inner = inflow.radius - params.wallSpacing;
+      const float rho = state[i].x;
+      if (rho > 0.0 && dot(d, d) < inner * inner) {
+        x.w = clamp(x.w * (1.0 + 0.1 * (inflow.restDensity / rho - 1.0)), inflow.baseMass, inflow.maxMass);
+      }
+    }
+  } else if (pc.mode != HEMO_INTEGRATE_RK2_FULL) {
     x.xyz += v.xyz * dt;
   }
   x.xyz = hemo_wrap_position(x.xyz);

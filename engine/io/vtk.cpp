@@ -1,17 +1,75 @@
 #include "hemo/io/output.hpp"
 
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <stdexcept>
 
 namespace hemo::io {
 
-void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s, double time) {
+namespace {
+
+glm::dvec3 minImage(glm::dvec3 d, glm::vec3 period) {
+  for (int a = 0; a < 3; ++a) {
+    if (period[a] > 0.0f) d[a] -= double(period[a]) * std::round(d[a] / double(period[a]));
+  }
+  return d;
+}
+
+double springLength(const sim::Snapshot& s, const sim::GpuSpring& k, glm::vec3 period) {
+  return glm::length(minImage(glm::dvec3(s.positions[k.b]) - glm::dvec3(s.positions[k.a]), period));
+}
+
+std::ofstream openVtk(const std::filesystem::path& path, const std::string& title, double time) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write VTK file '" + path.string() + "'");
-  const std::size_t n = s.positions.size();
   out.precision(9);
-  out << "# vtk DataFile Version 3.0\nhemo particles, t = " << time << " s\nASCII\nDATASET POLYDATA\n";
+  out << "# vtk DataFile Version 3.0\n" << title << ", t = " << time << " s\nASCII\nDATASET POLYDATA\n";
   out << "FIELD FieldData 1\nTIME 1 1 double\n" << time << "\n";
+  return out;
+}
+
+void checkSprings(const sim::Snapshot& s, const std::vector<sim::GpuSpring>& springs) {
+  for (const auto& k : springs) {
+    if (k.a >= s.positions.size() || k.b >= s.positions.size()) {
+      throw std::runtime_error("a spring refers to particle ids beyond the snapshot");
+    }
+  }
+}
+
+}  // namespace
+
+WallPointStats wallPointStats(const sim::Snapshot& s, const std::vector<sim::GpuSpring>& springs, glm::vec3 period) {
+  checkSprings(s, springs);
+  const std::size_t n = s.positions.size();
+  WallPointStats w;
+  w.maxStrain.assign(n, 0.0f);
+  w.brokenFraction.assign(n, 0.0f);
+  std::vector<std::uint32_t> total(n, 0), broken(n, 0);
+  for (const auto& k : springs) {
+    ++total[k.a];
+    ++total[k.b];
+    if (k.broken) {
+      ++broken[k.a];
+      ++broken[k.b];
+      continue;
+    }
+    const float strain = float(springLength(s, k, period) / k.restLength - 1.0);
+    w.maxStrain[k.a] = std::max(w.maxStrain[k.a], strain);
+    w.maxStrain[k.b] = std::max(w.maxStrain[k.b], strain);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (total[i]) w.brokenFraction[i] = float(broken[i]) / float(total[i]);
+  }
+  return w;
+}
+
+void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s, double time,
+                       const std::vector<sim::GpuSpring>* springs, glm::vec3 period) {
+  std::ofstream out = openVtk(path, "hemo particles", time);
+  const std::size_t n = s.positions.size();
   out << "POINTS " << n << " float\n";
   for (const auto& p : s.positions) out << p.x << ' ' << p.y << ' ' << p.z << '\n';
   out << "VERTICES " << n << ' ' << 2 * n << '\n';
@@ -24,8 +82,35 @@ void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s
   for (const auto& d : s.densityPressure) out << d.y << '\n';
   out << "SCALARS kind int 1\nLOOKUP_TABLE default\n";
   for (const auto& v : s.velocities) out << int(v.w) << '\n';
+  out << "SCALARS mass_kg float 1\nLOOKUP_TABLE default\n";
+  for (const auto& p : s.positions) out << p.w << '\n';
   out << "SCALARS id unsigned_int 1\nLOOKUP_TABLE default\n";
   for (auto id : s.ids) out << id << '\n';
+  if (springs) {
+    const WallPointStats w = wallPointStats(s, *springs, period);
+    out << "SCALARS max_strain float 1\nLOOKUP_TABLE default\n";
+    for (float x : w.maxStrain) out << x << '\n';
+    out << "SCALARS broken_fraction float 1\nLOOKUP_TABLE default\n";
+    for (float x : w.brokenFraction) out << x << '\n';
+  }
+  if (!out) throw std::runtime_error("failed while writing VTK file '" + path.string() + "'");
+}
+
+void writeSpringsVtk(const std::filesystem::path& path, const sim::Snapshot& s, const std::vector<sim::GpuSpring>& springs,
+                     double time, glm::vec3 period) {
+  checkSprings(s, springs);
+  std::ofstream out = openVtk(path, "hemo springs", time);
+  const std::size_t n = s.positions.size(), m = springs.size();
+  out << "POINTS " << n << " float\n";
+  for (const auto& p : s.positions) out << p.x << ' ' << p.y << ' ' << p.z << '\n';
+  out << "LINES " << m << ' ' << 3 * m << '\n';
+  for (const auto& k : springs) out << "2 " << k.a << ' ' << k.b << '\n';
+  out << "CELL_DATA " << m << "\nSCALARS strain float 1\nLOOKUP_TABLE default\n";
+  for (const auto& k : springs) out << float(springLength(s, k, period) / k.restLength - 1.0) << '\n';
+  out << "SCALARS tension_N float 1\nLOOKUP_TABLE default\n";
+  for (const auto& k : springs) out << (k.broken ? 0.0f : float(k.stiffness * (springLength(s, k, period) - k.restLength))) << '\n';
+  out << "SCALARS broken int 1\nLOOKUP_TABLE default\n";
+  for (const auto& k : springs) out << (k.broken ? 1 : 0) << '\n';
   if (!out) throw std::runtime_error("failed while writing VTK file '" + path.string() + "'");
 }
 

@@ -163,27 +163,42 @@ AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& a) {
       }
   }
 
-  // Particles: the wall, then the fluid on the tube's lattice inside the tube or the sac, at
-  // least kFluidClearance spacings from the wall's first layer and from every wall point
-  // (nearer, and the fluid starts compressed; much further, and it starts with a gap that
-  // it rushes to fill).
+  // Particles: the wall, then the fluid: the tube's rings (tubeFluidPoints) and, outside the
+  // tube's lumen, concentric Fibonacci shells about the sac's centre at radii (k + 1/2) dr
+  // (dr = Rs / round(Rs / dp), round(4 pi r^2 / dr^2) points each, one per dr^3 of the shell
+  // they stand for), the outer one a spacing inside the sac's first layer. Fluid points
+  // nearer than kFluidClearance spacings to a wall point are dropped (at the neck's rim),
+  // and shell points that crowd a ring point at the lumen's edge.
   ParticleSet& set = b.particles;
   for (std::uint32_t i = 0; i < b.wall; ++i) set.add(glm::vec3(pos[i]), t.fluidMass, float(HEMO_KIND_WALL), glm::vec3(inward[i]));
-  const double dx = double(t.length) / tube.along;
-  const double tubeLimit = t.radius + (0.5 - kFluidClearance) * dp, sacLimit = a.sacRadius + (0.5 - kFluidClearance) * dp;
-  const int reach = int(std::ceil(t.radius / dp));
-  const int side = std::max(reach, int(std::ceil(a.sacRadius / dp)));
-  const int top = int(std::ceil((c.z - t.centreYZ.y + a.sacRadius) / dp));
-  for (std::uint32_t i = 0; i < tube.along; ++i)
-    for (int j = -side; j <= side; ++j)
-      for (int k = -reach; k <= top; ++k) {
-        const glm::dvec3 p(t.x0 + (i + 0.5) * dx, t.centreYZ.x + (j + 0.5) * dp, t.centreYZ.y + (k + 0.5) * dp);
-        if (axisDistance(t, p) > tubeLimit && glm::length(p - c) > sacLimit) continue;
-        bool clash = false;
-        for (std::uint32_t w = 0; w < b.wall && !clash; ++w) clash = glm::length(pos[w] - p) < kFluidClearance * dp;
-        if (clash) continue;
-        set.add(glm::vec3(p), t.fluidMass, float(HEMO_KIND_FLUID));
-      }
+  auto clearOfWall = [&](const glm::dvec3& p) {
+    for (std::uint32_t w = 0; w < b.wall; ++w) {
+      if (glm::length(pos[w] - p) < kFluidClearance * dp) return false;
+    }
+    return true;
+  };
+  std::vector<glm::dvec3> fluid;
+  for (const glm::dvec3& p : tubeFluidPoints(t, tube.along)) {
+    if (clearOfWall(p)) fluid.push_back(p);
+  }
+  const std::size_t ringPoints = fluid.size();
+  const auto shells = static_cast<std::uint32_t>(std::max(1L, std::lround(a.sacRadius / dp)));
+  const double dr = double(a.sacRadius) / shells;
+  for (std::uint32_t k = 0; k < shells; ++k) {
+    const double S = (k + 0.5) * dr;
+    const auto count = static_cast<std::uint32_t>(std::max(1L, std::lround(4.0 * std::numbers::pi * S * S / (dr * dr))));
+    for (std::uint32_t m = 0; m < count; ++m) {
+      const double z = 1.0 - (2.0 * m + 1.0) / count;
+      const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+      const double phi = golden * m + k;  // each shell turned, so shells do not line up
+      const glm::dvec3 p = c + S * glm::dvec3(r * std::cos(phi), r * std::sin(phi), z);
+      if (axisDistance(t, p) < t.radius || !clearOfWall(p)) continue;
+      bool crowded = false;
+      for (std::size_t j = 0; j < ringPoints && !crowded; ++j) crowded = glm::length(fluid[j] - p) < kFluidClearance * dp;
+      if (!crowded) fluid.push_back(p);
+    }
+  }
+  for (const glm::dvec3& p : fluid) set.add(glm::vec3(p), t.fluidMass, float(HEMO_KIND_FLUID));
   set.fluid = set.size() - b.wall;
   set.boundary = 0;
   set.numberIds();

@@ -16,7 +16,7 @@ using Json = nlohmann::json;
 
 namespace {
 
-enum class Kind { Number, Integer, Bool, String, Vec3, Choice, ChoiceList, Objects, Section };
+enum class Kind { Number, Integer, Bool, String, Vec3, NumberList, Choice, ChoiceList, Objects, Section };
 
 struct Field {
   std::string key;
@@ -92,6 +92,17 @@ const std::vector<Field>& schema() {
            {"neck_width_m", Kind::Number, "m", 0, 1e3, false, 0.0, "saccular_aneurysm: width of the opening between tube and sac."},
            {"sac_stiffness_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "saccular_aneurysm: sac springs' stiffness / the tube's."},
            {"sac_strength_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "saccular_aneurysm: sac springs' maximum force / the tube's."},
+           {"inflow", Kind::Section, "", 0, 0, false, Json::object(), "Driven inflow (periodic vessels): fluid in a zone at the start of the tube moves at a prescribed axial velocity, and what leaves the far end comes back through the periodic seam (recycled; the particle count never changes). A pump: it sets the flow rate whatever the pressure.", {},
+            {
+                {"profile", Kind::Choice, "", 0, 0, false, "none", "Velocity profile over the cross-section: parabolic (Poiseuille, peak 2x the mean), plug (uniform), or none (no inflow).", {"none", "parabolic", "plug"}},
+                {"mean_speed_m_s", Kind::Number, "m/s", -1e3, 1e3, false, 0.0, "Mean speed U over the cross-section (negative: flow along -x)."},
+                {"zone_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the driven zone from the tube's start; at least the kernel support 2h, at most half the tube."},
+                {"pulse_period_s", Kind::Number, "s", 0, 1e6, false, 0.0, "Period of the waveform (0: constant speed)."},
+                {"waveform", Kind::NumberList, "1", -100, 100, false, Json::array(), "Pulsatile flow: u(t) = U w(t), w sampled at equal steps over one period (2 to 64 samples, linear in between, periodic). Empty: w = 1."},
+                {"ramp_s", Kind::Number, "s", 0, 1e6, false, 0.0, "u rises linearly from 0 over this time (0: at once)."},
+                {"hold_lumen_pressure", Kind::Bool, "", 0, 0, false, false, "The zone is also the blood supply: each step a zone particle's mass becomes m rho0 / rho (between its initial mass and max_mass_ratio times it), so the zone holds the lumen at fluid.background_pressure_Pa while the wall stretches and blood leaves through a rupture."},
+                {"max_mass_ratio", Kind::Number, "1", 1, 1e3, false, 4.0, "Cap of a particle's mass over its initial mass under hold_lumen_pressure."},
+            }},
        }},
       {"forces", Kind::Section, "", 0, 0, false, Json::object(), "Body forces.", {},
        {
@@ -126,6 +137,7 @@ std::string kindName(Kind k) {
     case Kind::Bool: return "boolean";
     case Kind::String: return "string";
     case Kind::Vec3: return "array of 3 numbers";
+    case Kind::NumberList: return "array of numbers";
     case Kind::Choice: return "string";
     case Kind::ChoiceList: return "array of strings";
     case Kind::Objects: return "array of objects";
@@ -223,6 +235,11 @@ class Checker {
         for (std::size_t k = 0; k < 3; ++k) checkNumber(p + "[" + std::to_string(k) + "]", v[k], Field{"", Kind::Number, f.unit, f.min, f.max});
         return v;
       }
+      case Kind::NumberList: {
+        if (!v.is_array()) fail(p, "expected an array of numbers" + (f.unit.empty() || f.unit == "1" ? std::string() : " (" + f.unit + ")") + ", got " + v.dump());
+        for (std::size_t k = 0; k < v.size(); ++k) checkNumber(p + "[" + std::to_string(k) + "]", v[k], Field{"", Kind::Number, f.unit, f.min, f.max});
+        return v;
+      }
       case Kind::Objects: {
         if (!v.is_array()) fail(p, "expected an array of objects, got " + v.dump());
         if (double(v.size()) < f.min) fail(p, "needs at least " + fmt(f.min) + " entr" + (f.min == 1 ? "y" : "ies"));
@@ -260,6 +277,50 @@ bool inside(const Box& inner, const Box& outer, float slack) {
 }
 
 // `v`: the checked section (defaults filled in); `raw`: what the file gave.
+void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene& s, Vessel& w) {
+  const std::string profile = in["profile"].get<std::string>();
+  if (profile == "none") {
+    for (auto it = raw.begin(); it != raw.end(); ++it) {
+      if (it.key() != "profile") c.fail("vessel.inflow." + it.key(), "is set but vessel.inflow.profile is \"none\" (choose \"parabolic\" or \"plug\")");
+    }
+    return;
+  }
+  if (!s.sph.periodic[0]) {
+    c.fail("vessel.inflow", "needs a periodic x axis (domain.periodic [\"x\"]): the outflow is recycled to the inlet through the periodic seam");
+  }
+  sim::Inflow f;
+  f.profile = profile == "plug" ? sim::Inflow::Profile::Plug : sim::Inflow::Profile::Parabolic;
+  f.meanSpeed = in["mean_speed_m_s"].get<float>();
+  const float zone = in["zone_length_m"].get<float>();
+  if (!(zone >= s.sph.supportRadius() * (1.0f - 1e-5f))) {
+    c.fail("vessel.inflow.zone_length_m", "must be at least the kernel support 2h = " + fmt(s.sph.supportRadius()) + " m (so no fluid reaches through the zone), got " + fmt(zone));
+  }
+  if (zone > 0.5f * w.length) c.fail("vessel.inflow.zone_length_m", "must be at most half the tube's length (" + fmt(0.5 * w.length) + " m)");
+  f.zoneStart = w.start.x;
+  f.zoneEnd = w.start.x + zone;
+  f.centreY = w.start.y;
+  f.centreZ = w.start.z;
+  f.radius = w.radius;
+  f.period = in["pulse_period_s"].get<float>();
+  f.ramp = in["ramp_s"].get<float>();
+  for (const auto& x : in["waveform"]) f.waveform.push_back(x.get<float>());
+  f.holdPressure = in["hold_lumen_pressure"].get<bool>();
+  f.maxMassRatio = in["max_mass_ratio"].get<float>();
+  if (!f.waveform.empty()) {
+    if (f.waveform.size() < 2 || f.waveform.size() > sim::Inflow::kMaxSamples) {
+      c.fail("vessel.inflow.waveform", "needs 2 to " + std::to_string(sim::Inflow::kMaxSamples) + " samples, got " + std::to_string(f.waveform.size()));
+    }
+    if (!(f.period > 0.0f)) c.fail("vessel.inflow.pulse_period_s", "must be positive when vessel.inflow.waveform is given");
+  } else if (f.period > 0.0f) {
+    c.fail("vessel.inflow.waveform", "is required when vessel.inflow.pulse_period_s is set (the samples of one period)");
+  }
+  if (f.meanSpeed == 0.0f) c.fail("vessel.inflow.mean_speed_m_s", "must be non-zero when an inflow profile is chosen");
+  if (!(s.sph.backgroundPressure > 0.0f)) {
+    c.fail("fluid.background_pressure_Pa", "must be positive with a vessel.inflow: the lumen pressure is what pushes the fluid into the zone behind the pump (without it the zone runs empty); a few times rho U^2 is enough");
+  }
+  w.inflow = f;
+}
+
 void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   const std::string shape = v["shape"].get<std::string>();
   auto given = [&](const char* key) { return raw.contains(key); };
@@ -296,6 +357,7 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
       if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a saccular_aneurysm");
     }
   }
+  parseInflow(c, v["inflow"], raw.contains("inflow") ? raw["inflow"] : Json::object(), s, w);
   if (w.radius < 2.0f * s.sph.spacing) c.fail("vessel.radius_m", "must be at least two particle spacings (" + fmt(2.0 * s.sph.spacing) + " m)");
   w.periodic = s.sph.periodic[0];
   if (s.sph.periodic[1] || s.sph.periodic[2]) c.fail("domain.periodic", "a vessel allows only x to be periodic (its axis)");
@@ -472,7 +534,7 @@ void collect(const std::vector<Field>& fields, const std::string& prefix, std::v
       return s;
     }() : kindName(f.kind);
     d.unit = f.unit == "1" ? "-" : f.unit;
-    if (f.kind == Kind::Number || f.kind == Kind::Integer || f.kind == Kind::Vec3) {
+    if (f.kind == Kind::Number || f.kind == Kind::Integer || f.kind == Kind::Vec3 || f.kind == Kind::NumberList) {
       d.range = std::string(f.minExclusive ? "(" : "[") + fmt(f.min) + ", " + fmt(f.max) + "]";
     } else if (f.kind == Kind::Objects) {
       d.range = ">= " + fmt(f.min) + " entries";

@@ -89,23 +89,29 @@ TubeBuild buildTube(const TubeSpec& t) {
           if (t.periodic || i > 0) link(id(i, k, l), id((i + along - 1) % along, k, l + 1));
         }
       }
-  // Fluid: the dp lattice inside r < radius - dp/2 (half a spacing from the wall's first layer
-  // at radius + dp/2, so the fluid-wall gap is one spacing as between fluid particles).
-  const int reach = int(std::ceil(t.radius / dp));
-  const double limit = t.radius - 0.5 * dp;
-  for (std::uint32_t i = 0; i < along; ++i)
-    for (int j = -reach; j <= reach; ++j)
-      for (int k = -reach; k <= reach; ++k) {
-        const double y = (j + 0.5) * dp, z = (k + 0.5) * dp;
-        if (y * y + z * z > limit * limit) continue;
-        set.add(glm::vec3(float(t.x0 + (i + 0.5) * dx), float(t.centreYZ.x + y), float(t.centreYZ.y + z)), t.fluidMass,
-                float(HEMO_KIND_FLUID));
-      }
+  for (const glm::dvec3& p : tubeFluidPoints(t, along)) set.add(glm::vec3(p), t.fluidMass, float(HEMO_KIND_FLUID));
   set.fluid = set.size() - b.wall;
   set.boundary = 0;
   set.numberIds();
   b.network.validate();
   return b;
+}
+
+std::vector<glm::dvec3> tubeFluidPoints(const TubeSpec& t, std::uint32_t slices) {
+  const double dp = t.spacing, dx = double(t.length) / slices;
+  const auto rings = static_cast<std::uint32_t>(std::max(1L, std::lround(t.radius / dp)));
+  const double dr = double(t.radius) / rings;
+  std::vector<glm::dvec3> points;
+  for (std::uint32_t i = 0; i < slices; ++i)
+    for (std::uint32_t k = 0; k < rings; ++k) {
+      const double r = (k + 0.5) * dr;
+      const auto count = static_cast<std::uint32_t>(std::max(1L, std::lround(2.0 * std::numbers::pi * r / dr)));
+      for (std::uint32_t m = 0; m < count; ++m) {
+        const double theta = 2.0 * std::numbers::pi * (m + 0.5 * (i % 2)) / count;
+        points.emplace_back(t.x0 + (i + 0.5) * dx, t.centreYZ.x + r * std::cos(theta), t.centreYZ.y + r * std::sin(theta));
+      }
+    }
+  return points;
 }
 
 double hoopRupturePressure(const TubeSpec& t, const TubeBuild& b) {

@@ -35,6 +35,7 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
   solver_ = std::make_unique<SphSolver>(context, *store_, scene.domain.min, scene.domain.max, scene.sph,
                                         scene.stepsPerBatch);
   if (build.network) solver_->attachWall(*build.network);  // a scene without walls runs no wall stage
+  if (scene.vessel && scene.vessel->inflow) solver_->setInflow(*scene.vessel->inflow);
   recorder_ = std::make_unique<gpu::CommandRecorder>(context);
   recorder_->begin();
   solver_->recordReset(*recorder_);

@@ -154,6 +154,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
+      inflow_(context, sizeof(InflowParams), gpu::MemoryUse::Device, "inflow params"),
       fluidCells_(context, grid_.spec().cellCount() * 4, gpu::MemoryUse::Device, "fluid cell flags"),
       savedPos_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "rk2 saved positions"),
       savedVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "rk2 saved velocities"),
@@ -171,6 +172,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
     params_.invPeriod[a] = spec.periodic(a) ? 1.0f / spec.period[a] : 0.0f;
   }
   paramsBuffer_.upload(std::vector<SphParams>{params_});
+  inflow_.upload(std::vector<InflowParams>{disabledInflowParams()});
   auto& cache = context.pipelines();
   markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
@@ -240,7 +242,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_SAVED_VEL, &savedVel_},
                                        {HEMO_INTEGRATE_BINDING_STEP_DT, &stepDt_},
                                        {HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild()},
-                                       {HEMO_INTEGRATE_BINDING_REACH, &reach_}});
+                                       {HEMO_INTEGRATE_BINDING_REACH, &reach_},
+                                       {HEMO_INTEGRATE_BINDING_INFLOW, &inflow_},
+                                       {HEMO_INTEGRATE_BINDING_STATE, &state_}});
 }
 
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
@@ -251,6 +255,8 @@ void SphSolver::attachWall(const SpringNetwork& network) {
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }
+
+void SphSolver::setInflow(const Inflow& inflow) { inflow_.upload(std::vector<InflowParams>{makeInflowParams(inflow, settings_.restDensity, settings_.particleMass())}); }
 
 void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   if (wall_) wall_->recordReset(rec);

@@ -248,5 +248,95 @@ TEST(VesselScene, BadVesselsAreNamed) {
   expectError(j, {"fluid.background_pressure_Pa"});
 }
 
+TEST(VesselScene, InflowIsParsedIntoTheTubesFrame) {
+  Json j = vesselScene();
+  j["vessel"]["start_m"] = {0.0, 0.001, -0.0005};
+  j["domain"]["min_m"] = {0.0, -0.004, -0.004};
+  j["vessel"]["inflow"] = Json::parse(R"({ "profile": "plug", "mean_speed_m_s": 0.2, "zone_length_m": 0.0014,
+                                           "pulse_period_s": 0.5, "waveform": [1.0, 2.0, 0.5], "ramp_s": 0.01,
+                                           "hold_lumen_pressure": true, "max_mass_ratio": 3.0 })");
+  const Scene s = parseScene(j.dump(), "v.json");
+  ASSERT_TRUE(s.vessel && s.vessel->inflow);
+  const sim::Inflow& f = *s.vessel->inflow;
+  EXPECT_EQ(f.profile, sim::Inflow::Profile::Plug);
+  EXPECT_FLOAT_EQ(f.zoneStart, 0.0f);
+  EXPECT_FLOAT_EQ(f.zoneEnd, 0.0014f);
+  EXPECT_FLOAT_EQ(f.centreY, 0.001f);
+  EXPECT_FLOAT_EQ(f.centreZ, -0.0005f);
+  EXPECT_FLOAT_EQ(f.radius, 0.00175f);
+  EXPECT_EQ(f.waveform.size(), 3u);
+  EXPECT_TRUE(f.holdPressure);
+  EXPECT_FLOAT_EQ(f.maxMassRatio, 3.0f);
+  EXPECT_FALSE(parseScene(vesselScene().dump(), "v.json").vessel->inflow) << "no inflow unless a profile is chosen";
+}
+
+TEST(VesselScene, BadInflowsAreNamed) {
+  auto with = [](const char* inflow) {
+    Json j = vesselScene();
+    j["vessel"]["inflow"] = Json::parse(inflow);
+    return j;
+  };
+  expectError(with(R"({ "profile": "parabolic", "mean_speed_m_s": 0.2, "zone_length_m": 0.0003 })"),
+              {"vessel.inflow.zone_length_m", "kernel support"});
+  expectError(with(R"({ "profile": "parabolic", "mean_speed_m_s": 0.2, "zone_length_m": 0.007 })"),
+              {"vessel.inflow.zone_length_m", "half the tube"});
+  expectError(with(R"({ "profile": "parabolic", "zone_length_m": 0.0014 })"), {"vessel.inflow.mean_speed_m_s", "non-zero"});
+  expectError(with(R"({ "profile": "plug", "mean_speed_m_s": 0.2, "zone_length_m": 0.0014, "waveform": [1.0, 2.0] })"),
+              {"vessel.inflow.pulse_period_s", "positive"});
+  expectError(with(R"({ "profile": "plug", "mean_speed_m_s": 0.2, "zone_length_m": 0.0014, "pulse_period_s": 1.0 })"),
+              {"vessel.inflow.waveform", "required"});
+  expectError(with(R"({ "profile": "plug", "mean_speed_m_s": 0.2, "zone_length_m": 0.0014, "pulse_period_s": 1.0, "waveform": [1.0] })"),
+              {"vessel.inflow.waveform", "2 to 64"});
+  expectError(with(R"({ "profile": "plug", "mean_speed_m_s": 0.2, "zone_length_m": 0.0014, "pulse_period_s": 1.0, "waveform": [1.0, "x"] })"),
+              {"vessel.inflow.waveform[1]", "number"});
+  expectError(with(R"({ "profile": "sideways" })"), {"vessel.inflow.profile", "unknown value"});
+  expectError(with(R"({ "mean_speed_m_s": 0.2 })"), {"vessel.inflow.mean_speed_m_s", "profile"});
+  Json noPressure = with(R"({ "profile": "plug", "mean_speed_m_s": 0.2, "zone_length_m": 0.0014 })");
+  noPressure["fluid"].erase("background_pressure_Pa");
+  expectError(noPressure, {"fluid.background_pressure_Pa", "inflow"});
+  Json closed = with(R"({ "profile": "plug", "mean_speed_m_s": 0.2, "zone_length_m": 0.0014 })");
+  closed["domain"]["periodic"] = Json::array();
+  closed["domain"]["min_m"][0] = -0.001;
+  closed["domain"]["max_m"][0] = 0.0123;
+  expectError(closed, {"vessel.inflow", "periodic"});
+}
+
+// The CPU evaluation of the waveform (the reference of sph/integrate.comp's).
+TEST(Inflow, WaveformRampAndProfile) {
+  sim::Inflow f;
+  f.zoneStart = 0.0f;
+  f.zoneEnd = 0.001f;
+  f.radius = 0.002f;
+  f.meanSpeed = 0.4f;
+  f.period = 1.0f;
+  f.waveform = {1.0f, 3.0f, 2.0f, 0.0f};
+  EXPECT_NEAR(f.meanSpeedAt(0.0), 0.4, 1e-7);
+  EXPECT_NEAR(f.meanSpeedAt(0.125), 0.4 * 2.0, 1e-6);   // halfway between samples 0 and 1
+  EXPECT_NEAR(f.meanSpeedAt(0.875), 0.4 * 0.5, 1e-6);   // between the last sample and the first
+  EXPECT_NEAR(f.meanSpeedAt(2.25), 0.4 * 3.0, 1e-6);    // periodic
+  EXPECT_NEAR(f.meanSpeedAt(-0.75), 0.4 * 3.0, 1e-6);
+  f.ramp = 0.5f;
+  EXPECT_NEAR(f.meanSpeedAt(0.25), 0.4 * 3.0 * 0.5, 1e-6);
+  EXPECT_NEAR(f.axialVelocity(2.0, 0.0), 2.0 * 0.4, 1e-6);  // parabolic: the peak is twice the mean
+  EXPECT_NEAR(f.axialVelocity(2.0, 0.001), 2.0 * 0.4 * 0.75, 1e-6);
+  EXPECT_EQ(f.axialVelocity(2.0, 0.003), 0.0);
+  f.profile = sim::Inflow::Profile::Plug;
+  EXPECT_NEAR(f.axialVelocity(2.0, 0.0019), 0.4, 1e-6);
+  // The mean of the parabolic profile over the disc is the mean speed.
+  f.profile = sim::Inflow::Profile::Parabolic;
+  double flux = 0.0;
+  const int rings = 2000;
+  for (int k = 0; k < rings; ++k) {
+    const double r = (k + 0.5) * f.radius / rings;
+    flux += f.axialVelocity(2.0, r) * 2.0 * std::numbers::pi * r * (f.radius / rings);
+  }
+  EXPECT_NEAR(flux / (std::numbers::pi * f.radius * f.radius), 0.4, 1e-6);
+  f.waveform = {1.0f};
+  EXPECT_THROW(f.validate(), std::invalid_argument);
+  f.waveform = {1.0f, 2.0f};
+  f.period = 0.0f;
+  EXPECT_THROW(f.validate(), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace hemo::scene

@@ -118,10 +118,18 @@ TEST(Tube, LatticeSpringsFramesAndFluid) {
       EXPECT_NEAR(s.restLength, glm::length(d), 1e-6f);
       EXPECT_LT(s.restLength, 2.0f * t.spacing);
     }
+    // The fluid's rings reach half a spacing from the lumen's edge (a spacing from the wall's
+    // first layer) all round, with one particle per dp^2 of the cross-section.
+    float outer = 0.0f;
     for (std::uint32_t i = b.wall; i < b.particles.size(); ++i) {
-      EXPECT_LE(std::hypot(x[i].y, x[i].z), t.radius - 0.5f * t.spacing + 1e-7f);
+      const float r = std::hypot(x[i].y, x[i].z);
+      EXPECT_LE(r, t.radius - 0.5f * t.spacing + 1e-6f);
+      outer = std::max(outer, r);
+      for (std::uint32_t j = b.wall; j < i; ++j) EXPECT_GT(glm::length(x[j] - x[i]), 0.45f * t.spacing) << i << " crowds " << j;
     }
-    EXPECT_EQ(b.particles.fluid, 12u * 60u);  // 60 lattice points per slice inside r < 4.5 dp
+    EXPECT_NEAR(outer, t.radius - 0.5f * t.spacing, 1e-6f);
+    EXPECT_EQ(b.particles.fluid, 12u * (3u + 9u + 16u + 22u + 28u));  // rings at 0.5 .. 4.5 dp: round(2 pi r / dp)
+    EXPECT_NEAR(double(b.particles.fluid) / 12.0, std::numbers::pi * 25.0, 1.0);  // pi R^2 / dp^2
   }
 }
 

@@ -7,9 +7,27 @@
 
 namespace hemo::io {
 
+// Per wall particle (by id): the largest strain (|x_a - x_b| / rest - 1, minimum image on
+// periodic axes) of its unbroken springs and the fraction of its springs that broke; both 0 for
+// particles without springs.
+struct WallPointStats {
+  std::vector<float> maxStrain;
+  std::vector<float> brokenFraction;
+};
+WallPointStats wallPointStats(const sim::Snapshot& snapshot, const std::vector<sim::GpuSpring>& springs,
+                              glm::vec3 period);
+
 // Legacy VTK polydata (ASCII) of all particles: velocity (m/s), density (kg/m^3),
-// pressure (Pa), kind (0 fluid, 1 boundary) and id. Throws std::runtime_error naming the file
+// pressure (Pa), kind (0 fluid, 1 boundary, 2 wall) and id; with springs also the wall's
+// max_strain and broken_fraction (wallPointStats). Throws std::runtime_error naming the file
 // if it cannot be written.
-void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& snapshot, double time);
+void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& snapshot, double time,
+                       const std::vector<sim::GpuSpring>* springs = nullptr, glm::vec3 period = glm::vec3(0.0f));
+
+// The spring network as VTK lines between particle positions, with per-spring strain,
+// tension (N, the elastic part k (|d| - rest)) and broken flag (0/1). A spring across a
+// periodic seam is drawn between the wrapped positions; its strain uses the minimum image.
+void writeSpringsVtk(const std::filesystem::path& path, const sim::Snapshot& snapshot,
+                     const std::vector<sim::GpuSpring>& springs, double time, glm::vec3 period);
 
 }  // namespace hemo::io

@@ -60,6 +60,9 @@ struct Vessel {
   float neckWidth = 0.0f;      // m
   float sacStiffnessScale = 1.0f;
   float sacStrengthScale = 1.0f;
+  // Driven inflow at the start of a periodic tube (the outflow comes back through the seam);
+  // none when the scene's vessel.inflow.profile is "none".
+  std::optional<sim::Inflow> inflow;
 };
 
 struct Scene {

@@ -14,6 +14,7 @@
 // for the kernel; docs/physics.md.
 #include "hemo/gpu/gate.hpp"
 #include "hemo/gpu/primitives.hpp"
+#include "hemo/sim/inflow.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
 #include "hemo/sim/particles.hpp"
 #include "hemo/sim/wall.hpp"
@@ -137,6 +138,9 @@ class SphSolver {
   // Set-up only, before the first step.
   void attachWall(const SpringNetwork& network);
   const MassSpring* wall() const { return wall_.get(); }
+  // Drives the fluid in a vessel's inflow zone (hemo/sim/inflow.hpp). Set-up only (an upload);
+  // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
+  void setInflow(const Inflow& inflow);
 
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);
@@ -172,6 +176,7 @@ class SphSolver {
   gpu::Buffer paramsBuffer_;
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, reach_, wallVel_;
   gpu::Buffer clock_, status_, log_;
+  gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer fluidCells_;
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)

@@ -1,0 +1,66 @@
+#pragma once
+// Driven inflow of a periodic vessel. A slab of the lumen at the start of the tube (the
+// inflow zone, x in [zoneStart, zoneEnd)) moves at a prescribed axial velocity: every fluid
+// particle that starts a step inside it within the tube's radius gets
+//   v = (u(t) f(r), 0, 0),  f = 2 (1 - r^2 / R^2) (parabolic) or 1 (plug),
+// so u(t) is the mean speed over the cross-section. u(t) = U w(t) ramp(t): U the mean speed,
+// w a periodic waveform (samples over one period, linearly interpolated; 1 when constant),
+// ramp(t) = min(t / ramp, 1). Fluid that leaves the far end of the tube comes back through the
+// periodic seam into the zone: the outflow is recycled to the inlet and the particle budget
+// never changes. The zone acts as a pump: it sets the flow rate whatever the pressure, and
+// keeps pushing blood through a rupture. Evaluated on the GPU in sph/integrate.comp.
+//
+// A pump does not add blood, and a closed loop of weakly compressible fluid loses its
+// pressure as the wall stretches (p falls by about 7 B dV/V) and as blood leaves through a
+// rupture. With holdPressure the zone is also the supply that keeps the lumen at its pressure:
+// every step each zone particle's mass becomes the one that brings its summed density to the
+// rest density rho0 (pressure p_bg, the lumen pressure), m <- m rho0 / rho, kept between the
+// initial mass m0 and maxMassRatio m0 (two-sided, so the scatter of single densities does not
+// ratchet the mass up). The flow carries the mass downstream; particles that took it up
+// stand for proportionally more volume (their spacing grows as (m / m0)^(1/3) at rest
+// density), and the cap bounds how long a bleed can be fed.
+#include <cstdint>
+#include <vector>
+
+namespace hemo::sim {
+
+struct Inflow {
+  enum class Profile { Parabolic, Plug };
+  Profile profile = Profile::Parabolic;
+  float zoneStart = 0.0f;  // m along x
+  float zoneEnd = 0.0f;    // m
+  float centreY = 0.0f;    // m, the tube's axis
+  float centreZ = 0.0f;    // m
+  float radius = 0.0f;     // m, the lumen's radius (particles farther out are not driven)
+  float meanSpeed = 0.0f;  // U (m/s), mean over the cross-section (may be negative: flow along -x)
+  float period = 0.0f;     // s, of the waveform (0: constant)
+  std::vector<float> waveform;  // w at t = k period / n, k = 0..n-1 (empty: constant)
+  float ramp = 0.0f;       // s: u rises linearly from 0 over this time (0: at once)
+  bool holdPressure = false;   // the zone supplies mass to hold rho >= rho0 (see above)
+  float maxMassRatio = 4.0f;   // cap of a particle's mass / the initial mass
+
+  static constexpr std::uint32_t kMaxSamples = 64;
+
+  // Mean speed u(t) (m/s) and the axial velocity at distance r from the axis, in double
+  // precision: the CPU reference of the GPU evaluation.
+  double meanSpeedAt(double t) const;
+  double axialVelocity(double t, double r) const;
+  // Throws std::invalid_argument naming the problem.
+  void validate() const;
+};
+
+// Mirror of the GLSL InflowParams block (compute_shaders/common/inflow.glsl), std430.
+struct InflowParams {
+  float zoneStart, zoneEnd, centreY, centreZ;
+  float radius, meanSpeed, period, ramp;
+  std::uint32_t profile, samples, enabled, holdPressure;
+  float restDensity, maxMass, baseMass, reserved;
+  float waveform[Inflow::kMaxSamples];
+};
+static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples);
+
+// `restDensity` rho0 (kg/m^3) and `particleMass` m0 (kg) of the fluid.
+InflowParams makeInflowParams(const Inflow& inflow, float restDensity, float particleMass);
+InflowParams disabledInflowParams();
+
+}  // namespace hemo::sim
