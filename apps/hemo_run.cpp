@@ -1,4 +1,5 @@
-// hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N] [--profile N]
+// hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N] [--stats-every N]
+//          [--profile N]
 // Runs a scene headless: a progress line, then a summary on screen and in DIR/summary.json.
 // Exit codes: 0 success; 1 bad input; 2 the simulation became non-finite or unstable;
 // 3 no usable Vulkan device or a device error.
@@ -23,13 +24,15 @@ using Json = nlohmann::json;
 
 const char* kUsage =
     "usage: hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N]\n"
-    "                [--profile N]\n"
+    "                [--stats-every N] [--profile N]\n"
     "  --out DIR        output directory (default: out/<scene name>)\n"
     "  --steps N        run N steps\n"
     "  --until SECONDS  run until this simulated time (default: the scene's time.end_time_s)\n"
     "  --device SEL     Vulkan device index or name part (default: HEMO_DEVICE, else the best)\n"
     "  --vtk-every N    write DIR/particles_<step>.vtk every N steps (and at the end); with a vessel\n"
     "                   also DIR/springs_<step>.vtk (strain, tension, broken)\n"
+    "  --stats-every N  write DIR/steps.csv: time, dt, max fluid speed, max density error, broken\n"
+    "                   springs and detached wall particles of every N-th step (recorded on the GPU)\n"
     "  --profile N      after the run, time N more steps stage by stage (GPU ms in stage_ms)\n"
     "  --png-every N, --surface-every N  need the renderer and marching cubes (not in this build)\n"
     "hemo-run --describe-scene   prints the scene-file parameter table\n";
@@ -56,7 +59,7 @@ int main(int argc, char** argv) {
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--out", "--steps", "--until", "--device", "--vtk-every", "--png-every",
-                                         "--surface-every", "--profile"});
+                                         "--surface-every", "--profile", "--stats-every"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SCENE.json");
     if (args.has("--steps") && args.has("--until")) throw hemo::cli::UsageError("give --steps or --until, not both");
     for (const char* opt : {"--png-every", "--surface-every"}) {
@@ -73,6 +76,7 @@ int main(int argc, char** argv) {
   hemo::sim::RunOptions options;
   std::uint32_t vtkEvery = 0;
   std::uint64_t profileSteps = 0;
+  std::uint32_t statsEvery = 0;
   hemo::scene::Scene scene;
   try {
     if (args.has("--steps")) options.steps = args.count("--steps", 0, 1, 4000000000ull);
@@ -92,6 +96,7 @@ int main(int argc, char** argv) {
     }
     vtkEvery = static_cast<std::uint32_t>(args.count("--vtk-every", 0, 1, 1000000000));
     profileSteps = args.count("--profile", 0, 1, 1000);
+    statsEvery = static_cast<std::uint32_t>(args.count("--stats-every", 0, 1, 1000000000));
     scene = hemo::scene::loadScene(args.positional[0]);
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-run: " << e.what() << "\n" << kUsage;
@@ -141,6 +146,21 @@ int main(int argc, char** argv) {
         hemo::io::writeParticlesVtk(out / name, snap, p.time);
       }
     };
+    std::ofstream csv;
+    if (statsEvery) {
+      csv.open(out / "steps.csv");
+      if (!csv) throw std::runtime_error("cannot write " + (out / "steps.csv").string());
+      csv << "step,time_s,dt_s,max_speed_m_s,max_density_error,broken_springs,detached_particles\n";
+      csv.precision(9);
+      sim.enableStepStats(statsEvery);
+      options.onStepStats = [&](const std::vector<hemo::sim::StepStatsRow>& rows) {
+        for (const auto& r : rows) {
+          csv << r.steps << ',' << r.time << ',' << r.dt << ',' << r.maxSpeed << ',' << r.maxDensityError << ','
+              << r.brokenSprings << ',' << r.detachedParticles << '\n';
+        }
+        if (!csv) throw std::runtime_error("failed while writing " + (out / "steps.csv").string());
+      };
+    }
     if (vtkEvery) {
       options.outputEvery = vtkEvery;
       options.onOutput = writeVtk;

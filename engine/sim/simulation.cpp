@@ -66,14 +66,24 @@ RunResult Simulation::run(const RunOptions& options) {
     if (options.outputEvery) batch = std::min<std::uint64_t>(batch, options.outputEvery - steps_ % options.outputEvery);
     const std::uint64_t before = clock.steps;
     recorder_->begin();
+    std::uint32_t statsRows = 0;
     for (std::uint64_t k = 0; k < batch; ++k) {
       solver_->recordStep(*recorder_, static_cast<std::uint32_t>(steps_ + k), static_cast<std::uint32_t>(k),
                           static_cast<float>(endTime));
+      if (stats_ && (steps_ + k) % statsEvery_ == 0) stats_->record(*recorder_, statsRows++);
     }
     recorder_->end();
     recorder_->submitAndWait();
     clock = solver_->readClock();
     checkStatus(steps_);
+    if (statsRows > 0 && options.onStepStats) {
+      std::vector<StepStatsRow> rows;
+      std::uint32_t last = static_cast<std::uint32_t>(before);
+      for (const StepStatsRow& r : stats_->read(statsRows)) {
+        if (r.steps > last) rows.push_back(r), last = r.steps;  // steps after the end time changed nothing
+      }
+      options.onStepStats(rows);
+    }
     // Steps after the end time change nothing and are not counted by the GPU clock.
     const std::uint64_t done = clock.steps - before;
     steps_ += done;
@@ -137,6 +147,11 @@ std::vector<std::pair<std::string, double>> Simulation::profileStep(int repeats)
     result.emplace_back(runs.front()[k].first, ms[ms.size() / 2]);
   }
   return result;
+}
+
+void Simulation::enableStepStats(std::uint32_t every) {
+  statsEvery_ = std::max(every, 1u);
+  if (!stats_) stats_ = std::make_unique<StepStats>(*context_, *store_, *solver_, scene_.stepsPerBatch);
 }
 
 Snapshot Simulation::snapshot() const {

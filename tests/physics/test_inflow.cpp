@@ -1,6 +1,7 @@
 // Issue 4: the driven inflow of a periodic vessel (hemo/sim/inflow.hpp). The zone's fluid
 // moves with the CPU reference's velocity (pulsatile waveform included); the flux it sets is
-// the flux downstream, with the particle count and the mass unchanged; and with the lumen's
+// the flux downstream, with the particle count and the mass unchanged (and the per-step
+// statistics match the state read back); with the lumen's
 // supply on, a stretching tube keeps its fluid at the rest density.
 #include "gpu_test.hpp"
 #include "hemo/scene/build.hpp"
@@ -8,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <cstdio>
@@ -48,8 +50,30 @@ TEST_F(InflowTest, ZoneFollowsTheWaveformAndSetsTheFlux) {
   std::uint32_t checked = 0;
   sim::RunOptions opt;
   opt.steps = 50;
+  // The per-step statistics come along (hemo/sim/stats.hpp): one row per step, the last of
+  // each batch checked against the state read back.
+  sim.enableStepStats(1);
+  std::vector<sim::StepStatsRow> rows;
+  opt.onStepStats = [&](const std::vector<sim::StepStatsRow>& batch) { rows = batch; };
   for (int batch = 0; batch < 12; ++batch) {
     sim.run(opt);
+    {
+      ASSERT_EQ(rows.size(), 50u);
+      const sim::Snapshot s = sim.snapshot();
+      double speed = 0.0, error = 0.0;
+      for (std::uint32_t i = 0; i < s.positions.size(); ++i) {
+        if (s.velocities[i].w != 0.0f) continue;
+        speed = std::max(speed, double(glm::length(glm::vec3(s.velocities[i]))));
+        error = std::max(error, std::abs(double(s.densityPressure[i].x) / scene.sph.restDensity - 1.0));
+      }
+      const sim::StepStatsRow& last = rows.back();
+      EXPECT_EQ(last.steps, sim.steps());
+      EXPECT_NEAR(last.time, sim.time(), 1e-6 * sim.time());
+      EXPECT_NEAR(last.maxSpeed, speed, 1e-6 * speed);
+      EXPECT_NEAR(last.maxDensityError, error, 1e-5);
+      EXPECT_EQ(last.brokenSprings, sim.brokenSprings());
+      for (std::size_t k = 1; k < rows.size(); ++k) EXPECT_EQ(rows[k].steps, rows[k - 1].steps + 1);
+    }
     const sim::SphClock clock = sim.solver().readClock();
     const double tStep = clock.time - clock.lastDt;  // the zone's velocity is set at the start of the step
     const sim::Snapshot s = sim.snapshot();

@@ -4,6 +4,7 @@
 // the clock and the status), never per step.
 #include "hemo/scene/build.hpp"
 #include "hemo/sim/sph.hpp"
+#include "hemo/sim/stats.hpp"
 
 #include <glm/vec2.hpp>
 
@@ -34,6 +35,8 @@ struct RunOptions {
   std::uint32_t outputEvery = 0;       // call onOutput every N steps (0: never)
   std::function<void(const Progress&)> onBatch;
   std::function<void(const Progress&)> onOutput;
+  // With enableStepStats: the rows of each batch (steps that changed nothing are left out).
+  std::function<void(const std::vector<StepStatsRow>&)> onStepStats;
 };
 
 struct RunResult {
@@ -60,6 +63,9 @@ class Simulation {
   RunResult run(const RunOptions& options);
 
   Snapshot snapshot() const;
+  // Records per-step statistics (hemo/sim/stats.hpp) of every `every`-th step from now on,
+  // delivered through RunOptions::onStepStats once per batch.
+  void enableStepStats(std::uint32_t every = 1);
   // GPU milliseconds of each stage of one step (median of `repeats` steps, run now and
   // counted like any other step). Empty if the device has no timestamps.
   std::vector<std::pair<std::string, double>> profileStep(int repeats = 5);
@@ -91,6 +97,8 @@ class Simulation {
   std::unique_ptr<ParticleStore> store_;
   std::unique_ptr<SphSolver> solver_;
   std::unique_ptr<gpu::CommandRecorder> recorder_;
+  std::unique_ptr<StepStats> stats_;
+  std::uint32_t statsEvery_ = 0;
   std::uint64_t steps_ = 0;
 };
 

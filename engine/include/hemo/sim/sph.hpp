@@ -154,6 +154,10 @@ class SphSolver {
   const gpu::Buffer& neighbourCounts() const { return ncount_; }
   const gpu::Buffer& neighbourList() const { return nlist_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
+  const gpu::Buffer& paramsBuffer() const { return paramsBuffer_; }
+  // The clock's two records and which one holds the current time (after the recorded steps).
+  const gpu::Buffer& clockBuffer() const { return clock_; }
+  std::uint32_t clockParity() const { return clockParity_; }
   // Largest distance a particle may move from where the list was built before recordStep
   // rebuilds it (half the list's skin), m.
   float rebuildThreshold() const;

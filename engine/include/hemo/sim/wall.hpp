@@ -93,6 +93,7 @@ class MassSpring {
   // them (a readback).
   std::uint32_t readDetachedCount() const;
   std::vector<GpuSpring> readSprings() const;        // with their broken flags (a readback)
+  const gpu::Buffer& counters() const { return counters_; }  // uint[4] (interface/wall.h)
 
  private:
   const ParticleStore* particles_;
