@@ -48,6 +48,7 @@ SceneBuild buildScene(const Scene& s) {
         out.network = std::move(b.network);
         out.wall = b.wall;
       }
+      out.network->timeStepFactor = s.vessel->timeStepFactor;
     } catch (const std::invalid_argument& e) {
       throw SceneError(s.name + ": vessel: " + e.what());
     }

@@ -92,6 +92,7 @@ const std::vector<Field>& schema() {
            {"neck_width_m", Kind::Number, "m", 0, 1e3, false, 0.0, "saccular_aneurysm: width of the opening between tube and sac."},
            {"sac_stiffness_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "saccular_aneurysm: sac springs' stiffness / the tube's."},
            {"sac_strength_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "saccular_aneurysm: sac springs' maximum force / the tube's."},
+           {"time_step_factor", Kind::Number, "1", 0, 1, true, 0.1, "The wall's time-step limit: dt <= factor sqrt(m / sum k) at every wall point. Symplectic Euler is stable up to 1 (a spring network's highest frequency is at most sqrt(2 sum k / m)); RK2 midpoint amplifies an undamped spring by about 1 + (omega dt)^4 / 8 per step and relies on the springs' damping, so keep it small there."},
            {"inflow", Kind::Section, "", 0, 0, false, Json::object(), "Driven inflow (periodic vessels): fluid in a zone at the start of the tube moves at a prescribed axial velocity, and what leaves the far end comes back through the periodic seam (recycled; the particle count never changes). A pump: it sets the flow rate whatever the pressure.", {},
             {
                 {"profile", Kind::Choice, "", 0, 0, false, "none", "Velocity profile over the cross-section: parabolic (Poiseuille, peak 2x the mean), plug (uniform), or none (no inflow).", {"none", "parabolic", "plug"}},
@@ -345,6 +346,7 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   w.neckWidth = v["neck_width_m"].get<float>();
   w.sacStiffnessScale = v["sac_stiffness_scale"].get<float>();
   w.sacStrengthScale = v["sac_strength_scale"].get<float>();
+  w.timeStepFactor = v["time_step_factor"].get<float>();
   for (const char* key : {"length_m", "radius_m", "point_mass_kg", "stiffness_N_m"}) {
     if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
   }

@@ -60,6 +60,7 @@ struct Vessel {
   float neckWidth = 0.0f;      // m
   float sacStiffnessScale = 1.0f;
   float sacStrengthScale = 1.0f;
+  float timeStepFactor = 0.1f;  // the wall's dt <= factor sqrt(m / sum k) (sim::SpringNetwork)
   // Driven inflow at the start of a periodic tube (the outflow comes back through the seam);
   // none when the scene's vessel.inflow.profile is "none".
   std::optional<sim::Inflow> inflow;
