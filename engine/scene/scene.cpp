@@ -1,6 +1,8 @@
 #include "hemo/scene/scene.hpp"
 
 #include "hemo/scene/aneurysm.hpp"
+#include "hemo/scene/build.hpp"
+#include "hemo/scene/tube.hpp"
 
 #include <glm/common.hpp>
 #include <nlohmann/json.hpp>
@@ -84,7 +86,11 @@ const std::vector<Field>& schema() {
            {"radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Inner radius; the wall's layers lie at radius + (l + 1/2) dp."},
            {"layers", Kind::Integer, "1", 1, 4, false, 2, "Wall layers."},
            {"point_mass_kg", Kind::Number, "kg", 0, 1e6, false, 0.0, "Mass of each wall point (for the springs)."},
-           {"stiffness_N_m", Kind::Number, "N/m", 0, 1e12, false, 0.0, "Stiffness of every tube spring."},
+           {"stiffness_N_m", Kind::Number, "N/m", 0, 1e12, false, 0.0, "Stiffness of every tube spring (or give youngs_modulus_Pa and wall_thickness_m)."},
+           {"youngs_modulus_Pa", Kind::Number, "Pa", 0, 1e12, false, 0.0, "Instead of stiffness_N_m: the wall's Young's modulus E; the springs get the hoop stiffness of a thin tube of this modulus and wall_thickness_m (docs/physics.md)."},
+           {"poisson_ratio", Kind::Number, "1", 0, 0.5, false, 0.45, "Poisson's ratio nu of the wall (with youngs_modulus_Pa; must be below 0.5)."},
+           {"wall_thickness_m", Kind::Number, "m", 0, 1, false, 0.0, "Wall thickness t for the tissue mapping (youngs_modulus_Pa, failure_stress_Pa)."},
+           {"failure_stress_Pa", Kind::Number, "Pa", 0, 1e12, false, 0.0, "Instead of max_force_N: the tissue's failure stress sigma_f; springs break so that the tube ruptures at P* = sigma_f t / R."},
            {"damping_N_s_m", Kind::Number, "N s/m", 0, 1e12, false, 0.0, "Damping of every spring, along the spring."},
            {"max_force_N", Kind::Number, "N", 0, 1e30, false, 1e30, "A spring whose tension exceeds this breaks, for good."},
            {"anchor_ends", Kind::Bool, "", 0, 0, false, true, "Fix the first and last rings of a non-periodic tube."},
@@ -347,9 +353,28 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   w.sacStiffnessScale = v["sac_stiffness_scale"].get<float>();
   w.sacStrengthScale = v["sac_strength_scale"].get<float>();
   w.timeStepFactor = v["time_step_factor"].get<float>();
-  for (const char* key : {"length_m", "radius_m", "point_mass_kg", "stiffness_N_m"}) {
+  for (const char* key : {"length_m", "radius_m", "point_mass_kg"}) {
     if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
   }
+  w.youngsModulus = v["youngs_modulus_Pa"].get<float>();
+  w.poissonRatio = v["poisson_ratio"].get<float>();
+  w.wallThickness = v["wall_thickness_m"].get<float>();
+  w.failureStress = v["failure_stress_Pa"].get<float>();
+  if (given("youngs_modulus_Pa") == given("stiffness_N_m")) {
+    c.fail("vessel.stiffness_N_m", "give either stiffness_N_m or youngs_modulus_Pa (with wall_thickness_m), not " +
+                                       std::string(given("stiffness_N_m") ? "both" : "neither"));
+  }
+  if (given("stiffness_N_m") && !(w.stiffness > 0.0f)) c.fail("vessel.stiffness_N_m", "must be positive");
+  if (given("max_force_N") && given("failure_stress_Pa")) c.fail("vessel.failure_stress_Pa", "give either max_force_N or failure_stress_Pa, not both");
+  const bool tissue = given("youngs_modulus_Pa") || given("failure_stress_Pa");
+  if (tissue && !(w.wallThickness > 0.0f)) c.fail("vessel.wall_thickness_m", "is required (and positive) with youngs_modulus_Pa or failure_stress_Pa");
+  if (!tissue && (given("wall_thickness_m") || given("poisson_ratio"))) {
+    c.fail(given("wall_thickness_m") ? "vessel.wall_thickness_m" : "vessel.poisson_ratio", "only applies with youngs_modulus_Pa or failure_stress_Pa");
+  }
+  for (const char* key : {"youngs_modulus_Pa", "failure_stress_Pa"}) {
+    if (given(key) && !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "must be positive");
+  }
+  if (!(w.poissonRatio < 0.5f)) c.fail("vessel.poisson_ratio", "must be below 0.5 (an incompressible membrane has no finite hoop stiffness here)");
   if (w.shape == Vessel::Shape::Tube) {
     for (const char* key : {"sac_radius_m", "neck_width_m", "sac_stiffness_scale", "sac_strength_scale"}) {
       if (given(key)) c.fail(std::string("vessel.") + key, "only applies to vessel.shape \"saccular_aneurysm\"");
@@ -384,6 +409,17 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   if (!inside(need, s.domain, slack)) {
     c.fail("vessel", "the vessel with its wall (x " + fmt(need.min.x) + ".." + fmt(need.max.x) + ", y " + fmt(need.min.y) + ".." +
                          fmt(need.max.y) + ", z " + fmt(need.min.z) + ".." + fmt(need.max.z) + " m) reaches outside the domain");
+  }
+  if (tissue) {
+    s.vessel = w;  // the layout the springs are fitted to
+    try {
+      const TissueSprings fit = springsFromTissue(vesselSpec(s).tube, given("youngs_modulus_Pa") ? w.youngsModulus : 1.0,
+                                                  w.poissonRatio, w.wallThickness, given("failure_stress_Pa") ? w.failureStress : 1.0);
+      if (given("youngs_modulus_Pa")) w.stiffness = fit.stiffness;
+      if (given("failure_stress_Pa")) w.maxForce = fit.maxForce;
+    } catch (const std::invalid_argument& e) {
+      c.fail("vessel", e.what());
+    }
   }
   s.vessel = w;
 }

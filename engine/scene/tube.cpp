@@ -4,6 +4,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -114,21 +115,56 @@ std::vector<glm::dvec3> tubeFluidPoints(const TubeSpec& t, std::uint32_t slices)
   return points;
 }
 
-double hoopRupturePressure(const TubeSpec& t, const TubeBuild& b) {
+namespace {
+struct HoopSums {
+  double sumKg2 = 0.0;  // sum_s k_s g_s^2 (N/m)
+  double uStar = std::numeric_limits<double>::infinity();  // m: the first spring's break
+  double gMax = 0.0;
+};
+HoopSums hoopSums(const TubeSpec& t, const TubeBuild& b) {
   const auto& pos = b.particles.positions;
   auto radial = [&](std::uint32_t i) {
     return glm::normalize(glm::dvec3(0.0, double(pos[i].y) - t.centreYZ.x, double(pos[i].z) - t.centreYZ.y));
   };
-  double sumKg2 = 0.0, uStar = std::numeric_limits<double>::infinity();
+  HoopSums h;
   for (const sim::Spring& s : b.network.springs) {
     glm::dvec3 d = glm::dvec3(pos[s.b]) - glm::dvec3(pos[s.a]);
     if (t.periodic) d.x -= double(t.length) * std::round(d.x / t.length);
     const double g = glm::dot(glm::normalize(d), radial(s.b) - radial(s.a));  // dL/du
-    sumKg2 += double(s.stiffness) * g * g;
-    if (g > 1e-9 && s.stiffness > 0.0f) uStar = std::min(uStar, double(s.maxForce) / (double(s.stiffness) * g));
+    h.sumKg2 += double(s.stiffness) * g * g;
+    h.gMax = std::max(h.gMax, g);
+    if (g > 1e-9 && s.stiffness > 0.0f) h.uStar = std::min(h.uStar, double(s.maxForce) / (double(s.stiffness) * g));
   }
-  if (!std::isfinite(uStar) || sumKg2 <= 0.0) throw std::invalid_argument("tube: no spring stretches when it widens");
-  return uStar * sumKg2 / (2.0 * std::numbers::pi * double(t.radius) * double(t.length));
+  return h;
+}
+}  // namespace
+
+double hoopRupturePressure(const TubeSpec& t, const TubeBuild& b) {
+  const HoopSums h = hoopSums(t, b);
+  if (!std::isfinite(h.uStar) || h.sumKg2 <= 0.0) throw std::invalid_argument("tube: no spring stretches when it widens");
+  return h.uStar * h.sumKg2 / (2.0 * std::numbers::pi * double(t.radius) * double(t.length));
+}
+
+double hoopStiffness(const TubeSpec& t, const TubeBuild& b) {
+  return hoopSums(t, b).sumKg2 / (2.0 * std::numbers::pi * double(t.radius) * double(t.length));
+}
+
+TissueSprings springsFromTissue(const TubeSpec& spec, double E, double nu, double thickness, double sigmaF) {
+  auto positive = [](double v) { return std::isfinite(v) && v > 0.0; };
+  if (!positive(E) || !positive(thickness) || !positive(sigmaF)) {
+    throw std::invalid_argument("tissue: Young's modulus, wall thickness and failure stress must be positive");
+  }
+  if (!(std::isfinite(nu) && nu >= 0.0 && nu < 0.5)) throw std::invalid_argument("tissue: Poisson's ratio must be in [0, 0.5)");
+  TubeSpec unit = spec;
+  unit.stiffness = 1.0f;
+  unit.maxForce = 1.0f;
+  const HoopSums h = hoopSums(unit, buildTube(unit));
+  if (h.sumKg2 <= 0.0 || h.gMax <= 0.0) throw std::invalid_argument("tube: no spring stretches when it widens");
+  const double twoPiL = 2.0 * std::numbers::pi * double(spec.length);
+  TissueSprings out;
+  out.stiffness = float(E * thickness * twoPiL / ((1.0 - nu * nu) * double(spec.radius) * h.sumKg2));
+  out.maxForce = float(sigmaF * thickness * twoPiL * h.gMax / h.sumKg2);
+  return out;
 }
 
 }  // namespace hemo::scene

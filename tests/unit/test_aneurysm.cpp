@@ -2,12 +2,14 @@
 #include "hemo/scene/aneurysm.hpp"
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/scene.hpp"
+#include "hemo/scene/tube.hpp"
 #include "scene_errors.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -227,7 +229,7 @@ TEST(VesselScene, BadVesselsAreNamed) {
   expectError(j, {"vessel.sac_radius_m", "saccular_aneurysm"});
   j = vesselScene();
   j["vessel"].erase("stiffness_N_m");
-  expectError(j, {"vessel.stiffness_N_m", "required"});
+  expectError(j, {"vessel.stiffness_N_m", "neither"});
   j = vesselScene();
   j["vessel"]["length_m"] = 0.01;
   expectError(j, {"vessel.length_m", "span the domain"});
@@ -299,6 +301,42 @@ TEST(VesselScene, BadInflowsAreNamed) {
   closed["domain"]["min_m"][0] = -0.001;
   closed["domain"]["max_m"][0] = 0.0123;
   expectError(closed, {"vessel.inflow", "periodic"});
+}
+
+// Tissue properties mapped onto the springs: the built lattice then widens under lumen
+// pressure P as a thin elastic tube does, u = (1 - nu^2) P R^2 / (E t), and ruptures at
+// Laplace's P* = sigma_f t / R.
+TEST(VesselScene, TissuePropertiesSetTheSprings) {
+  Json j = vesselScene();
+  j["vessel"]["shape"] = "tube";
+  for (const char* key : {"sac_radius_m", "neck_width_m", "stiffness_N_m", "max_force_N"}) j["vessel"].erase(key);
+  const double E = 1.5e6, nu = 0.45, t = 2.5e-4, sigma = 1.2e6;  // artery-like (docs/physics.md)
+  j["vessel"]["youngs_modulus_Pa"] = E;
+  j["vessel"]["poisson_ratio"] = nu;
+  j["vessel"]["wall_thickness_m"] = t;
+  j["vessel"]["failure_stress_Pa"] = sigma;
+  const Scene s = parseScene(j.dump(), "v.json");
+  const TubeSpec spec = vesselSpec(s).tube;
+  const TubeBuild b = buildTube(spec);
+  EXPECT_NEAR(hoopStiffness(spec, b) / (E * t / ((1.0 - nu * nu) * spec.radius * spec.radius)), 1.0, 1e-5);
+  EXPECT_NEAR(hoopRupturePressure(spec, b) / (sigma * t / spec.radius), 1.0, 1e-5);
+  std::printf("E %.3g Pa, t %.3g m -> k = %.4g N/m; sigma_f %.3g Pa -> f_max = %.4g N (P* = %.0f Pa)\n", E, t,
+              spec.stiffness, sigma, spec.maxForce, hoopRupturePressure(spec, b));
+  Json both = j;
+  both["vessel"]["stiffness_N_m"] = 5.0;
+  expectError(both, {"vessel.stiffness_N_m", "both"});
+  Json noThickness = j;
+  noThickness["vessel"].erase("wall_thickness_m");
+  expectError(noThickness, {"vessel.wall_thickness_m", "required"});
+  Json stray = vesselScene();
+  stray["vessel"]["wall_thickness_m"] = 1e-4;
+  expectError(stray, {"vessel.wall_thickness_m", "only applies"});
+  Json bothForce = j;
+  bothForce["vessel"]["max_force_N"] = 1e-3;
+  expectError(bothForce, {"vessel.failure_stress_Pa", "not both"});
+  Json incompressible = j;
+  incompressible["vessel"]["poisson_ratio"] = 0.5;
+  expectError(incompressible, {"vessel.poisson_ratio", "below 0.5"});
 }
 
 // The CPU evaluation of the waveform (the reference of sph/integrate.comp's).

@@ -61,6 +61,12 @@ struct Vessel {
   float sacStiffnessScale = 1.0f;
   float sacStrengthScale = 1.0f;
   float timeStepFactor = 0.1f;  // the wall's dt <= factor sqrt(m / sum k) (sim::SpringNetwork)
+  // Tissue properties, when the scene gives them instead of stiffness / max force (0: not
+  // given); the loader maps them onto the springs with scene::springsFromTissue.
+  float youngsModulus = 0.0f;   // Pa
+  float poissonRatio = 0.45f;
+  float wallThickness = 0.0f;   // m
+  float failureStress = 0.0f;   // Pa
   // Driven inflow at the start of a periodic tube (the outflow comes back through the seam);
   // none when the scene's vessel.inflow.profile is "none".
   std::optional<sim::Inflow> inflow;

@@ -53,6 +53,28 @@ TubeBuild buildTube(const TubeSpec& spec);
 // ends). Throws std::invalid_argument if no spring stretches.
 double hoopRupturePressure(const TubeSpec& spec, const TubeBuild& tube);
 
+// The hoop stiffness of the layout: the lumen pressure per unit uniform radial displacement,
+// sum_s k_s g_s^2 / (2 pi R L) (Pa/m), from the virtual work above.
+double hoopStiffness(const TubeSpec& spec, const TubeBuild& tube);
+
+// Springs from tissue properties: the uniform stiffness and maximum force that give the
+// built layout the hoop behaviour of a thin elastic tube of Young's modulus E (Pa), Poisson
+// ratio nu, wall thickness t (m) and failure (ultimate) stress sigma_f (Pa). A long tube under
+// lumen pressure P has hoop stress P R / t and, not stretching along its axis, hoop strain
+// (1 - nu^2) P R / (E t): its wall moves out by u = (1 - nu^2) P R^2 / (E t). The lattice moves
+// out by u = P 2 pi R L / (k sum g^2), so
+//   k = E t 2 pi L / ((1 - nu^2) R sum g^2),
+// and it ruptures at P* = sigma_f t / R (Laplace) when
+//   f_max = sigma_f t 2 pi L g_max / sum g^2
+// (g_s = dL_s/du, g_max the largest). Throws std::invalid_argument for non-positive inputs or
+// nu outside [0, 0.5).
+struct TissueSprings {
+  float stiffness = 0.0f;  // N/m
+  float maxForce = 0.0f;   // N
+};
+TissueSprings springsFromTissue(const TubeSpec& spec, double youngsModulus, double poissonRatio, double thickness,
+                                double failureStress);
+
 // The fluid filling of a tube's lumen, one spacing clear of the wall's first layer: slices
 // (x0 + (i + 1/2) dx) of concentric rings at radii (k + 1/2) dr (K = round(R / dp) rings,
 // dr = R / K, the outer one at R - dr/2), ring k holding round(2 pi r_k / dr) points (one
