@@ -206,12 +206,21 @@ AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& a) {
   return b;
 }
 
+double innerRadiusAt(const AneurysmSpec& a, double x) {
+  const TubeSpec& t = a.tube;
+  if (!(a.bulgeRadius > 0.0f) || !(a.bulgeLength > 0.0f)) return t.radius;
+  const double u = (x - (double(t.x0) + 0.5 * t.length)) / a.bulgeLength;
+  if (std::abs(u) >= 0.5) return t.radius;
+  const double c = std::cos(std::numbers::pi * u);
+  return t.radius + (double(a.bulgeRadius) - t.radius) * c * c;
+}
+
 bool outsideVessel(const AneurysmSpec& a, glm::vec3 point, float margin) {
   const TubeSpec& t = a.tube;
   const glm::dvec3 p(point);
   const double wall = double(t.layers) * t.spacing + margin;
   if (!t.periodic && (p.x < t.x0 || p.x > double(t.x0) + t.length)) return true;
-  if (axisDistance(t, p) <= t.radius + wall) return false;
+  if (axisDistance(t, p) <= innerRadiusAt(a, p.x) + wall) return false;
   return a.sacRadius <= 0.0f || glm::length(p - centreOf(a)) > a.sacRadius + wall;
 }
 

@@ -1,5 +1,7 @@
 #include "hemo/scene/build.hpp"
 
+#include "hemo/scene/fusiform.hpp"
+
 #include <stdexcept>
 
 namespace hemo::scene {
@@ -25,6 +27,12 @@ AneurysmSpec vesselSpec(const Scene& s) {
   if (v.shape == Vessel::Shape::SaccularAneurysm) {
     a.sacRadius = v.sacRadius;
     a.neckWidth = v.neckWidth;
+  }
+  if (v.shape == Vessel::Shape::FusiformAneurysm) {
+    a.bulgeRadius = v.bulgeRadius;
+    a.bulgeLength = v.bulgeLength;
+  }
+  if (v.shape != Vessel::Shape::Tube) {
     a.sacStiffnessScale = v.sacStiffnessScale;
     a.sacStrengthScale = v.sacStrengthScale;
   }
@@ -39,6 +47,11 @@ SceneBuild buildScene(const Scene& s) {
     try {
       if (s.vessel->shape == Vessel::Shape::SaccularAneurysm) {
         AneurysmBuild b = buildSaccularAneurysm(spec);
+        set = std::move(b.particles);
+        out.network = std::move(b.network);
+        out.wall = b.wall;
+      } else if (s.vessel->shape == Vessel::Shape::FusiformAneurysm) {
+        FusiformBuild b = buildFusiformAneurysm(spec);
         set = std::move(b.particles);
         out.network = std::move(b.network);
         out.wall = b.wall;

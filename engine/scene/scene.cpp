@@ -80,7 +80,7 @@ const std::vector<Field>& schema() {
        }},
       {"vessel", Kind::Section, "", 0, 0, false, Json::object(), "A vessel wall of wall particles joined by springs, filled with fluid; its axis runs along +x. Omit it for scenes without walls (no spring stage runs).", {},
        {
-           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, or none.", {"none", "tube", "saccular_aneurysm"}},
+           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, tube bulging all round halfway along, or none.", {"none", "tube", "saccular_aneurysm", "fusiform_aneurysm"}},
            {"start_m", Kind::Vec3, "m", -1e6, 1e6, false, Json::array({0.0, 0.0, 0.0}), "Start of the axis. With a periodic x axis the tube spans the domain: start x = domain min x."},
            {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length along +x (with a periodic x axis: the domain's period)."},
            {"radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Inner radius; the wall's layers lie at radius + (l + 1/2) dp."},
@@ -96,8 +96,10 @@ const std::vector<Field>& schema() {
            {"anchor_ends", Kind::Bool, "", 0, 0, false, true, "Fix the first and last rings of a non-periodic tube."},
            {"sac_radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "saccular_aneurysm: inner radius of the sac."},
            {"neck_width_m", Kind::Number, "m", 0, 1e3, false, 0.0, "saccular_aneurysm: width of the opening between tube and sac."},
-           {"sac_stiffness_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "saccular_aneurysm: sac springs' stiffness / the tube's."},
-           {"sac_strength_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "saccular_aneurysm: sac springs' maximum force / the tube's."},
+           {"bulge_radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "fusiform_aneurysm: inner radius at the bulge's middle (r(x) = R + (Rb - R) cos^2(pi (x - xc) / Lb))."},
+           {"bulge_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "fusiform_aneurysm: axial length Lb of the bulge, centred halfway along the tube."},
+           {"sac_stiffness_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "Aneurysms: the sac's or bulge's springs' stiffness / the tube's."},
+           {"sac_strength_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "Aneurysms: the sac's or bulge's springs' maximum force / the tube's."},
            {"time_step_factor", Kind::Number, "1", 0, 1, true, 0.1, "The wall's time-step limit: dt <= factor sqrt(m / sum k) at every wall point. Symplectic Euler is stable up to 1 (a spring network's highest frequency is at most sqrt(2 sum k / m)); RK2 midpoint amplifies an undamped spring by about 1 + (omega dt)^4 / 8 per step and relies on the springs' damping, so keep it small there."},
            {"inflow", Kind::Section, "", 0, 0, false, Json::object(), "Driven inflow (periodic vessels): fluid in a zone at the start of the tube moves at a prescribed axial velocity, and what leaves the far end comes back through the periodic seam (recycled; the particle count never changes). A pump: it sets the flow rate whatever the pressure.", {},
             {
@@ -333,12 +335,14 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   auto given = [&](const char* key) { return raw.contains(key); };
   if (shape == "none") {
     for (auto it = raw.begin(); it != raw.end(); ++it) {
-      if (it.key() != "shape") c.fail("vessel." + it.key(), "is set but vessel.shape is not (\"tube\" or \"saccular_aneurysm\")");
+      if (it.key() != "shape") c.fail("vessel." + it.key(), "is set but vessel.shape is not (\"tube\", \"saccular_aneurysm\" or \"fusiform_aneurysm\")");
     }
     return;
   }
   Vessel w;
-  w.shape = shape == "tube" ? Vessel::Shape::Tube : Vessel::Shape::SaccularAneurysm;
+  w.shape = shape == "tube"                ? Vessel::Shape::Tube
+            : shape == "saccular_aneurysm" ? Vessel::Shape::SaccularAneurysm
+                                           : Vessel::Shape::FusiformAneurysm;
   w.start = vec3(v["start_m"]);
   w.length = v["length_m"].get<float>();
   w.radius = v["radius_m"].get<float>();
@@ -352,6 +356,8 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   w.neckWidth = v["neck_width_m"].get<float>();
   w.sacStiffnessScale = v["sac_stiffness_scale"].get<float>();
   w.sacStrengthScale = v["sac_strength_scale"].get<float>();
+  w.bulgeRadius = v["bulge_radius_m"].get<float>();
+  w.bulgeLength = v["bulge_length_m"].get<float>();
   w.timeStepFactor = v["time_step_factor"].get<float>();
   for (const char* key : {"length_m", "radius_m", "point_mass_kg"}) {
     if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
@@ -376,12 +382,18 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   }
   if (!(w.poissonRatio < 0.5f)) c.fail("vessel.poisson_ratio", "must be below 0.5 (an incompressible membrane has no finite hoop stiffness here)");
   if (w.shape == Vessel::Shape::Tube) {
-    for (const char* key : {"sac_radius_m", "neck_width_m", "sac_stiffness_scale", "sac_strength_scale"}) {
-      if (given(key)) c.fail(std::string("vessel.") + key, "only applies to vessel.shape \"saccular_aneurysm\"");
+    for (const char* key : {"sac_radius_m", "neck_width_m", "sac_stiffness_scale", "sac_strength_scale", "bulge_radius_m", "bulge_length_m"}) {
+      if (given(key)) c.fail(std::string("vessel.") + key, "only applies to an aneurysm (vessel.shape \"saccular_aneurysm\" or \"fusiform_aneurysm\")");
     }
   } else {
-    for (const char* key : {"sac_radius_m", "neck_width_m"}) {
-      if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a saccular_aneurysm");
+    const bool saccular = w.shape == Vessel::Shape::SaccularAneurysm;
+    for (const char* key : {"sac_radius_m", "neck_width_m", "bulge_radius_m", "bulge_length_m"}) {
+      const bool sacKey = std::string(key).rfind("sac_", 0) == 0 || std::string(key) == "neck_width_m";
+      if (sacKey != saccular) {
+        if (given(key)) c.fail(std::string("vessel.") + key, "does not apply to a " + shape);
+        continue;
+      }
+      if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
     }
   }
   parseInflow(c, v["inflow"], raw.contains("inflow") ? raw["inflow"] : Json::object(), s, w);
@@ -398,6 +410,10 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   // The wall's outer layer reaches radius + layers dp; one more spacing of room around it.
   const float room = float(w.layers + 1) * s.sph.spacing;
   float halfWidth = w.radius + room, top = w.radius + room;
+  if (w.shape == Vessel::Shape::FusiformAneurysm) {
+    if (!(w.bulgeRadius > w.radius)) c.fail("vessel.bulge_radius_m", "must exceed vessel.radius_m");
+    top = halfWidth = w.bulgeRadius + room;
+  }
   if (w.shape == Vessel::Shape::SaccularAneurysm) {
     const double hw = 0.5 * w.neckWidth;
     if (hw >= w.radius || hw >= w.sacRadius) c.fail("vessel.neck_width_m", "must be narrower than the tube's and the sac's diameters");

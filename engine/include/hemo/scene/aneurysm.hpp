@@ -19,7 +19,16 @@ struct AneurysmSpec {
   float neckWidth = 0.0f;          // m, diameter of the opening between tube and sac
   float sacStiffnessScale = 1.0f;  // sac springs: stiffness = scale x the tube's
   float sacStrengthScale = 1.0f;   // sac springs: maximum force = scale x the tube's
+  // A fusiform aneurysm instead (hemo/scene/fusiform.hpp; sacRadius 0): the tube bulges to
+  // this inner radius halfway along, over this axial length; the bulge's springs take the
+  // sac's scales.
+  float bulgeRadius = 0.0f;        // m
+  float bulgeLength = 0.0f;        // m
 };
+
+// The inner radius (m) of the vessel at axial position x: the tube's, or on a fusiform
+// aneurysm R + (Rb - R) cos^2(pi (x - xc) / Lb) within Lb / 2 of the tube's middle xc.
+double innerRadiusAt(const AneurysmSpec& spec, double x);
 
 struct AneurysmBuild {
   ParticleSet particles;  // wall particles first (ids 0 .. wall-1), then the fluid

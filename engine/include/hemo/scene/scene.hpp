@@ -41,10 +41,10 @@ struct Tank {
 };
 
 // A vessel built of wall particles and springs, its axis along +x from `start`; filled with
-// fluid. Shapes: a straight tube, or a tube with a saccular aneurysm (a spherical sac on its
-// +z side, halfway along). Periodic along x when the domain is (the tube then spans it).
+// fluid. Shapes: a straight tube, a tube with a saccular aneurysm (a spherical sac on its
+// +z side, halfway along), or with a fusiform aneurysm (a bulge all round, halfway along). Periodic along x when the domain is (the tube then spans it).
 struct Vessel {
-  enum class Shape { Tube, SaccularAneurysm };
+  enum class Shape { Tube, SaccularAneurysm, FusiformAneurysm };
   Shape shape = Shape::Tube;
   glm::vec3 start{0.0f};       // m, where the axis starts
   float length = 0.0f;         // m
@@ -60,6 +60,8 @@ struct Vessel {
   float neckWidth = 0.0f;      // m
   float sacStiffnessScale = 1.0f;
   float sacStrengthScale = 1.0f;
+  float bulgeRadius = 0.0f;    // m (fusiform aneurysm): inner radius at the bulge's middle
+  float bulgeLength = 0.0f;    // m: axial length of the bulge
   float timeStepFactor = 0.1f;  // the wall's dt <= factor sqrt(m / sum k) (sim::SpringNetwork)
   // Tissue properties, when the scene gives them instead of stiffness / max force (0: not
   // given); the loader maps them onto the springs with scene::springsFromTissue.

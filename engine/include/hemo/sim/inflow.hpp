@@ -2,7 +2,9 @@
 // Driven inflow of a periodic vessel. A slab of the lumen at the start of the tube (the
 // inflow zone, x in [zoneStart, zoneEnd)) moves at a prescribed axial velocity: every fluid
 // particle that starts a step inside it within the tube's radius gets
-//   v = (u(t) f(r), 0, 0),  f = 2 (1 - r^2 / R^2) (parabolic) or 1 (plug),
+//   v_x = u(t) f(r),  f = 2 (1 - r^2 / R^2) (parabolic) or 1 (plug),
+// while across the section it moves under the SPH forces as anywhere (so particles that enter
+// the zone too close can part; a fully kinematic zone froze them together),
 // so u(t) is the mean speed over the cross-section. u(t) = U w(t) ramp(t): U the mean speed,
 // w a periodic waveform (samples over one period, linearly interpolated; 1 when constant),
 // ramp(t) = min(t / ramp, 1). Fluid that leaves the far end of the tube comes back through the
