@@ -3,6 +3,7 @@
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/scene/tube.hpp"
+#include "artery_spec.hpp"
 #include "scene_errors.hpp"
 
 #include <glm/geometric.hpp>
@@ -23,17 +24,8 @@ using Json = nlohmann::json;
 // The shipped scene's proportions: R = 5 dp, Rs = 8 dp, neck 6.9 dp, 32 dp long, periodic.
 AneurysmSpec spec() {
   AneurysmSpec a;
-  TubeSpec& t = a.tube;
-  t.spacing = 3.5e-4f;
-  t.length = 32 * t.spacing;
-  t.radius = 5 * t.spacing;
-  t.layers = 2;
-  t.pointMass = 5e-6f;
-  t.stiffness = 5.0f;
-  t.damping = 2e-3f;
-  t.maxForce = 1.65e-4f;
-  t.periodic = true;
-  t.fluidMass = 4.5e-8f;
+  a.tube = arteryTube(32);
+  const TubeSpec& t = a.tube;
   a.sacRadius = 8 * t.spacing;
   a.neckWidth = 2.4e-3f;
   a.sacStrengthScale = 0.5f;

@@ -2,6 +2,7 @@
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/fusiform.hpp"
 #include "hemo/scene/scene.hpp"
+#include "artery_spec.hpp"
 #include "scene_errors.hpp"
 
 #include <glm/geometric.hpp>
@@ -20,17 +21,8 @@ using Json = nlohmann::json;
 // R = 5 dp, bulging to 8 dp over 14 dp, in a periodic tube 28 dp long.
 AneurysmSpec spec() {
   AneurysmSpec a;
-  TubeSpec& t = a.tube;
-  t.spacing = 3.5e-4f;
-  t.length = 28 * t.spacing;
-  t.radius = 5 * t.spacing;
-  t.layers = 2;
-  t.pointMass = 5e-6f;
-  t.stiffness = 5.0f;
-  t.damping = 2e-3f;
-  t.maxForce = 1.65e-4f;
-  t.periodic = true;
-  t.fluidMass = 4.5e-8f;
+  a.tube = arteryTube(28);
+  const TubeSpec& t = a.tube;
   a.bulgeRadius = 8 * t.spacing;
   a.bulgeLength = 14 * t.spacing;
   return a;
