@@ -25,6 +25,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <numbers>
 #include <random>
 
 namespace {
@@ -316,7 +317,7 @@ Json table1(Context& ctx, int repeat) {
     const int slices = 9;
     const double length = slices * dp;
     // Fluid per slice of a tube of radius a dp is about pi a^2 (tubeFluidPoints).
-    const double radius = std::max(2.0, std::round(std::sqrt(pr.fluid / (slices * 3.14159265)))) * dp;
+    const double radius = std::max(2.0, std::round(std::sqrt(pr.fluid / (slices * std::numbers::pi)))) * dp;
     const double half = radius + 3 * dp;
     Json j = Json::parse(R"({
       "scene": "table1",

@@ -11,7 +11,7 @@ struct InflowParams {
   uint profile;     // 0 parabolic, 1 plug
   uint samples;     // waveform samples over one period
   uint enabled;
-  uint holdPressure;  // the zone supplies mass: m <- clamp(m rho0 / rho, baseMass, maxMass)
+  uint holdPressure;  // the zone supplies mass, relaxing towards m rho0 / rho within [baseMass, maxMass]
   float restDensity;  // rho0 (kg/m^3)
   float maxMass;      // kg, cap of a particle's mass
   float baseMass;     // kg, the initial particle mass (the floor)

@@ -89,14 +89,16 @@ float hemo_inflow_mean_speed(float time) {
   return inflow.meanSpeed * w * ramp;
 }
 
-// True when a fluid particle at x (start of the step) is in the inflow zone; u: its velocity.
-bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u) {
+// True when a fluid particle at x (start of the step) is in the inflow zone; u: its velocity,
+// s2: its (r / R)^2.
+bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2) {
   u = vec3(0.0);
+  s2 = 0.0;
   if (inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || x.x < inflow.zoneStart || x.x >= inflow.zoneEnd) {
     return false;
   }
   const vec2 d = x.yz - vec2(inflow.centreY, inflow.centreZ);
-  const float s2 = dot(d, d) / (inflow.radius * inflow.radius);
+  s2 = dot(d, d) / (inflow.radius * inflow.radius);
   if (s2 >= 1.0) {
     return false;  // outside the lumen (escaped blood is never driven)
   }
@@ -131,7 +133,8 @@ void main() {
       vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
       vec3 drift = v.xyz;
       vec3 u;
-      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u)) {
+      float s2;
+      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u, s2)) {
         vMid.x = u.x;
         drift.x = u.x;
       }
@@ -175,7 +178,8 @@ void main() {
     v.xyz /= 1.0 + params.dampingRate * dt;  // settling phase only (implicit, so never unstable)
   }
   vec3 u;
-  if (hemo_inflow_driven(start, v.w, clock.time - clock.compensation, u)) {
+  float s2;
+  if (hemo_inflow_driven(start, v.w, clock.time - clock.compensation, u, s2)) {
     // The axial velocity is prescribed; the motion across the section stays free, so
     // particles that enter the zone too close can still part (a fully kinematic zone froze
     // such pairs together: 6-13 kPa at its far end and an emptied slice after it).
@@ -194,10 +198,9 @@ void main() {
       // Only away from the wall (r < R - dp): next to it the summed density reads low (the
       // wall's two layers do not fill the kernel's support), and the outer ring took up to
       // 2.6 times its mass while the zone's middle ended 7% dense.
-      const vec2 d = start.yz - vec2(inflow.centreY, inflow.centreZ);
-      const float inner = inflow.radius - params.wallSpacing;
+      const float inner = 1.0 - params.wallSpacing / inflow.radius;  // R - dp, over R
       const float rho = state[i].x;
-      if (rho > 0.0 && dot(d, d) < inner * inner) {
+      if (rho > 0.0 && s2 < inner * inner) {
         x.w = clamp(x.w * (1.0 + 0.1 * (inflow.restDensity / rho - 1.0)), inflow.baseMass, inflow.maxMass);
       }
     }

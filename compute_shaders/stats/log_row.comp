@@ -3,6 +3,7 @@
 // the wall's counters. One invocation does the work.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/stats.h"
+#include "interface/wall.h"
 #include "common/clock.glsl"
 
 struct StatsRow {
@@ -28,6 +29,6 @@ void main() {
     return;
   }
   const ClockRecord c = clocks[pc.clockIn];
-  rows[pc.row] = StatsRow(c.time - c.compensation, c.lastDt, speedMinMax.y, errorMinMax.y, wallCounters[0], wallCounters[1],
-                          c.steps, 0u);
+  rows[pc.row] = StatsRow(c.time - c.compensation, c.lastDt, speedMinMax.y, errorMinMax.y,
+                          wallCounters[HEMO_WALL_COUNTER_BROKEN], wallCounters[HEMO_WALL_COUNTER_DETACHED], c.steps, 0u);
 }

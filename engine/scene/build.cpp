@@ -8,14 +8,17 @@ namespace hemo::scene {
 
 AneurysmSpec vesselSpec(const Scene& s) {
   if (!s.vessel) throw SceneError(s.name + ": the scene has no vessel");
-  const Vessel& v = *s.vessel;
+  return vesselSpec(*s.vessel, s.sph);
+}
+
+AneurysmSpec vesselSpec(const Vessel& v, const sim::SphSettings& fluid) {
   AneurysmSpec a;
   TubeSpec& t = a.tube;
   t.x0 = v.start.x;
   t.length = v.length;
   t.centreYZ = {v.start.y, v.start.z};
   t.radius = v.radius;
-  t.spacing = s.sph.spacing;
+  t.spacing = fluid.spacing;
   t.layers = v.layers;
   t.pointMass = v.pointMass;
   t.stiffness = v.stiffness;
@@ -23,7 +26,7 @@ AneurysmSpec vesselSpec(const Scene& s) {
   t.maxForce = v.maxForce;
   t.periodic = v.periodic;
   t.anchorEnds = v.anchorEnds;
-  t.fluidMass = s.sph.particleMass();
+  t.fluidMass = fluid.particleMass();
   if (v.shape == Vessel::Shape::SaccularAneurysm) {
     a.sacRadius = v.sacRadius;
     a.neckWidth = v.neckWidth;

@@ -7,6 +7,7 @@
 #include <glm/common.hpp>
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <limits>
@@ -386,13 +387,12 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
       if (given(key)) c.fail(std::string("vessel.") + key, "only applies to an aneurysm (vessel.shape \"saccular_aneurysm\" or \"fusiform_aneurysm\")");
     }
   } else {
+    const std::array<const char*, 2> sac{"sac_radius_m", "neck_width_m"}, bulge{"bulge_radius_m", "bulge_length_m"};
     const bool saccular = w.shape == Vessel::Shape::SaccularAneurysm;
-    for (const char* key : {"sac_radius_m", "neck_width_m", "bulge_radius_m", "bulge_length_m"}) {
-      const bool sacKey = std::string(key).rfind("sac_", 0) == 0 || std::string(key) == "neck_width_m";
-      if (sacKey != saccular) {
-        if (given(key)) c.fail(std::string("vessel.") + key, "does not apply to a " + shape);
-        continue;
-      }
+    for (const char* key : saccular ? bulge : sac) {
+      if (given(key)) c.fail(std::string("vessel.") + key, "does not apply to a " + shape);
+    }
+    for (const char* key : saccular ? sac : bulge) {
       if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
     }
   }
@@ -426,10 +426,9 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
     c.fail("vessel", "the vessel with its wall (x " + fmt(need.min.x) + ".." + fmt(need.max.x) + ", y " + fmt(need.min.y) + ".." +
                          fmt(need.max.y) + ", z " + fmt(need.min.z) + ".." + fmt(need.max.z) + " m) reaches outside the domain");
   }
-  if (tissue) {
-    s.vessel = w;  // the layout the springs are fitted to
+  if (tissue) {  // springs fitted to the built layout
     try {
-      const TissueSprings fit = springsFromTissue(vesselSpec(s).tube, given("youngs_modulus_Pa") ? w.youngsModulus : 1.0,
+      const TissueSprings fit = springsFromTissue(vesselSpec(w, s.sph).tube, given("youngs_modulus_Pa") ? w.youngsModulus : 1.0,
                                                   w.poissonRatio, w.wallThickness, given("failure_stress_Pa") ? w.failureStress : 1.0);
       if (given("youngs_modulus_Pa")) w.stiffness = fit.stiffness;
       if (given("failure_stress_Pa")) w.maxForce = fit.maxForce;

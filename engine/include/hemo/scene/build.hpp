@@ -16,6 +16,8 @@ struct SceneBuild {
 
 // The builder's description of the scene's vessel (a tube is an aneurysm spec without sac).
 AneurysmSpec vesselSpec(const Scene& scene);
+// The same for a vessel and the fluid it is filled with (spacing, particle mass).
+AneurysmSpec vesselSpec(const Vessel& vessel, const sim::SphSettings& fluid);
 // Throws SceneError naming the vessel's parameter if the builder rejects it.
 SceneBuild buildScene(const Scene& scene);
 std::uint64_t countSceneParticles(const Scene& scene);

@@ -4,8 +4,8 @@
 // particle that starts a step inside it within the tube's radius gets
 //   v_x = u(t) f(r),  f = 2 (1 - r^2 / R^2) (parabolic) or 1 (plug),
 // while across the section it moves under the SPH forces as anywhere (so particles that enter
-// the zone too close can part; a fully kinematic zone froze them together),
-// so u(t) is the mean speed over the cross-section. u(t) = U w(t) ramp(t): U the mean speed,
+// the zone too close can part; a fully kinematic zone froze them together). u(t) is the mean
+// speed over the cross-section: u(t) = U w(t) ramp(t), U the mean speed,
 // w a periodic waveform (samples over one period, linearly interpolated; 1 when constant),
 // ramp(t) = min(t / ramp, 1). Fluid that leaves the far end of the tube comes back through the
 // periodic seam into the zone: the outflow is recycled to the inlet and the particle budget
@@ -15,10 +15,12 @@
 // A pump does not add blood, and a closed loop of weakly compressible fluid loses its
 // pressure as the wall stretches (p falls by about 7 B dV/V) and as blood leaves through a
 // rupture. With holdPressure the zone is also the supply that keeps the lumen at its pressure:
-// every step each zone particle's mass becomes the one that brings its summed density to the
-// rest density rho0 (pressure p_bg, the lumen pressure), m <- m rho0 / rho, kept between the
-// initial mass m0 and maxMassRatio m0 (two-sided, so the scatter of single densities does not
-// ratchet the mass up). The flow carries the mass downstream; particles that took it up
+// every step each zone particle away from the wall (r < R - dp) moves its mass a tenth of the
+// way towards the one that brings its summed density to the rest density rho0 (pressure p_bg,
+// the lumen pressure), m <- m (1 + (rho0 / rho - 1) / 10), kept between the initial mass m0 and
+// maxMassRatio m0 (two-sided, so the scatter of single densities does not ratchet the mass
+// up; sph/integrate.comp says why a tenth and why not at the wall). The flow carries the mass
+// downstream; particles that took it up
 // stand for proportionally more volume (their spacing grows as (m / m0)^(1/3) at rest
 // density), and the cap bounds how long a bleed can be fed.
 #include <cstdint>
@@ -38,7 +40,7 @@ struct Inflow {
   float period = 0.0f;     // s, of the waveform (0: constant)
   std::vector<float> waveform;  // w at t = k period / n, k = 0..n-1 (empty: constant)
   float ramp = 0.0f;       // s: u rises linearly from 0 over this time (0: at once)
-  bool holdPressure = false;   // the zone supplies mass to hold rho >= rho0 (see above)
+  bool holdPressure = false;   // the zone supplies mass to hold the lumen at rho0 (see above)
   float maxMassRatio = 4.0f;   // cap of a particle's mass / the initial mass
 
   static constexpr std::uint32_t kMaxSamples = 64;
