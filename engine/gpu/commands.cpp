@@ -64,14 +64,13 @@ void CommandRecorder::wait() {
   check(r, "vkWaitForFences");
 }
 
-void CommandRecorder::dispatch(const ComputePipeline& pipeline, const DescriptorSet& set,
-                               const void* push, std::uint32_t pushBytes, Groups groups) {
+void CommandRecorder::bind(const ComputePipeline& pipeline, const DescriptorSet& set, const void* push,
+                           std::uint32_t pushBytes) {
   if (pushBytes != pipeline.pushConstantBytes()) {
     throw std::invalid_argument("push constants for '" + pipeline.name() + "' are " +
                                 std::to_string(pushBytes) + " bytes; the pipeline expects " +
                                 std::to_string(pipeline.pushConstantBytes()));
   }
-  if (groups.total() == 0) return;
   // Rebind only what changed (lavapipe pays for every bind when the command buffer runs).
   if (pipeline.handle() != boundPipeline_) {
     vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
@@ -86,11 +85,37 @@ void CommandRecorder::dispatch(const ComputePipeline& pipeline, const Descriptor
   if (pushBytes) {
     vkCmdPushConstants(cmd_, pipeline.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, pushBytes, push);
   }
+}
+
+void CommandRecorder::dispatch(const ComputePipeline& pipeline, const DescriptorSet& set,
+                               const void* push, std::uint32_t pushBytes, Groups groups) {
+  if (pushBytes != pipeline.pushConstantBytes()) {
+    throw std::invalid_argument("push constants for '" + pipeline.name() + "' are " +
+                                std::to_string(pushBytes) + " bytes; the pipeline expects " +
+                                std::to_string(pipeline.pushConstantBytes()));
+  }
+  if (groups.total() == 0) return;
+  bind(pipeline, set, push, pushBytes);
   if (gate_) {
     vkCmdDispatchIndirect(cmd_, gate_->args_.handle(), gate_->claim(groups));
   } else {
     vkCmdDispatch(cmd_, groups.x, groups.y, 1);
   }
+  ++dispatches_;
+}
+
+void CommandRecorder::dispatchIndirect(const ComputePipeline& pipeline, const DescriptorSet& set, const void* push,
+                                       std::uint32_t pushBytes, const Buffer& args, VkDeviceSize offset) {
+  if (gate_) {
+    throw std::logic_error("indirect dispatch of '" + pipeline.name() + "' inside the gate region of '" +
+                           gate_->name() + "'");
+  }
+  if (offset % 4 != 0 || offset + 3 * sizeof(std::uint32_t) > args.size()) {
+    throw std::invalid_argument("indirect arguments of '" + pipeline.name() + "' at byte " + std::to_string(offset) +
+                                " do not fit buffer '" + args.name() + "'");
+  }
+  bind(pipeline, set, push, pushBytes);
+  vkCmdDispatchIndirect(cmd_, args.handle(), offset);
   ++dispatches_;
 }
 

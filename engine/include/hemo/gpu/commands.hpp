@@ -41,6 +41,20 @@ class CommandRecorder {
     dispatch(pipeline, set, &push, sizeof(Push), groups);
   }
 
+  // Workgroup counts read from `args` at `offset` (three uint32: x, y, z) when the command
+  // runs: work whose size only the GPU knows. Not allowed inside a gate region.
+  void dispatchIndirect(const ComputePipeline& pipeline, const DescriptorSet& set, const void* push,
+                        std::uint32_t pushBytes, const Buffer& args, VkDeviceSize offset);
+  template <class Push>
+  void dispatchIndirect(const ComputePipeline& pipeline, const DescriptorSet& set, const Push& push,
+                        const Buffer& args, VkDeviceSize offset) {
+    dispatchIndirect(pipeline, set, &push, sizeof(Push), args, offset);
+  }
+  void dispatchIndirect(const ComputePipeline& pipeline, const DescriptorSet& set, const Buffer& args,
+                        VkDeviceSize offset) {
+    dispatchIndirect(pipeline, set, nullptr, 0, args, offset);
+  }
+
   // Dispatches between beginGate and endGate run only when the gate is open (see gate.hpp).
   void beginGate(DispatchGate& gate);
   void endGate();
@@ -60,6 +74,7 @@ class CommandRecorder {
   std::uint64_t dispatchCount() const { return dispatches_; }
 
  private:
+  void bind(const ComputePipeline& pipeline, const DescriptorSet& set, const void* push, std::uint32_t pushBytes);
   void barrier(VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst, VkAccessFlags dstAccess);
 
   Context* context_;

@@ -1,0 +1,27 @@
+// Surface grid maths shared by the marching-cubes stages (layouts in interface/mc.h).
+struct McGrid {
+  vec4 origin;  // xyz: point (0,0,0) (m); w: voxel size (m)
+  uvec4 points; // xyz: points per axis; w: point count
+  uvec4 runs;   // x: runs per x-row; y, z: voxels along y and z; w: run count
+  vec4 level;   // x: iso level
+};
+
+uint hemo_mc_point(uvec3 p, McGrid g) {
+  return p.x + g.points.x * (p.y + g.points.y * p.z);
+}
+
+// Workgroup counts covering `items` invocations: (x, y, 1), folded into y when x would pass
+// 65535 (the smallest maxComputeWorkGroupCount[0] Vulkan allows); shaders index with
+// hemo_group_index() and skip the tail.
+uvec3 hemo_mc_groups(uint items, uint workgroup) {
+  const uint groups = (items + workgroup - 1u) / workgroup;
+  if (groups <= 65535u) {
+    return uvec3(groups, 1u, 1u);
+  }
+  return uvec3(65535u, (groups + 65534u) / 65535u, 1u);
+}
+
+// Corner c of a voxel: offset (c & 1, (c >> 1) & 1, (c >> 2) & 1).
+uvec3 hemo_mc_corner(uint c) {
+  return uvec3(c & 1u, (c >> 1u) & 1u, (c >> 2u) & 1u);
+}

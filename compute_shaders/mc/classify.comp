@@ -1,0 +1,59 @@
+#version 450
+// Classify: one invocation per run of up to HEMO_MC_RUN voxels along x. It reads the field at
+// the run's corner points once (four x-rows), forms each voxel's case (bit c set when corner c
+// is inside: field > iso), and writes the run's triangle count, its active flag and its cases
+// (8 bits each, x ascending). Both counts are then prefix-scanned; entries past the last run
+// stay zero (the buffers are cleared before), so entry `runs` of a scan is the total.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/mc.h"
+#include "common/index.glsl"
+#include "common/mc.glsl"
+
+layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_GRID) readonly buffer Grid { McGrid grid; };
+layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_FIELD) readonly buffer Field { int field[]; };
+layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_TABLE) readonly buffer Table { uvec4 table[256]; };
+layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_RUN_TRIANGLES) writeonly buffer RunTriangles { uint runTriangles[]; };
+layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE) writeonly buffer RunActive { uint runActive[]; };
+layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_RUN_CASES) writeonly buffer RunCases { uint runCases[]; };
+layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_ARGS) readonly buffer Args { uint args[16]; };
+
+void main() {
+  const uint r = hemo_global_index();
+  if (r >= args[HEMO_MC_ARGS_RUNS]) {
+    return;
+  }
+  const McGrid g = grid;
+  const uint rx = r % g.runs.x;
+  const uint rest = r / g.runs.x;
+  const uint vy = rest % g.runs.y;
+  const uint vz = rest / g.runs.y;
+  const uint x0 = rx * HEMO_MC_RUN;
+  const uint count = min(uint(HEMO_MC_RUN), g.points.x - 1u - x0);
+  // Fixed point: inside when value > iso * scale, compared exactly as floats of the integers.
+  const float iso = g.level.x;
+  uint rowInside[4];  // bit k: point x0 + k of row (dy + 2 dz) is inside
+  for (uint row = 0u; row < 4u; ++row) {
+    const uint base = hemo_mc_point(uvec3(x0, vy + (row & 1u), vz + (row >> 1u)), g);
+    uint bits = 0u;
+    for (uint k = 0u; k <= count; ++k) {
+      if (float(field[base + k]) * (1.0 / HEMO_MC_FIXED_SCALE) > iso) {
+        bits |= 1u << k;
+      }
+    }
+    rowInside[row] = bits;
+  }
+  uint triangles = 0u;
+  uint cases = 0u;
+  for (uint k = 0u; k < count; ++k) {
+    uint cube = 0u;
+    for (uint c = 0u; c < 8u; ++c) {
+      const uvec3 o = hemo_mc_corner(c);
+      cube |= ((rowInside[o.y + 2u * o.z] >> (k + o.x)) & 1u) << c;
+    }
+    cases |= cube << (8u * k);
+    triangles += table[cube].x;
+  }
+  runTriangles[r] = triangles;
+  runActive[r] = triangles > 0u ? 1u : 0u;
+  runCases[r] = cases;
+}

@@ -1,0 +1,74 @@
+#version 450
+// The particle field on the surface grid, by a deterministic splat: every fluid particle j
+// adds its share of the SPH volume-fraction estimate
+//   phi(x) = sum_j (m_j / rho_j) W(|x - x_j|, h)      (Wendland C2, support 2h)
+// to the grid points within its support, rounded to fixed point (interface/mc.h) and added
+// with integer atomics. Integer sums do not depend on the order of the additions, so the
+// field is bit-identical from run to run. phi is about 1 inside the fluid, 0 far from it and
+// about 1/2 at the free surface. The field must be zeroed before (a buffer fill).
+#extension GL_GOOGLE_include_directive : require
+#include "interface/mc.h"
+#include "interface/sph.h"
+#include "common/index.glsl"
+#include "common/kernel.glsl"
+#include "common/mc.glsl"
+
+layout(std430, binding = HEMO_MC_SPLAT_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
+layout(std430, binding = HEMO_MC_SPLAT_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+layout(std430, binding = HEMO_MC_SPLAT_BINDING_STATE) readonly buffer State { vec4 state[]; };
+layout(std430, binding = HEMO_MC_SPLAT_BINDING_GRID) readonly buffer Grid { McGrid grid; };
+layout(std430, binding = HEMO_MC_SPLAT_BINDING_FIELD) buffer Field { int field[]; };
+layout(push_constant) uniform Push {
+  uint n;
+  float h;
+  float kernelNorm;
+  float rho0;
+} pc;
+
+void main() {
+  const uint i = hemo_global_index();
+  if (i >= pc.n || uint(velocities[i].w) != HEMO_KIND_FLUID) {
+    return;
+  }
+  const vec4 p = positions[i];
+  if (any(isnan(p.xyz)) || any(isinf(p.xyz))) {
+    return;
+  }
+  const McGrid g = grid;
+  if (g.points.w == 0u) {
+    return;
+  }
+  const float rho = state[i].x;
+  const float volume = p.w / (rho > 0.0 ? rho : pc.rho0);
+  const float support = 2.0 * pc.h;
+  const float voxel = g.origin.w;
+  const vec3 rel = p.xyz - g.origin.xyz;
+  const vec3 hiPoint = vec3(g.points.xyz - 1u);
+  const vec3 first = clamp(ceil((rel - support) / voxel), vec3(0.0), hiPoint);
+  const vec3 last = clamp(floor((rel + support) / voxel), vec3(0.0), hiPoint);
+  if (any(greaterThan(first, last))) {
+    return;
+  }
+  const uvec3 a = uvec3(first), b = uvec3(last);
+  const float support2 = support * support;
+  for (uint z = a.z; z <= b.z; ++z) {
+    for (uint y = a.y; y <= b.y; ++y) {
+      const vec2 dyz = vec2(float(y), float(z)) * voxel - rel.yz;
+      const float ryz2 = dot(dyz, dyz);
+      if (ryz2 >= support2) {
+        continue;
+      }
+      const uint row = g.points.x * (y + g.points.y * z);
+      for (uint x = a.x; x <= b.x; ++x) {
+        const float dx = float(x) * voxel - rel.x;
+        const float r2 = ryz2 + dx * dx;
+        if (r2 < support2) {
+          const int add = int(round(volume * hemo_kernel_w(sqrt(r2), pc.h, pc.kernelNorm) * HEMO_MC_FIXED_SCALE));
+          if (add != 0) {
+            atomicAdd(field[row + x], add);
+          }
+        }
+      }
+    }
+  }
+}

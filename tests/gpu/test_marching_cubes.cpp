@@ -1,0 +1,324 @@
+// The GPU surface stages (compute_shaders/mc/) against the CPU double-precision reference
+// (hemo/reference/marching_cubes.hpp): the same triangles on random fields, closed meshes,
+// the area and volume of a sphere, the particle field and the surface of a block of fluid.
+#include "gpu_test.hpp"
+#include "hemo/reference/marching_cubes.hpp"
+#include "hemo/surface/marching_cubes.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <cstring>
+#include <map>
+#include <numbers>
+#include <tuple>
+
+namespace hemo::test {
+namespace {
+
+using surface::McVertex;
+
+struct FieldCase {
+  glm::dvec3 origin;
+  double voxel;
+  glm::uvec3 points;
+  std::vector<double> values;  // already representable in fixed point
+};
+
+reference::ScalarGrid toGrid(const FieldCase& f) {
+  reference::ScalarGrid g;
+  g.origin = f.origin;
+  g.spacing = f.voxel;
+  g.points = f.points;
+  g.values = f.values;
+  return g;
+}
+
+FieldCase randomField(std::mt19937_64& rng, glm::uvec3 points, bool closed) {
+  FieldCase f{glm::dvec3(-0.01, 0.02, 0.005), 1.0e-3, points, {}};
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  f.values.resize(std::size_t(points.x) * points.y * points.z);
+  for (std::uint32_t k = 0; k < points.z; ++k) {
+    for (std::uint32_t j = 0; j < points.y; ++j) {
+      for (std::uint32_t i = 0; i < points.x; ++i) {
+        const bool face = i == 0 || j == 0 || k == 0 || i + 1 == points.x || j + 1 == points.y || k + 1 == points.z;
+        const double v = closed && face ? 0.0 : u(rng);
+        f.values[i + std::size_t(points.x) * (j + std::size_t(points.y) * k)] = surface::fromFixed(surface::toFixed(v));
+      }
+    }
+  }
+  return f;
+}
+
+class MarchingCubesTest : public GpuTest {
+ protected:
+  surface::SurfaceMesh extract(surface::MarchingCubes& mc, const FieldCase& f, float iso) {
+    mc.uploadField(f.origin, f.voxel, f.points, f.values, iso);
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    mc.record(rec);
+    rec.end();
+    rec.submitAndWait();
+    return mc.readMesh();
+  }
+};
+
+// Same triangles in the same order (both visit voxels x fastest and a voxel's triangles in
+// table order), vertices within 1e-5 voxel, normals within 1e-4.
+void expectSameMesh(const surface::SurfaceMesh& gpu, const reference::RefMesh& cpu, double voxel) {
+  ASSERT_EQ(gpu.totals.triangles, cpu.triangleCount());
+  ASSERT_EQ(gpu.vertices.size(), cpu.positions.size());
+  double worstPosition = 0.0, worstNormal = 0.0;
+  for (std::size_t v = 0; v < cpu.positions.size(); ++v) {
+    worstPosition = std::max(worstPosition, glm::length(glm::dvec3(gpu.vertices[v].position) - cpu.positions[v]));
+    worstNormal = std::max(worstNormal, glm::length(glm::dvec3(gpu.vertices[v].normal) - cpu.normals[v]));
+    ASSERT_EQ(gpu.vertices[v].position.w, 1.0f);
+  }
+  EXPECT_LT(worstPosition, 1e-5 * voxel);
+  EXPECT_LT(worstNormal, 1e-4);
+}
+
+// Welds vertices by their exact bits and checks every edge is shared by exactly two triangles
+// in opposite directions, with no degenerate triangle.
+void expectWatertight(const std::vector<McVertex>& vertices) {
+  std::map<std::tuple<std::uint32_t, std::uint32_t, std::uint32_t>, std::uint32_t> ids;
+  const auto id = [&](const glm::vec4& p) {
+    std::uint32_t b[3];
+    std::memcpy(b, &p, sizeof(b));
+    return ids.emplace(std::make_tuple(b[0], b[1], b[2]), std::uint32_t(ids.size())).first->second;
+  };
+  std::map<std::pair<std::uint32_t, std::uint32_t>, int> directed;
+  for (std::size_t t = 0; t < vertices.size() / 3; ++t) {
+    const glm::vec3 p0(vertices[3 * t].position), p1(vertices[3 * t + 1].position), p2(vertices[3 * t + 2].position);
+    ASSERT_GT(glm::length(glm::cross(p1 - p0, p2 - p0)), 0.0f) << "degenerate triangle " << t;
+    const std::uint32_t v[3] = {id(vertices[3 * t].position), id(vertices[3 * t + 1].position),
+                                id(vertices[3 * t + 2].position)};
+    for (int k = 0; k < 3; ++k) ++directed[{v[k], v[(k + 1) % 3]}];
+  }
+  for (const auto& [edge, count] : directed) {
+    ASSERT_EQ(count, 1) << "edge used twice in one direction";
+    ASSERT_EQ(directed.count({edge.second, edge.first}), 1u) << "open edge";
+  }
+}
+
+TEST_F(MarchingCubesTest, RandomFieldsGiveTheReferenceTriangles) {
+  auto rng = rngFor();
+  const auto table = surface::buildCaseTable();
+  surface::MarchingCubes mc(ctx(), 40, 400000);  // random fields: ~3 triangles per voxel
+  for (glm::uvec3 points : {glm::uvec3(2, 2, 2), glm::uvec3(9, 7, 6), glm::uvec3(6, 13, 11), glm::uvec3(41, 23, 30)}) {
+    SCOPED_TRACE("points " + std::to_string(points.x) + "x" + std::to_string(points.y) + "x" + std::to_string(points.z));
+    const FieldCase f = randomField(rng, points, false);
+    const auto gpu = extract(mc, f, 0.5f);
+    const auto cpu = reference::marchingCubes(toGrid(f), 0.5, table);
+    expectSameMesh(gpu, cpu, f.voxel);
+    EXPECT_FALSE(gpu.totals.overflow());
+    const auto args = mc.args().readback<std::uint32_t>(16);
+    EXPECT_EQ(args[8], 3 * gpu.totals.written) << "draw vertex count";
+    EXPECT_EQ(args[9], 1u) << "draw instance count";
+  }
+}
+
+TEST_F(MarchingCubesTest, ClosedFieldsGiveWatertightMeshes) {
+  auto rng = rngFor();
+  surface::MarchingCubes mc(ctx(), 32, 200000);
+  for (int trial = 0; trial < 3; ++trial) {
+    const auto mesh = extract(mc, randomField(rng, glm::uvec3(33, 30, 25), true), 0.5f);
+    ASSERT_GT(mesh.totals.written, 5000u);
+    expectWatertight(mesh.vertices);
+  }
+}
+
+TEST_F(MarchingCubesTest, SphereAreaAndVolumeOnA128Grid) {
+  const double R = 1.0e-3;
+  const std::uint32_t n = 129;
+  FieldCase f{glm::dvec3(-1.2 * R), 2.4 * R / (n - 1), glm::uvec3(n), {}};
+  f.values.resize(std::size_t(n) * n * n);
+  for (std::uint32_t k = 0; k < n; ++k) {
+    for (std::uint32_t j = 0; j < n; ++j) {
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const glm::dvec3 x = f.origin + f.voxel * glm::dvec3(i, j, k);
+        // Signed distance in units of R (a field of order 1, as the particle field).
+        f.values[i + n * (j + std::size_t(n) * k)] = surface::fromFixed(surface::toFixed(1.0 - glm::length(x) / R));
+      }
+    }
+  }
+  surface::MarchingCubes mc(ctx(), 128);
+  const auto gpu = extract(mc, f, 0.0f);
+  reference::RefMesh asRef;
+  for (const McVertex& v : gpu.vertices) asRef.positions.emplace_back(v.position);
+  const double area = reference::meshArea(asRef), volume = reference::meshVolume(asRef);
+  std::printf("GPU sphere at 128^3: %u triangles, area error %.4f%%, volume error %.4f%%\n", gpu.totals.written,
+              100 * (area / (4 * std::numbers::pi * R * R) - 1), 100 * (volume / (4.0 / 3 * std::numbers::pi * R * R * R) - 1));
+  EXPECT_NEAR(area / (4 * std::numbers::pi * R * R), 1.0, 0.01);
+  EXPECT_NEAR(volume / (4.0 / 3 * std::numbers::pi * R * R * R), 1.0, 0.01);
+  const auto cpu = reference::marchingCubes(toGrid(f), 0.0, surface::buildCaseTable());
+  expectSameMesh(gpu, cpu, f.voxel);
+  for (const McVertex& v : gpu.vertices) {
+    ASSERT_GT(glm::dot(glm::vec3(v.normal), glm::normalize(glm::vec3(v.position))), 0.99f);
+  }
+}
+
+TEST_F(MarchingCubesTest, OverflowIsCountedAndClamped) {
+  auto rng = rngFor();
+  surface::MarchingCubes mc(ctx(), 16, 100);
+  const auto mesh = extract(mc, randomField(rng, glm::uvec3(17, 17, 17), false), 0.5f);
+  EXPECT_GT(mesh.totals.triangles, 100u);
+  EXPECT_EQ(mesh.totals.written, 100u);
+  EXPECT_TRUE(mesh.totals.overflow());
+  EXPECT_EQ(mesh.vertices.size(), 300u);
+  EXPECT_EQ(mc.args().readback<std::uint32_t>(16)[8], 300u);
+}
+
+TEST_F(MarchingCubesTest, UploadRejectsGridsBeyondTheCapacity) {
+  surface::MarchingCubes mc(ctx(), 8);
+  EXPECT_THROW(mc.uploadField(glm::dvec3(0.0), 1.0, glm::uvec3(10, 2, 2), std::vector<double>(40, 0.0), 0.5f),
+               std::invalid_argument);
+  EXPECT_THROW(mc.uploadField(glm::dvec3(0.0), 1.0, glm::uvec3(3, 3, 3), std::vector<double>(26, 0.0), 0.5f),
+               std::invalid_argument);
+  EXPECT_THROW(surface::MarchingCubes(ctx(), 0), std::invalid_argument);
+}
+
+// A block of fluid particles at rest on a cubic lattice (plus boundary particles the field
+// must ignore).
+struct Block {
+  std::vector<glm::vec4> positions, velocities, state;
+  glm::vec3 lo, hi;  // faces of the block (m)
+};
+
+Block fluidBlock(float dp, glm::uvec3 cells, float rho0) {
+  Block b;
+  b.lo = glm::vec3(0.01f, -0.02f, 0.003f);
+  b.hi = b.lo + dp * glm::vec3(cells);
+  const float mass = rho0 * dp * dp * dp;
+  for (std::uint32_t k = 0; k < cells.z; ++k) {
+    for (std::uint32_t j = 0; j < cells.y; ++j) {
+      for (std::uint32_t i = 0; i < cells.x; ++i) {
+        b.positions.emplace_back(b.lo + dp * (glm::vec3(i, j, k) + 0.5f), mass);
+        b.velocities.emplace_back(0.0f);
+        b.state.emplace_back(rho0 * (1.0f + 0.001f * float((i + j + k) % 5)), 0.0f, 0.0f, 0.0f);
+      }
+    }
+  }
+  // Boundary particles below the block and far away: not part of the field or its box.
+  for (int i = 0; i < 20; ++i) {
+    b.positions.emplace_back(b.lo + glm::vec3(dp * i, 0.0f, -dp), mass);
+    b.velocities.emplace_back(0.0f, 0.0f, 0.0f, 1.0f);
+    b.state.emplace_back(rho0, 0.0f, 0.0f, 0.0f);
+  }
+  b.positions.emplace_back(b.lo + glm::vec3(1.0f), mass);
+  b.velocities.emplace_back(0.0f, 0.0f, 0.0f, 1.0f);
+  b.state.emplace_back(rho0, 0.0f, 0.0f, 0.0f);
+  return b;
+}
+
+TEST_F(MarchingCubesTest, ParticleFieldMatchesTheReferenceAndWrapsTheBlock) {
+  const float dp = 1.0e-3f, h = 1.3f * dp, rho0 = 1000.0f;
+  const Block block = fluidBlock(dp, glm::uvec3(12, 8, 6), rho0);
+  const auto n = std::uint32_t(block.positions.size());
+  sim::ParticleStore store(ctx(), n);
+  store.upload(block.positions, block.velocities);
+  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
+  state.upload(block.state);
+  surface::MarchingCubes mc(ctx(), 64);
+  surface::FieldSettings settings;
+  settings.resolution = 48;
+  settings.h = h;
+  settings.restDensity = rho0;
+  surface::ParticleField field(ctx(), mc, store, state, settings);
+
+  const auto run = [&] {
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    field.record(rec, n);
+    mc.record(rec);
+    rec.end();
+    rec.submitAndWait();
+    return std::make_pair(mc.readField(), mc.readMesh());
+  };
+  const auto [values, mesh] = run();
+
+  // The grid: the fluid's box grown by 2h, 48 voxels along its longest side.
+  const surface::McGrid g = mesh.grid;
+  const glm::vec3 grown = (block.hi - block.lo) - dp + 4.0f * h;
+  EXPECT_NEAR(g.origin[3], std::max({grown.x, grown.y, grown.z}) / 48.0f, 1e-9f);
+  for (int a = 0; a < 3; ++a) EXPECT_NEAR(g.origin[a], block.lo[a] + 0.5f * dp - 2.0f * h, 1e-7f);
+  EXPECT_EQ(g.points[0], 49u);
+
+  // Field against the double-precision sum at every point.
+  std::vector<glm::dvec4> particles;
+  std::vector<double> densities;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (block.velocities[i].w != 0.0f) continue;
+    particles.emplace_back(block.positions[i]);
+    densities.push_back(block.state[i].x);
+  }
+  double worst = 0.0;
+  reference::ScalarGrid ref;
+  ref.origin = glm::dvec3(g.origin[0], g.origin[1], g.origin[2]);
+  ref.spacing = g.origin[3];
+  ref.points = glm::uvec3(g.points[0], g.points[1], g.points[2]);
+  ref.values.resize(values.size());
+  for (std::uint32_t k = 0; k < ref.points.z; ++k) {
+    for (std::uint32_t j = 0; j < ref.points.y; ++j) {
+      for (std::uint32_t i = 0; i < ref.points.x; ++i) {
+        const glm::dvec3 x = ref.origin + ref.spacing * glm::dvec3(i, j, k);
+        const double expected = reference::particleField(x, particles, densities, h);
+        const std::size_t idx = ref.index(i, j, k);
+        worst = std::max(worst, std::abs(surface::fromFixed(values[idx]) - expected));
+        ref.values[idx] = surface::fromFixed(values[idx]);
+      }
+    }
+  }
+  EXPECT_LT(worst, 5e-5) << "field against the double-precision sum";
+
+  // The surface: closed, and within one particle spacing of the block's faces.
+  ASSERT_GT(mesh.totals.written, 1000u);
+  expectWatertight(mesh.vertices);
+  double farthest = 0.0;
+  for (const McVertex& v : mesh.vertices) {
+    const glm::vec3 p(v.position);
+    const glm::vec3 outside = glm::max(glm::max(block.lo - p, p - block.hi), glm::vec3(0.0f));
+    const glm::vec3 inside = glm::min(p - block.lo, block.hi - p);
+    const float d = glm::length(outside) > 0.0f ? glm::length(outside) : std::min({inside.x, inside.y, inside.z});
+    farthest = std::max(farthest, double(d));
+  }
+  std::printf("block surface: %u triangles, farthest vertex %.3f dp from the block's faces\n", mesh.totals.written,
+              farthest / dp);
+  EXPECT_LT(farthest, dp);
+  // The extraction of that field equals the reference's.
+  expectSameMesh(mesh, reference::marchingCubes(ref, 0.5, surface::buildCaseTable()), ref.spacing);
+
+  // Bit-identical when run again.
+  const auto [values2, mesh2] = run();
+  EXPECT_EQ(values, values2);
+  ASSERT_EQ(mesh.vertices.size(), mesh2.vertices.size());
+  EXPECT_EQ(0, std::memcmp(mesh.vertices.data(), mesh2.vertices.data(), mesh.vertices.size() * sizeof(McVertex)));
+}
+
+TEST_F(MarchingCubesTest, NoFluidGivesNoSurface) {
+  const float dp = 1.0e-3f;
+  Block block = fluidBlock(dp, glm::uvec3(2, 2, 2), 1000.0f);
+  for (auto& v : block.velocities) v.w = 1.0f;  // everything boundary
+  const auto n = std::uint32_t(block.positions.size());
+  sim::ParticleStore store(ctx(), n);
+  store.upload(block.positions, block.velocities);
+  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
+  state.upload(block.state);
+  surface::MarchingCubes mc(ctx(), 16);
+  surface::FieldSettings settings;
+  settings.resolution = 16;
+  settings.h = 1.3f * dp;
+  surface::ParticleField field(ctx(), mc, store, state, settings);
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  field.record(rec, n);
+  mc.record(rec);
+  rec.end();
+  rec.submitAndWait();
+  const auto totals = mc.readTotals();
+  EXPECT_EQ(totals.triangles, 0u);
+  EXPECT_EQ(totals.runs, 0u);
+  EXPECT_EQ(mc.args().readback<std::uint32_t>(16)[8], 0u);
+}
+
+}  // namespace
+}  // namespace hemo::test
