@@ -1,16 +1,18 @@
 // hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N]
 // Benchmarks (not tests): GPU times from timestamp queries, medians over repeated runs after a
-// warm-up. Suites: primitives, accuracy, table1 (this build); render arrives with the
-// rendering stages.
+// warm-up. Suites: primitives, accuracy, table1, render (surface field and extraction; the
+// draw arrives with the renderer).
 #include "cli.hpp"
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/gpu/primitives.hpp"
+#include "hemo/reference/marching_cubes.hpp"
 #include "hemo/reference/published.hpp"
 #include "hemo/scene/builders.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
 #include "hemo/sim/probes.hpp"
 #include "hemo/sim/simulation.hpp"
+#include "hemo/surface/marching_cubes.hpp"
 
 #include "interface/scan.h"
 
@@ -22,6 +24,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -367,6 +370,92 @@ Json table1(Context& ctx, int repeat) {
   return rows;
 }
 
+// Marching-cubes rendering benchmark: for the dam break and the aneurysm (after a few hundred
+// steps, so the surface has moved), the GPU field (bounds + splat) and extraction (classify,
+// scans, compact, generate) at grids of 64^3, 128^3 and 256^3 voxels over the fluid's box, and
+// the CPU reference extracting the same field (double precision, one thread) in the same run.
+Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
+  Json rows = Json::array();
+  std::printf("%-10s %5s %10s %10s %12s %12s %9s %10s %12s\n", "scene", "grid", "particles", "field_ms", "extract_ms",
+              "cpu_mc_ms", "speed-up", "triangles", "Mtri/s");
+  for (const char* name : {"dam_break", "aneurysm"}) {
+    const hemo::scene::Scene scene = hemo::scene::loadScene(scenes / (std::string(name) + ".json"));
+    hemo::sim::Simulation sim(ctx, scene);
+    hemo::sim::RunOptions opt;
+    opt.steps = 300;
+    sim.run(opt);
+    for (std::uint32_t grid : {64u, 128u, 256u}) {
+      hemo::surface::MarchingCubes mc(ctx, grid);
+      hemo::surface::FieldSettings fs;
+      fs.resolution = grid;
+      fs.iso = scene.surface.iso;
+      fs.h = sim.solver().settings().h();
+      fs.restDensity = sim.solver().settings().restDensity;
+      hemo::surface::ParticleField field(ctx, mc, sim.store(), sim.solver().state(), fs);
+      CommandRecorder rec(ctx);
+      TimestampQueries ts(ctx, 16);
+      std::map<std::string, std::vector<double>> stages;
+      for (int r = 0; r <= repeat; ++r) {
+        rec.begin();
+        ts.reset(rec);
+        ts.mark(rec, "start");
+        field.record(rec, sim.store().count(), &ts);
+        mc.record(rec, &ts);
+        rec.end();
+        rec.submitAndWait();
+        if (r == 0) continue;
+        for (const auto& [stage, ms] : ts.stageMs()) stages[stage].push_back(ms);
+      }
+      Json stageMs = Json::object();
+      double fieldMs = 0.0, extractMs = 0.0;
+      for (auto& [stage, ms] : stages) {
+        const double m = median(ms);
+        stageMs[stage] = m;
+        (stage == "field" ? fieldMs : extractMs) += m;
+      }
+      const hemo::surface::McTotals totals = mc.readTotals();
+      // The CPU reference on the same field.
+      const hemo::surface::McGrid g = mc.readGrid();
+      const auto fixed = mc.readField();
+      hemo::reference::ScalarGrid ref;
+      ref.origin = glm::dvec3(g.origin[0], g.origin[1], g.origin[2]);
+      ref.spacing = g.origin[3];
+      ref.points = glm::uvec3(g.points[0], g.points[1], g.points[2]);
+      ref.values.resize(fixed.size());
+      for (std::size_t k = 0; k < fixed.size(); ++k) ref.values[k] = hemo::surface::fromFixed(fixed[k]);
+      const auto table = hemo::surface::buildCaseTable();
+      std::vector<double> cpu;
+      std::size_t cpuTriangles = 0;
+      for (int r = 0; r < 3; ++r) {
+        const auto t0 = std::chrono::steady_clock::now();
+        cpuTriangles = hemo::reference::marchingCubes(ref, g.level[0], table).triangleCount();
+        cpu.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+      }
+      const double cpuMs = median(cpu);
+      std::printf("%-10s %5u %10u %10.2f %12.2f %12.1f %9.1f %10u %12.2f%s\n", name, grid, sim.fluidParticles(), fieldMs,
+                  extractMs, cpuMs, cpuMs / extractMs, totals.triangles, totals.triangles / (fieldMs + extractMs) / 1e3,
+                  cpuTriangles == totals.triangles ? "" : "  (CPU triangle count differs!)");
+      std::fflush(stdout);
+      rows.push_back({{"scene", name},
+                      {"grid", grid},
+                      {"fluid_particles", sim.fluidParticles()},
+                      {"grid_points", {g.points[0], g.points[1], g.points[2]}},
+                      {"gpu_ms", fieldMs + extractMs},
+                      {"gpu_field_ms", fieldMs},
+                      {"gpu_extract_ms", extractMs},
+                      {"draw_ms", nullptr},
+                      {"cpu_ms", cpuMs},
+                      {"speedup_extract", cpuMs / extractMs},
+                      {"triangles", totals.triangles},
+                      {"cpu_triangles", cpuTriangles},
+                      {"triangles_per_s", totals.triangles / ((fieldMs + extractMs) / 1e3)},
+                      {"overflow", totals.overflow()},
+                      {"stage_ms", stageMs}});
+    }
+  }
+  return rows;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -389,13 +478,8 @@ int main(int argc, char** argv) {
     if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break") {
       throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille or dam_break)");
     }
-    if (suite != "primitives" && suite != "accuracy" && suite != "table1") {
-      if (suite == "render") {
-        std::cerr << "hemo-bench: suite '" << suite
-                  << "' needs the simulation stages that are not in this build yet\n";
-      } else {
-        std::cerr << "hemo-bench: unknown suite '" << suite << "'\n" << usage;
-      }
+    if (suite != "primitives" && suite != "accuracy" && suite != "table1" && suite != "render") {
+      std::cerr << "hemo-bench: unknown suite '" << suite << "'\n" << usage;
       return 1;
     }
     hemo::gpu::ContextOptions options;
@@ -408,6 +492,7 @@ int main(int argc, char** argv) {
     }
     const Json rows = suite == "primitives" ? primitives(ctx, repeat)
                       : suite == "table1"   ? table1(ctx, std::max(1, repeat / 3))
+                      : suite == "render"   ? render(ctx, repeat, std::filesystem::path(HEMO_SOURCE_DIR) / "scenes")
                                             : accuracy(ctx, only);
     if (args.has("--json")) {
       const std::string path = args.text("--json");

@@ -1,5 +1,5 @@
 // hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N] [--stats-every N]
-//          [--profile N]
+//          [--surface-every N] [--profile N]
 // Runs a scene headless: a progress line, then a summary on screen and in DIR/summary.json.
 // Exit codes: 0 success; 1 bad input; 2 the simulation became non-finite or unstable;
 // 3 no usable Vulkan device or a device error.
@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -24,7 +25,7 @@ using Json = nlohmann::json;
 
 const char* kUsage =
     "usage: hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N]\n"
-    "                [--stats-every N] [--profile N]\n"
+    "                [--stats-every N] [--surface-every N] [--profile N]\n"
     "  --out DIR        output directory (default: out/<scene name>)\n"
     "  --steps N        run N steps\n"
     "  --until SECONDS  run until this simulated time (default: the scene's time.end_time_s)\n"
@@ -34,7 +35,9 @@ const char* kUsage =
     "  --stats-every N  write DIR/steps.csv: time, dt, max fluid speed, max density error, broken\n"
     "                   springs and detached wall particles of every N-th step (recorded on the GPU)\n"
     "  --profile N      after the run, time N more steps stage by stage (GPU ms in stage_ms)\n"
-    "  --png-every N, --surface-every N  need the renderer and marching cubes (not in this build)\n"
+    "  --surface-every N  write the blood surface (GPU marching cubes, the scene's surface section)\n"
+    "                   as DIR/surface_<step>.ply every N steps (and at the end)\n"
+    "  --png-every N    needs the renderer (not in this build yet)\n"
     "hemo-run --describe-scene   prints the scene-file parameter table\n";
 
 void printProgress(const hemo::sim::Progress& p, bool tty) {
@@ -62,11 +65,8 @@ int main(int argc, char** argv) {
                                          "--surface-every", "--profile", "--stats-every"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SCENE.json");
     if (args.has("--steps") && args.has("--until")) throw hemo::cli::UsageError("give --steps or --until, not both");
-    for (const char* opt : {"--png-every", "--surface-every"}) {
-      if (args.has(opt)) {
-        throw hemo::cli::UsageError(std::string(opt) +
-                                    " needs the renderer and GPU marching cubes, which are not in this build yet");
-      }
+    if (args.has("--png-every")) {
+      throw hemo::cli::UsageError("--png-every needs the renderer, which is not in this build yet");
     }
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-run: " << e.what() << "\n" << kUsage;
@@ -75,6 +75,7 @@ int main(int argc, char** argv) {
 
   hemo::sim::RunOptions options;
   std::uint32_t vtkEvery = 0;
+  std::uint32_t surfaceEvery = 0;
   std::uint64_t profileSteps = 0;
   std::uint32_t statsEvery = 0;
   hemo::scene::Scene scene;
@@ -95,6 +96,7 @@ int main(int argc, char** argv) {
       options.until = t;
     }
     vtkEvery = static_cast<std::uint32_t>(args.count("--vtk-every", 0, 1, 1000000000));
+    surfaceEvery = static_cast<std::uint32_t>(args.count("--surface-every", 0, 1, 1000000000));
     profileSteps = args.count("--profile", 0, 1, 1000);
     statsEvery = static_cast<std::uint32_t>(args.count("--stats-every", 0, 1, 1000000000));
     scene = hemo::scene::loadScene(args.positional[0]);
@@ -161,10 +163,28 @@ int main(int argc, char** argv) {
         if (!csv) throw std::runtime_error("failed while writing " + (out / "steps.csv").string());
       };
     }
-    if (vtkEvery) {
-      options.outputEvery = vtkEvery;
-      options.onOutput = writeVtk;
-      writeVtk(hemo::sim::Progress{});
+    std::uint64_t surfaceFiles = 0;
+    hemo::surface::McTotals lastSurface;
+    auto writeSurface = [&](const hemo::sim::Progress& p) {
+      char name[64];
+      std::snprintf(name, sizeof name, "surface_%08llu.ply", static_cast<unsigned long long>(p.steps));
+      const hemo::surface::SurfaceMesh mesh = sim.extractSurface();
+      hemo::io::writeSurfacePly(out / name, mesh, p.time);
+      if (mesh.totals.overflow() && !lastSurface.overflow()) {
+        std::fprintf(stderr, "hemo-run: %s holds %u of %u triangles; raise surface.max_triangles\n", name,
+                     mesh.totals.written, mesh.totals.triangles);
+      }
+      lastSurface = mesh.totals;
+      ++surfaceFiles;
+    };
+    auto writeOutputs = [&](const hemo::sim::Progress& p) {
+      if (vtkEvery && p.steps % vtkEvery == 0) writeVtk(p);
+      if (surfaceEvery && p.steps % surfaceEvery == 0) writeSurface(p);
+    };
+    if (vtkEvery || surfaceEvery) {
+      options.outputEvery = vtkEvery && surfaceEvery ? std::gcd(vtkEvery, surfaceEvery) : std::max(vtkEvery, surfaceEvery);
+      options.onOutput = writeOutputs;
+      writeOutputs(hemo::sim::Progress{});
     }
     hemo::sim::RunResult result;
     bool finite = true;
@@ -176,11 +196,12 @@ int main(int argc, char** argv) {
       code = 2;
     }
     if (tty) std::fprintf(stderr, "\n");
-    if (finite && vtkEvery && sim.steps() % vtkEvery != 0) {
+    if (finite) {
       hemo::sim::Progress p;
       p.steps = sim.steps();
       p.time = sim.time();
-      writeVtk(p);
+      if (vtkEvery && sim.steps() % vtkEvery != 0) writeVtk(p);
+      if (surfaceEvery && sim.steps() % surfaceEvery != 0) writeSurface(p);
     }
     const double wall = result.wallSeconds;
     nlohmann::json stageMs = nlohmann::json::object();
@@ -205,6 +226,10 @@ int main(int argc, char** argv) {
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},
                {"finite", finite}};
     if (profileSteps > 0) summary["stage_ms"] = stageMs;
+    if (surfaceFiles > 0) {
+      summary["surface_files"] = surfaceFiles;
+      summary["surface_triangles"] = lastSurface.triangles;
+    }
     if (!finite) summary["error"] = failure;
     if (ctx.validationEnabled() && ctx.validationMessageCount() > 0) {
       for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";

@@ -3,7 +3,7 @@ struct McGrid {
   vec4 origin;  // xyz: point (0,0,0) (m); w: voxel size (m)
   uvec4 points; // xyz: points per axis; w: point count
   uvec4 runs;   // x: runs per x-row; y, z: voxels along y and z; w: run count
-  vec4 level;   // x: iso level
+  vec4 level;   // x: iso level; y: splat planes per particle
 };
 
 uint hemo_mc_point(uvec3 p, McGrid g) {

@@ -15,7 +15,8 @@
 //   uvec4 points    xyz: points per axis (>= 2 for any voxel); w: point count
 //   uvec4 runs      x: runs per x-row = ceil((points.x - 1) / HEMO_MC_RUN); y, z: voxels
 //                   along y and z; w: run count (written by mc/prepare.comp)
-//   vec4  level     x: iso level (inside: field > iso); yzw: 0
+//   vec4  level     x: iso level (inside: field > iso); y: z-planes a particle's support
+//                   spans (written by mc/bounds.comp for the splat); zw: 0
 // McArgs, std430, 64 bytes (indirect arguments and totals, all uint):
 //   [0..3]   classify/compact dispatch (x, y, z, 0) over runs
 //   [4..7]   generate dispatch (x, y, z, 0) over active runs
@@ -34,8 +35,10 @@
 #define HEMO_MC_BOUNDS_BINDING_POSITIONS 0
 #define HEMO_MC_BOUNDS_BINDING_VELOCITIES 1  // w: particle kind; only fluid counts
 #define HEMO_MC_BOUNDS_BINDING_GRID 2
-#define HEMO_MC_BOUNDS_BINDING_COUNT 3
-// push: uint n; uint resolution (voxels along the longest side); float margin (m); float iso
+#define HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS 3  // uvec4: the splat's dispatch
+#define HEMO_MC_BOUNDS_BINDING_COUNT 4
+// push: uint n; uint resolution (voxels along the longest side); float margin (m); float iso;
+//       uint splatWorkgroup
 
 // mc/splat.comp: each fluid particle adds round(scale V_j W(|x - x_j|, h)) to the points
 // within its support (integer atomics).

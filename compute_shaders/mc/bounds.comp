@@ -3,7 +3,12 @@
 // grown by `margin` on every side (the field's support, so the surface closes inside the
 // grid), cut into cubic voxels with `resolution` voxels along its longest side. One workgroup
 // reduces the box (min and max are exact, so the order does not matter) and invocation 0
-// writes origin, voxel size and point counts. No fluid: zero points, nothing extracted.
+// writes origin, voxel size and point counts, and the splat's dispatch: one invocation per
+// (fluid-or-not particle, z-plane of its support). The voxel is never finer than margin / 126
+// (h / 63): then a particle's support spans at most 254 planes and an invocation's loop over
+// one plane at most 254^2 points. (llvmpipe stops any shader invocation after 65,535 loop
+// iterations in total; a particle's whole support in one invocation silently lost most of
+// its contributions on fine grids.) No fluid: zero points, nothing extracted.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/mc.h"
 #include "interface/sph.h"
@@ -13,11 +18,13 @@
 layout(std430, binding = HEMO_MC_BOUNDS_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_MC_BOUNDS_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
 layout(std430, binding = HEMO_MC_BOUNDS_BINDING_GRID) writeonly buffer Grid { McGrid grid; };
+layout(std430, binding = HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS) writeonly buffer SplatArgs { uint splatArgs[4]; };
 layout(push_constant) uniform Push {
   uint n;
   uint resolution;
-  float margin;
+  float margin;  // the field's support radius 2h (m)
   float iso;
+  uint splatWorkgroup;
 } pc;
 
 shared vec3 s_lo[gl_WorkGroupSize.x];
@@ -57,17 +64,26 @@ void main() {
     grid.points = uvec4(0u);
     grid.runs = uvec4(0u);
     grid.level = vec4(pc.iso, 0.0, 0.0, 0.0);
+    splatArgs[0] = 0u;
+    splatArgs[1] = 0u;
+    splatArgs[2] = 0u;
     return;
   }
   lo -= vec3(pc.margin);
   hi += vec3(pc.margin);
   const vec3 extent = hi - lo;
-  const float voxel = max(extent.x, max(extent.y, extent.z)) / float(pc.resolution);
+  const float voxel = max(max(extent.x, max(extent.y, extent.z)) / float(pc.resolution), pc.margin / 126.0);
   // Enough voxels to cover the extent, never more than the resolution (rounding).
   const uvec3 voxels = min(uvec3(ceil(extent / voxel)), uvec3(pc.resolution));
   const uvec3 points = max(voxels, uvec3(1u)) + 1u;
   grid.origin = vec4(lo, voxel);
   grid.points = uvec4(points, points.x * points.y * points.z);
   grid.runs = uvec4(0u);
-  grid.level = vec4(pc.iso, 0.0, 0.0, 0.0);
+  // z-planes a support of radius `margin` can touch, and one invocation per (slot, plane).
+  const uint planes = 2u * uint(floor(pc.margin / voxel)) + 2u;
+  grid.level = vec4(pc.iso, float(planes), 0.0, 0.0);
+  const uvec3 groups = hemo_mc_groups(pc.n * planes, pc.splatWorkgroup);
+  splatArgs[0] = groups.x;
+  splatArgs[1] = groups.y;
+  splatArgs[2] = groups.z;
 }

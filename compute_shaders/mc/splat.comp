@@ -6,6 +6,9 @@
 // with integer atomics. Integer sums do not depend on the order of the additions, so the
 // field is bit-identical from run to run. phi is about 1 inside the fluid, 0 far from it and
 // about 1/2 at the free surface. The field must be zeroed before (a buffer fill).
+// One invocation per (particle slot, z-plane of its support): mc/bounds.comp sizes the
+// dispatch so that no invocation loops over more than 254^2 points (llvmpipe's limit on a
+// shader invocation's loop iterations is 65,535).
 #extension GL_GOOGLE_include_directive : require
 #include "interface/mc.h"
 #include "interface/sph.h"
@@ -26,7 +29,9 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
-  const uint i = hemo_global_index();
+  const uint planes = uint(grid.level.y);
+  const uint invocation = hemo_global_index();
+  const uint i = invocation / max(planes, 1u);
   if (i >= pc.n || uint(velocities[i].w) != HEMO_KIND_FLUID) {
     return;
   }
@@ -51,7 +56,8 @@ void main() {
   }
   const uvec3 a = uvec3(first), b = uvec3(last);
   const float support2 = support * support;
-  for (uint z = a.z; z <= b.z; ++z) {
+  const uint z = a.z + invocation % planes;
+  if (z <= b.z) {
     for (uint y = a.y; y <= b.y; ++y) {
       const vec2 dyz = vec2(float(y), float(z)) * voxel - rel.yz;
       const float ryz2 = dot(dyz, dyz);

@@ -130,6 +130,12 @@ const std::vector<Field>& schema() {
            {"settle_damping_1_s", Kind::Number, "1/s", 0, 1e6, false, 0.0, "Velocity damping xi of a settling phase: v <- v / (1 + xi dt)."},
            {"settle_until_s", Kind::Number, "s", 0, 1e6, false, 0.0, "The settling phase lasts while t < this (0: none)."},
        }},
+      {"surface", Kind::Section, "", 0, 0, false, Json::object(), "The blood surface (GPU marching cubes over the particles' volume-fraction field), built only when something asks for it (hemo-run --surface-every, the renderer).", {},
+       {
+           {"grid_resolution", Kind::Integer, "1", 4, 512, false, 128, "Voxels along the longest side of the grid around the fluid's bounding box (grown by 2h)."},
+           {"iso_level", Kind::Number, "1", 0, 1, true, 0.5, "The surface is where the volume fraction sum_j (m_j / rho_j) W(|x - x_j|, h) equals this (1 inside the fluid, 0 away from it)."},
+           {"max_triangles", Kind::Integer, "1", 0, 4.0e7, false, 0, "Capacity of the triangle buffer (0: 12 grid_resolution^2). Triangles beyond it are counted and reported, not drawn."},
+       }},
       {"domain", Kind::Section, "", 0, 0, false, nullptr, "Region covered by the neighbour grid; particles that leave it are counted as escaped.", {},
        {
            {"min_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Lower corner."},
@@ -532,6 +538,10 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.stepsPerBatch = time["steps_per_batch"].get<std::uint32_t>();
   s.sph.dampingRate = time["settle_damping_1_s"].get<float>();
   s.sph.dampingUntil = time["settle_until_s"].get<float>();
+
+  s.surface.resolution = j["surface"]["grid_resolution"].get<std::uint32_t>();
+  s.surface.iso = j["surface"]["iso_level"].get<float>();
+  s.surface.maxTriangles = j["surface"]["max_triangles"].get<std::uint32_t>();
 
   s.domain = box(c, "domain", j["domain"]);
   const float slack = 1e-6f * s.sph.spacing;

@@ -149,6 +149,35 @@ std::vector<std::pair<std::string, double>> Simulation::profileStep(int repeats)
   return result;
 }
 
+surface::MarchingCubes& Simulation::enableSurface() {
+  if (!surface_) {
+    const scene::SurfaceSpec& spec = scene_.surface;
+    surface_ = std::make_unique<surface::MarchingCubes>(*context_, spec.resolution, spec.maxTriangles);
+    surface::FieldSettings settings;
+    settings.resolution = spec.resolution;
+    settings.iso = spec.iso;
+    settings.h = solver_->settings().h();
+    settings.restDensity = solver_->settings().restDensity;
+    field_ = std::make_unique<surface::ParticleField>(*context_, *surface_, *store_, solver_->state(), settings);
+  }
+  return *surface_;
+}
+
+void Simulation::recordSurface(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
+  enableSurface();
+  rec.computeToCompute();
+  field_->record(rec, store_->count(), timestamps);
+  surface_->record(rec, timestamps);
+}
+
+surface::SurfaceMesh Simulation::extractSurface() {
+  recorder_->begin();
+  recordSurface(*recorder_);
+  recorder_->end();
+  recorder_->submitAndWait();
+  return surface_->readMesh();
+}
+
 void Simulation::enableStepStats(std::uint32_t every) {
   statsEvery_ = std::max(every, 1u);
   if (!stats_) stats_ = std::make_unique<StepStats>(*context_, *store_, *solver_, scene_.stepsPerBatch);

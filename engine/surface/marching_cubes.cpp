@@ -29,6 +29,7 @@ struct GeneratePush {
 struct BoundsPush {
   std::uint32_t n, resolution;
   float margin, iso;
+  std::uint32_t splatWorkgroup;
 };
 struct SplatPush {
   std::uint32_t n;
@@ -195,7 +196,9 @@ std::vector<std::int32_t> MarchingCubes::readField() const {
 
 ParticleField::ParticleField(gpu::Context& context, MarchingCubes& target, const sim::ParticleStore& particles,
                              const gpu::Buffer& state, const FieldSettings& settings)
-    : target_(&target), settings_(settings) {
+    : target_(&target),
+      settings_(settings),
+      splatArgs_(context, 16, gpu::MemoryUse::Device, "surface splat dispatch") {
   if (settings.resolution == 0 || settings.resolution > target.maxVoxelsPerAxis()) {
     throw std::invalid_argument("surface: resolution " + std::to_string(settings.resolution) +
                                 " must be between 1 and the extractor's " + std::to_string(target.maxVoxelsPerAxis()));
@@ -207,7 +210,8 @@ ParticleField::ParticleField(gpu::Context& context, MarchingCubes& target, const
   splat_ = &cache.get({"mc/splat", HEMO_MC_SPLAT_BINDING_COUNT, sizeof(SplatPush), kWorkgroup, {}});
   boundsSet_ = bounds_->makeSet({{HEMO_MC_BOUNDS_BINDING_POSITIONS, &particles.live().positions},
                                  {HEMO_MC_BOUNDS_BINDING_VELOCITIES, &particles.live().velocities},
-                                 {HEMO_MC_BOUNDS_BINDING_GRID, &target.grid()}});
+                                 {HEMO_MC_BOUNDS_BINDING_GRID, &target.grid()},
+                                 {HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS, &splatArgs_}});
   splatSet_ = splat_->makeSet({{HEMO_MC_SPLAT_BINDING_POSITIONS, &particles.live().positions},
                                {HEMO_MC_SPLAT_BINDING_VELOCITIES, &particles.live().velocities},
                                {HEMO_MC_SPLAT_BINDING_STATE, &state},
@@ -222,10 +226,11 @@ void ParticleField::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
   rec.computeToTransfer();
   rec.fill(target_->field(), 0u);
   rec.transferToCompute();
-  rec.dispatch(*bounds_, boundsSet_, BoundsPush{n, settings_.resolution, 2.0f * h, settings_.iso}, gpu::Groups{1, 1});
+  rec.dispatch(*bounds_, boundsSet_,
+               BoundsPush{n, settings_.resolution, 2.0f * h, settings_.iso, splat_->workgroupSize()}, gpu::Groups{1, 1});
   rec.computeToCompute();
-  rec.dispatch(*splat_, splatSet_, SplatPush{n, h, kernelNorm, settings_.restDensity},
-               splat_->groupsFor(std::max(n, 1u)));
+  rec.computeToIndirect();
+  rec.dispatchIndirect(*splat_, splatSet_, SplatPush{n, h, kernelNorm, settings_.restDensity}, splatArgs_, 0);
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "field");
 }

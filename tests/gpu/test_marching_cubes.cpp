@@ -2,13 +2,17 @@
 // (hemo/reference/marching_cubes.hpp): the same triangles on random fields, closed meshes,
 // the area and volume of a sphere, the particle field and the surface of a block of fluid.
 #include "gpu_test.hpp"
+#include "hemo/io/output.hpp"
 #include "hemo/reference/marching_cubes.hpp"
 #include "hemo/surface/marching_cubes.hpp"
 
 #include <glm/geometric.hpp>
 
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <map>
+#include <sstream>
 #include <numbers>
 #include <tuple>
 
@@ -287,11 +291,77 @@ TEST_F(MarchingCubesTest, ParticleFieldMatchesTheReferenceAndWrapsTheBlock) {
   // The extraction of that field equals the reference's.
   expectSameMesh(mesh, reference::marchingCubes(ref, 0.5, surface::buildCaseTable()), ref.spacing);
 
+  // PLY export: welded vertices (a closed surface: V - E + F = 2 per component, here one
+  // block), the header's counts and the binary body's size.
+  const io::IndexedMesh welded = io::weld(mesh.vertices);
+  ASSERT_EQ(welded.indices.size(), mesh.vertices.size());
+  const std::size_t faces = welded.indices.size() / 3;
+  EXPECT_EQ(std::int64_t(welded.positions.size()) - std::int64_t(3 * faces / 2) + std::int64_t(faces), 2);
+  const auto path = std::filesystem::temp_directory_path() / "hemo_test_block.ply";
+  io::writeSurfacePly(path, mesh, 0.25);
+  std::ifstream in(path, std::ios::binary);
+  std::string header, line;
+  while (std::getline(in, line) && line != "end_header") header += line + "\n";
+  EXPECT_NE(header.find("element vertex " + std::to_string(welded.positions.size()) + "\n"), std::string::npos);
+  EXPECT_NE(header.find("element face " + std::to_string(faces) + "\n"), std::string::npos);
+  EXPECT_NE(header.find("comment time_s 0.25\n"), std::string::npos);
+  const auto bodyStart = std::uint64_t(in.tellg());
+  EXPECT_EQ(std::filesystem::file_size(path) - bodyStart, welded.positions.size() * 24 + faces * 13);
+  std::filesystem::remove(path);
+
   // Bit-identical when run again.
   const auto [values2, mesh2] = run();
   EXPECT_EQ(values, values2);
   ASSERT_EQ(mesh.vertices.size(), mesh2.vertices.size());
   EXPECT_EQ(0, std::memcmp(mesh.vertices.data(), mesh2.vertices.data(), mesh.vertices.size() * sizeof(McVertex)));
+}
+
+// A grid much finer than the kernel: each particle's support covers ~64^3 points, more loop
+// iterations than llvmpipe lets one shader invocation run (65,535), so the splat must split a
+// particle's work (mc/bounds.comp).
+TEST_F(MarchingCubesTest, ParticleFieldOnAGridFarFinerThanTheKernel) {
+  const float dp = 1.0e-3f, h = 1.3f * dp, rho0 = 1000.0f;
+  const Block block = fluidBlock(dp, glm::uvec3(4, 4, 3), rho0);
+  const auto n = std::uint32_t(block.positions.size());
+  sim::ParticleStore store(ctx(), n);
+  store.upload(block.positions, block.velocities);
+  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
+  state.upload(block.state);
+  surface::MarchingCubes mc(ctx(), 100);
+  surface::FieldSettings settings;
+  settings.resolution = 100;
+  settings.h = h;
+  settings.restDensity = rho0;
+  surface::ParticleField field(ctx(), mc, store, state, settings);
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  field.record(rec, n);
+  rec.end();
+  rec.submitAndWait();
+  const surface::McGrid g = mc.readGrid();
+  ASSERT_GT(2.0f * h / g.origin[3], 30.0f) << "support radius in voxels";
+  const auto values = mc.readField();
+  std::vector<glm::dvec4> particles;
+  std::vector<double> densities;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (block.velocities[i].w != 0.0f) continue;
+    particles.emplace_back(block.positions[i]);
+    densities.push_back(block.state[i].x);
+  }
+  double worst = 0.0, largest = 0.0;
+  for (std::uint32_t k = 0; k < g.points[2]; k += 3) {
+    for (std::uint32_t j = 0; j < g.points[1]; j += 3) {
+      for (std::uint32_t i = 0; i < g.points[0]; i += 3) {
+        const glm::dvec3 x = glm::dvec3(g.origin[0], g.origin[1], g.origin[2]) + double(g.origin[3]) * glm::dvec3(i, j, k);
+        const double expected = reference::particleField(x, particles, densities, h);
+        const double got = surface::fromFixed(values[i + std::size_t(g.points[0]) * (j + std::size_t(g.points[1]) * k)]);
+        worst = std::max(worst, std::abs(got - expected));
+        largest = std::max(largest, got);
+      }
+    }
+  }
+  EXPECT_LT(worst, 5e-5);
+  EXPECT_GT(largest, 0.5);
 }
 
 TEST_F(MarchingCubesTest, NoFluidGivesNoSurface) {

@@ -1,5 +1,5 @@
 #pragma once
-// Output files: VTK particle files for ParaView and the run summary.
+// Output files: VTK particle files for ParaView, PLY surfaces, and the run summary.
 #include "hemo/sim/simulation.hpp"
 
 #include <filesystem>
@@ -29,5 +29,25 @@ void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s
 // periodic seam is drawn between the wrapped positions; its strain uses the minimum image.
 void writeSpringsVtk(const std::filesystem::path& path, const sim::Snapshot& snapshot,
                      const std::vector<sim::GpuSpring>& springs, double time, glm::vec3 period);
+
+}  // namespace hemo::io
+
+namespace hemo::io {
+
+// A surface mesh with shared vertices: the GPU's per-triangle vertices welded where their
+// positions are bit-identical (marching cubes computes a shared edge's vertex identically in
+// both voxels), in first-use order.
+struct IndexedMesh {
+  std::vector<glm::vec3> positions;  // m
+  std::vector<glm::vec3> normals;    // unit, outward
+  std::vector<std::uint32_t> indices;  // 3 per triangle
+};
+IndexedMesh weld(const std::vector<surface::McVertex>& vertices);
+
+// Binary little-endian PLY (float x y z nx ny nz per vertex, faces as uchar count + uint
+// indices), positions in m; comments give the units, the time (s) and, if the triangle
+// buffer overflowed, how many triangles are missing. Throws std::runtime_error naming the
+// file if it cannot be written.
+void writeSurfacePly(const std::filesystem::path& path, const surface::SurfaceMesh& mesh, double time);
 
 }  // namespace hemo::io

@@ -74,6 +74,13 @@ struct Vessel {
   std::optional<sim::Inflow> inflow;
 };
 
+// The blood surface's grid (hemo/surface/marching_cubes.hpp).
+struct SurfaceSpec {
+  std::uint32_t resolution = 128;  // voxels along the longest side
+  float iso = 0.5f;
+  std::uint32_t maxTriangles = 0;  // 0: automatic
+};
+
 struct Scene {
   std::string name;
   std::string description;
@@ -85,6 +92,7 @@ struct Scene {
   Box domain;
   double endTime = 1.0;             // s
   std::uint32_t stepsPerBatch = 64;  // steps recorded per submit
+  SurfaceSpec surface;
 };
 
 Scene parseScene(const std::string& jsonText, const std::string& sourceName);

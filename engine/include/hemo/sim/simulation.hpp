@@ -5,6 +5,7 @@
 #include "hemo/scene/build.hpp"
 #include "hemo/sim/sph.hpp"
 #include "hemo/sim/stats.hpp"
+#include "hemo/surface/marching_cubes.hpp"
 
 #include <glm/vec2.hpp>
 
@@ -69,6 +70,14 @@ class Simulation {
   // GPU milliseconds of each stage of one step (median of `repeats` steps, run now and
   // counted like any other step). Empty if the device has no timestamps.
   std::vector<std::pair<std::string, double>> profileStep(int repeats = 5);
+  // The blood surface (hemo/surface/marching_cubes.hpp) on the grid of the scene's `surface`
+  // section. The extractor is built on first use: a run nobody looks at never has one.
+  // recordSurface records the field and the extraction (after the steps recorded before it);
+  // extractSurface records, submits, waits and reads the mesh back (for files).
+  surface::MarchingCubes& enableSurface();
+  void recordSurface(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
+  surface::SurfaceMesh extractSurface();
+  const surface::MarchingCubes* surfaceExtractor() const { return surface_.get(); }
   const scene::Scene& scene() const { return scene_; }
   std::uint32_t fluidParticles() const { return fluid_; }
   std::uint32_t boundaryParticles() const { return boundary_; }
@@ -98,6 +107,8 @@ class Simulation {
   std::unique_ptr<SphSolver> solver_;
   std::unique_ptr<gpu::CommandRecorder> recorder_;
   std::unique_ptr<StepStats> stats_;
+  std::unique_ptr<surface::MarchingCubes> surface_;
+  std::unique_ptr<surface::ParticleField> field_;
   std::uint32_t statsEvery_ = 0;
   std::uint64_t steps_ = 0;
 };

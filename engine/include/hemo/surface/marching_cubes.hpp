@@ -2,6 +2,7 @@
 // The blood surface on the GPU (compute_shaders/mc/), in the order it is recorded:
 //   bounds ..... (ParticleField) the fluid's bounding box -> a grid of cubic voxels
 //   splat ...... (ParticleField) the SPH volume fraction at the grid points, fixed point
+//                (indirect: one invocation per particle and z-plane of its support)
 //   prepare .... runs of voxels and the classify dispatch (indirect)
 //   classify ... per run of 4 voxels: cases, triangle count, active flag
 //   scan ....... prefix sums of triangle counts and of active flags
@@ -125,6 +126,7 @@ class ParticleField {
   FieldSettings settings_;
   const gpu::ComputePipeline* bounds_;
   const gpu::ComputePipeline* splat_;
+  gpu::Buffer splatArgs_;
   gpu::DescriptorSet boundsSet_, splatSet_;
 };
 
