@@ -10,6 +10,7 @@ packages=(
   mesa-vulkan-drivers      # lavapipe: Vulkan on the CPU when there is no GPU
   glslang-tools spirv-tools
   libglm-dev nlohmann-json3-dev libglfw3-dev libgtest-dev
+  libpng-dev               # PNG frames (render/)
 )
 
 missing=()

@@ -1,10 +1,11 @@
 // hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N] [--stats-every N]
-//          [--surface-every N] [--profile N]
+//          [--surface-every N] [--png-every N] [--png-size WxH] [--profile N]
 // Runs a scene headless: a progress line, then a summary on screen and in DIR/summary.json.
 // Exit codes: 0 success; 1 bad input; 2 the simulation became non-finite or unstable;
 // 3 no usable Vulkan device or a device error.
 #include "cli.hpp"
 #include "hemo/io/output.hpp"
+#include "hemo/render/renderer.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/sim/simulation.hpp"
 
@@ -18,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 
 namespace {
 
@@ -25,7 +27,7 @@ using Json = nlohmann::json;
 
 const char* kUsage =
     "usage: hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N]\n"
-    "                [--stats-every N] [--surface-every N] [--profile N]\n"
+    "                [--stats-every N] [--surface-every N] [--png-every N] [--png-size WxH] [--profile N]\n"
     "  --out DIR        output directory (default: out/<scene name>)\n"
     "  --steps N        run N steps\n"
     "  --until SECONDS  run until this simulated time (default: the scene's time.end_time_s)\n"
@@ -37,7 +39,9 @@ const char* kUsage =
     "  --profile N      after the run, time N more steps stage by stage (GPU ms in stage_ms)\n"
     "  --surface-every N  write the blood surface (GPU marching cubes, the scene's surface section)\n"
     "                   as DIR/surface_<step>.ply every N steps (and at the end)\n"
-    "  --png-every N    needs the renderer (not in this build yet)\n"
+    "  --png-every N    render DIR/frame_<step>.png every N steps (and at the end): the blood\n"
+    "                   surface, the vessel wall cut open on the camera's side, offscreen\n"
+    "  --png-size WxH   frame size in pixels (default 960x540)\n"
     "hemo-run --describe-scene   prints the scene-file parameter table\n";
 
 void printProgress(const hemo::sim::Progress& p, bool tty) {
@@ -62,12 +66,10 @@ int main(int argc, char** argv) {
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--out", "--steps", "--until", "--device", "--vtk-every", "--png-every",
-                                         "--surface-every", "--profile", "--stats-every"});
+                                         "--surface-every", "--profile", "--stats-every", "--png-size"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SCENE.json");
     if (args.has("--steps") && args.has("--until")) throw hemo::cli::UsageError("give --steps or --until, not both");
-    if (args.has("--png-every")) {
-      throw hemo::cli::UsageError("--png-every needs the renderer, which is not in this build yet");
-    }
+
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-run: " << e.what() << "\n" << kUsage;
     return 1;
@@ -76,6 +78,8 @@ int main(int argc, char** argv) {
   hemo::sim::RunOptions options;
   std::uint32_t vtkEvery = 0;
   std::uint32_t surfaceEvery = 0;
+  std::uint32_t pngEvery = 0;
+  std::uint32_t pngWidth = 960, pngHeight = 540;
   std::uint64_t profileSteps = 0;
   std::uint32_t statsEvery = 0;
   hemo::scene::Scene scene;
@@ -97,6 +101,17 @@ int main(int argc, char** argv) {
     }
     vtkEvery = static_cast<std::uint32_t>(args.count("--vtk-every", 0, 1, 1000000000));
     surfaceEvery = static_cast<std::uint32_t>(args.count("--surface-every", 0, 1, 1000000000));
+    pngEvery = static_cast<std::uint32_t>(args.count("--png-every", 0, 1, 1000000000));
+    if (args.has("--png-size")) {
+      const std::string v = args.text("--png-size");
+      unsigned w = 0, h = 0;
+      char tail = 0;
+      if (std::sscanf(v.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192) {
+        throw hemo::cli::UsageError("--png-size expects WxH with 16 <= W, H <= 8192, got '" + v + "'");
+      }
+      pngWidth = w;
+      pngHeight = h;
+    }
     profileSteps = args.count("--profile", 0, 1, 1000);
     statsEvery = static_cast<std::uint32_t>(args.count("--stats-every", 0, 1, 1000000000));
     scene = hemo::scene::loadScene(args.positional[0]);
@@ -177,12 +192,55 @@ int main(int argc, char** argv) {
       lastSurface = mesh.totals;
       ++surfaceFiles;
     };
+    // Frames: the camera frames every particle of the first frame (tank and wall included).
+    std::unique_ptr<hemo::render::OffscreenRenderer> renderer;
+    std::unique_ptr<hemo::gpu::CommandRecorder> frameRec;
+    hemo::render::Camera camera;
+    hemo::render::FrameOptions frame;
+    std::uint64_t pngFiles = 0;
+    auto writePng = [&](const hemo::sim::Progress& p) {
+      if (!renderer) {
+        renderer = std::make_unique<hemo::render::OffscreenRenderer>(ctx, pngWidth, pngHeight);
+        frameRec = std::make_unique<hemo::gpu::CommandRecorder>(ctx);
+        glm::vec3 lo(3e38f), hi(-3e38f);
+        for (const glm::vec4& q : sim.store().readPositions()) {
+          if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) {
+            lo = glm::min(lo, glm::vec3(q));
+            hi = glm::max(hi, glm::vec3(q));
+          }
+        }
+        // Vessels run along +x: look across the axis (from -y, a little above), so the cutaway
+        // opens the whole length of the vessel.
+        const glm::vec3 direction = sim.wallParticles() > 0 ? glm::vec3(0.0f, -1.0f, 0.45f) : glm::vec3(0.45f, -1.0f, 0.4f);
+        camera = hemo::render::Camera::framing(lo, hi, float(pngWidth) / float(pngHeight), direction);
+        frame.fluid = false;  // the surface shows the blood
+        frame.wall = true;
+        frame.cutaway = sim.wallParticles() > 0;
+        frame.particleRadius = 0.5f * scene.sph.spacing;
+      }
+      frameRec->begin();
+      sim.recordSurface(*frameRec);
+      renderer->record(*frameRec, camera, frame,
+                       {&sim.store().live().positions, &sim.store().live().velocities, sim.store().count()},
+                       sim.surfaceExtractor());
+      frameRec->end();
+      frameRec->submitAndWait();
+      char name[64];
+      std::snprintf(name, sizeof name, "frame_%08llu.png", static_cast<unsigned long long>(p.steps));
+      hemo::render::writePng(out / name, pngWidth, pngHeight, renderer->readPixels());
+      ++pngFiles;
+    };
     auto writeOutputs = [&](const hemo::sim::Progress& p) {
       if (vtkEvery && p.steps % vtkEvery == 0) writeVtk(p);
       if (surfaceEvery && p.steps % surfaceEvery == 0) writeSurface(p);
+      if (pngEvery && p.steps % pngEvery == 0) writePng(p);
     };
-    if (vtkEvery || surfaceEvery) {
-      options.outputEvery = vtkEvery && surfaceEvery ? std::gcd(vtkEvery, surfaceEvery) : std::max(vtkEvery, surfaceEvery);
+    if (vtkEvery || surfaceEvery || pngEvery) {
+      std::uint32_t every = 0;
+      for (std::uint32_t e : {vtkEvery, surfaceEvery, pngEvery}) {
+        if (e) every = every ? std::gcd(every, e) : e;
+      }
+      options.outputEvery = every;
       options.onOutput = writeOutputs;
       writeOutputs(hemo::sim::Progress{});
     }
@@ -202,6 +260,7 @@ int main(int argc, char** argv) {
       p.time = sim.time();
       if (vtkEvery && sim.steps() % vtkEvery != 0) writeVtk(p);
       if (surfaceEvery && sim.steps() % surfaceEvery != 0) writeSurface(p);
+      if (pngEvery && sim.steps() % pngEvery != 0) writePng(p);
     }
     const double wall = result.wallSeconds;
     nlohmann::json stageMs = nlohmann::json::object();
@@ -226,6 +285,7 @@ int main(int argc, char** argv) {
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},
                {"finite", finite}};
     if (profileSteps > 0) summary["stage_ms"] = stageMs;
+    if (pngFiles > 0) summary["png_files"] = pngFiles;
     if (surfaceFiles > 0) {
       summary["surface_files"] = surfaceFiles;
       summary["surface_triangles"] = lastSurface.triangles;

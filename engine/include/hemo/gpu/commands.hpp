@@ -65,6 +65,9 @@ class CommandRecorder {
   void transferToCompute();  // copy/fill -> shader reads/writes
   void transferToTransfer();
   void computeToIndirect();  // shader writes -> indirect dispatch/draw arguments
+  // Compute/transfer writes -> what a draw reads: indirect arguments, vertex attributes,
+  // storage buffers in vertex shaders (the renderer's one hand-off from the simulation).
+  void computeToGraphics();
   void computeToHost();      // shader/copy writes -> host reads after a fence
 
   void fill(const Buffer& buffer, std::uint32_t value, VkDeviceSize offset = 0, VkDeviceSize bytes = VK_WHOLE_SIZE);

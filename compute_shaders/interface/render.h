@@ -1,0 +1,18 @@
+// The renderer's graphics shaders (render/shaders/). Shared by GLSL and C++.
+#ifndef HEMO_INTERFACE_RENDER_H
+#define HEMO_INTERFACE_RENDER_H
+
+// render/particles.vert: storage buffers of the particle store, read by the vertex shader.
+#define HEMO_RENDER_BINDING_POSITIONS 0
+#define HEMO_RENDER_BINDING_VELOCITIES 1
+#define HEMO_RENDER_BINDING_COUNT 2
+// push (128 bytes): mat4 viewProj; vec4 right (w radius m); vec4 up (w speed scale m/s);
+//                   uvec4 show (fluid, wall, boundary); vec4 cut (wall particles with
+//                   dot(cut.xyz, x) > cut.w are hidden)
+
+// render/surface.vert + .frag: vertex attributes from the marching-cubes vertex buffer
+// (stride 32: vec4 position at 0, vec4 normal at 16).
+#define HEMO_RENDER_SURFACE_STRIDE 32
+// push (112 bytes): mat4 viewProj; vec4 eye; vec4 light; vec4 color
+
+#endif

@@ -1,0 +1,102 @@
+#pragma once
+// Drawing from the engine's GPU buffers on the same device: particles as shaded discs (fluid
+// coloured by speed, wall particles, optionally the rigid boundary) and the marching-cubes
+// surface, lit, with depth. The renderer only reads engine buffers (positions, velocities,
+// the extractor's vertices and indirect draw arguments) and owns the one compute-to-graphics
+// barrier. OffscreenRenderer draws into an image and copies it to host memory for PNG files
+// and tests; nothing here needs a window.
+#include "hemo/gpu/commands.hpp"
+#include "hemo/surface/marching_cubes.hpp"
+
+#include <glm/mat4x4.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <utility>
+#include <vector>
+
+namespace hemo::render {
+
+struct Camera {
+  glm::vec3 eye{0.0f, -1.0f, 0.0f};  // m
+  glm::vec3 target{0.0f};            // m
+  glm::vec3 up{0.0f, 0.0f, 1.0f};
+  float fovY = 0.6f;                 // vertical field of view (rad)
+  float nearPlane = 1e-4f, farPlane = 10.0f;  // m
+
+  // Looks at the centre of the box [lo, hi] from `direction` (target -> eye) from far enough
+  // that the box's bounding sphere fits the view at this aspect ratio (width / height).
+  static Camera framing(glm::vec3 lo, glm::vec3 hi, float aspect, glm::vec3 direction = {0.45f, -1.0f, 0.4f});
+  glm::mat4 view() const;
+  // Vulkan clip space: y down, depth 0 (near) .. 1 (far).
+  glm::mat4 projection(float aspect) const;
+};
+
+struct FrameOptions {
+  bool fluid = true;      // fluid particles
+  bool wall = true;       // vessel wall particles
+  bool boundary = false;  // rigid boundary particles (tank walls)
+  bool cutaway = false;   // hide the wall particles between the camera and the target's plane
+  float particleRadius = 0.0f;  // m (0: nothing drawn for particles)
+  float speedScale = 1.0f;      // m/s at the red end of the fluid's colour scale
+  glm::vec4 background{0.95f, 0.95f, 0.96f, 1.0f};
+  glm::vec3 surfaceColor{0.62f, 0.05f, 0.06f};
+  glm::vec3 lightDirection{0.3f, -0.5f, 0.8f};  // towards the light
+};
+
+// The particle buffers to draw (a sim::ParticleStore's live arrays, in any order).
+struct ParticleView {
+  const gpu::Buffer* positions = nullptr;   // vec4 xyz m
+  const gpu::Buffer* velocities = nullptr;  // vec4 xyz m/s, w kind
+  std::uint32_t count = 0;
+};
+
+class OffscreenRenderer {
+ public:
+  OffscreenRenderer(gpu::Context& context, std::uint32_t width, std::uint32_t height);
+  ~OffscreenRenderer();
+  OffscreenRenderer(const OffscreenRenderer&) = delete;
+  OffscreenRenderer& operator=(const OffscreenRenderer&) = delete;
+
+  // Records one frame after the compute work that produced the buffers (same recorder): the
+  // compute-to-graphics barrier, clear, particles, the surface (drawn with the extractor's
+  // indirect arguments; nullptr: no surface), and the copy of the image to host memory.
+  void record(gpu::CommandRecorder& rec, const Camera& camera, const FrameOptions& options,
+              const ParticleView& particles, const surface::MarchingCubes* surface);
+  // RGBA8 pixels of the last recorded frame (after its submission completed), top row first.
+  std::vector<std::uint8_t> readPixels() const;
+  std::uint32_t width() const { return width_; }
+  std::uint32_t height() const { return height_; }
+
+ private:
+  VkShaderModule module(const char* name);
+  VkDescriptorSet particleSet(const ParticleView& view);
+  void createTargets();
+  void createPipelines();
+
+  gpu::Context* context_;
+  std::uint32_t width_, height_;
+  VkFormat depthFormat_ = VK_FORMAT_UNDEFINED;
+  VkImage color_ = VK_NULL_HANDLE, depth_ = VK_NULL_HANDLE;
+  VkDeviceMemory colorMemory_ = VK_NULL_HANDLE, depthMemory_ = VK_NULL_HANDLE;
+  VkImageView colorView_ = VK_NULL_HANDLE, depthView_ = VK_NULL_HANDLE;
+  VkRenderPass renderPass_ = VK_NULL_HANDLE;
+  VkFramebuffer framebuffer_ = VK_NULL_HANDLE;
+  VkDescriptorSetLayout particleLayout_ = VK_NULL_HANDLE;
+  VkDescriptorPool pool_ = VK_NULL_HANDLE;
+  VkPipelineLayout particlePipelineLayout_ = VK_NULL_HANDLE, surfacePipelineLayout_ = VK_NULL_HANDLE;
+  VkPipeline particlePipeline_ = VK_NULL_HANDLE, surfacePipeline_ = VK_NULL_HANDLE;
+  std::vector<VkShaderModule> modules_;
+  std::map<std::pair<VkBuffer, VkBuffer>, VkDescriptorSet> particleSets_;
+  gpu::Buffer pixels_;
+};
+
+// Writes RGBA8 pixels (top row first) as an 8-bit RGBA PNG. Throws std::runtime_error naming
+// the file if it cannot be written.
+void writePng(const std::filesystem::path& path, std::uint32_t width, std::uint32_t height,
+              const std::vector<std::uint8_t>& rgba);
+
+}  // namespace hemo::render

@@ -1,0 +1,42 @@
+#include "hemo/render/renderer.hpp"
+
+#include <png.h>
+
+#include <cstdio>
+#include <memory>
+#include <stdexcept>
+
+namespace hemo::render {
+
+void writePng(const std::filesystem::path& path, std::uint32_t width, std::uint32_t height,
+              const std::vector<std::uint8_t>& rgba) {
+  if (rgba.size() != std::size_t(width) * height * 4) {
+    throw std::invalid_argument("PNG '" + path.string() + "': " + std::to_string(rgba.size()) + " bytes for " +
+                                std::to_string(width) + "x" + std::to_string(height) + " RGBA pixels");
+  }
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
+  if (!file) throw std::runtime_error("cannot write PNG file '" + path.string() + "'");
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  png_infop info = png ? png_create_info_struct(png) : nullptr;
+  if (!png || !info) {
+    png_destroy_write_struct(&png, &info);
+    throw std::runtime_error("libpng could not start writing '" + path.string() + "'");
+  }
+  // libpng reports errors by longjmp; nothing with a destructor lives between here and the end.
+  if (setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    throw std::runtime_error("failed while writing PNG file '" + path.string() + "'");
+  }
+  png_init_io(png, file.get());
+  png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  for (std::uint32_t y = 0; y < height; ++y) {
+    png_write_row(png, const_cast<png_bytep>(rgba.data() + std::size_t(y) * width * 4));
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  if (std::fflush(file.get()) != 0) throw std::runtime_error("failed while writing PNG file '" + path.string() + "'");
+}
+
+}  // namespace hemo::render

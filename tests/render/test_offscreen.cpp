@@ -1,0 +1,154 @@
+// The offscreen renderer: a known surface and known particles drawn where the camera maths
+// says, in the colours the options say, the background everywhere else.
+#include "gpu_test.hpp"
+#include "hemo/render/renderer.hpp"
+#include "hemo/sim/particles.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace hemo::test {
+namespace {
+
+struct Rgb {
+  int r, g, b;
+};
+
+Rgb pixel(const std::vector<std::uint8_t>& rgba, std::uint32_t width, std::uint32_t x, std::uint32_t y) {
+  const std::size_t i = (std::size_t(y) * width + x) * 4;
+  return {rgba[i], rgba[i + 1], rgba[i + 2]};
+}
+
+// Pixel coordinates of a world point (the renderer's camera maths, applied here).
+glm::vec2 project(const render::Camera& camera, glm::vec3 p, std::uint32_t width, std::uint32_t height) {
+  const glm::vec4 clip = camera.projection(float(width) / float(height)) * camera.view() * glm::vec4(p, 1.0f);
+  const glm::vec2 ndc = glm::vec2(clip) / clip.w;
+  return {(ndc.x + 1.0f) * 0.5f * float(width), (ndc.y + 1.0f) * 0.5f * float(height)};
+}
+
+class RenderTest : public GpuTest {};
+
+TEST_F(RenderTest, SphereSurfaceCoversItsSilhouette) {
+  const double R = 1.0e-3;
+  const std::uint32_t n = 65;
+  const double voxel = 2.4 * R / (n - 1);
+  std::vector<double> values(std::size_t(n) * n * n);
+  for (std::uint32_t k = 0; k < n; ++k) {
+    for (std::uint32_t j = 0; j < n; ++j) {
+      for (std::uint32_t i = 0; i < n; ++i) {
+        const glm::dvec3 x = glm::dvec3(-1.2 * R) + voxel * glm::dvec3(i, j, k);
+        values[i + n * (j + std::size_t(n) * k)] = 1.0 - glm::length(x) / R;
+      }
+    }
+  }
+  surface::MarchingCubes mc(ctx(), 64);
+  mc.uploadField(glm::dvec3(-1.2 * R), voxel, glm::uvec3(n), values, 0.0f);
+
+  const std::uint32_t W = 320, H = 240;
+  render::OffscreenRenderer renderer(ctx(), W, H);
+  render::Camera camera;
+  camera.eye = glm::vec3(0.0f, -5.0e-3f, 0.0f);
+  camera.target = glm::vec3(0.0f);
+  camera.nearPlane = 1e-3f;
+  camera.farPlane = 1e-2f;
+  render::FrameOptions options;
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  mc.record(rec);
+  renderer.record(rec, camera, options, {}, &mc);
+  rec.end();
+  rec.submitAndWait();
+  const auto rgba = renderer.readPixels();
+
+  const Rgb background = pixel(rgba, W, 0, 0);
+  EXPECT_EQ(background.r, int(std::lround(options.background.r * 255.0f)));
+  std::size_t covered = 0;
+  for (std::uint32_t y = 0; y < H; ++y) {
+    for (std::uint32_t x = 0; x < W; ++x) {
+      const Rgb p = pixel(rgba, W, x, y);
+      if (p.r != background.r || p.g != background.g || p.b != background.b) {
+        ++covered;
+        ASSERT_GT(p.r, p.g) << "surface pixels are red (" << x << ", " << y << ")";
+        ASSERT_GT(p.r, p.b);
+      }
+    }
+  }
+  // The silhouette of a sphere seen from distance d: a disc of angular radius asin(R / d).
+  const double d = 5.0e-3;
+  const double radiusPx = std::tan(std::asin(R / d)) / std::tan(0.5 * camera.fovY) * (H / 2.0);
+  const double expected = 3.14159265358979 * radiusPx * radiusPx;
+  std::printf("sphere: %zu pixels covered, %.0f expected\n", covered, expected);
+  EXPECT_NEAR(double(covered) / expected, 1.0, 0.03);
+  const Rgb centre = pixel(rgba, W, W / 2, H / 2);
+  EXPECT_GT(centre.r, 2 * centre.g);
+  EXPECT_GT(centre.r, 2 * centre.b);
+  // Lit from above (the default light points up): the top of the disc is brighter.
+  const Rgb top = pixel(rgba, W, W / 2, std::uint32_t(H / 2 - 0.8 * radiusPx));
+  const Rgb bottom = pixel(rgba, W, W / 2, std::uint32_t(H / 2 + 0.8 * radiusPx));
+  EXPECT_GT(top.r, bottom.r);
+}
+
+TEST_F(RenderTest, ParticlesAreDrawnInTheirKindsColours) {
+  // A slow and a fast fluid particle, a wall particle, and a boundary particle (hidden by
+  // default), side by side along x.
+  const std::vector<glm::vec4> positions = {{-3e-3f, 0.0f, 0.0f, 1.0f}, {3e-3f, 0.0f, 0.0f, 1.0f},
+                                            {0.0f, 0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 2.5e-3f, 1.0f}};
+  const std::vector<glm::vec4> velocities = {{0.0f, 0.0f, 0.0f, 0.0f}, {2.0f, 0.0f, 0.0f, 0.0f},
+                                             {0.0f, 0.0f, 0.0f, 2.0f}, {0.0f, 0.0f, 0.0f, 1.0f}};
+  sim::ParticleStore store(ctx(), 4);
+  store.upload(positions, velocities);
+  const std::uint32_t W = 320, H = 200;
+  render::OffscreenRenderer renderer(ctx(), W, H);
+  const render::Camera camera = render::Camera::framing(glm::vec3(-4e-3f, -1e-3f, -1e-3f), glm::vec3(4e-3f, 1e-3f, 3e-3f),
+                                                        float(W) / H, glm::vec3(0.0f, -1.0f, 0.0f));
+  render::FrameOptions options;
+  options.particleRadius = 0.8e-3f;
+  options.speedScale = 2.0f;
+  gpu::CommandRecorder rec(ctx());
+  const auto draw = [&] {
+    rec.begin();
+    renderer.record(rec, camera, options, {&store.live().positions, &store.live().velocities, 4}, nullptr);
+    rec.end();
+    rec.submitAndWait();
+    return renderer.readPixels();
+  };
+  auto rgba = draw();
+  const auto at = [&](int k) {
+    const glm::vec2 p = project(camera, glm::vec3(positions[k]), W, H);
+    return pixel(rgba, W, std::uint32_t(p.x), std::uint32_t(p.y));
+  };
+  const Rgb slow = at(0), fast = at(1), wall = at(2), boundary = at(3), background = pixel(rgba, W, 0, 0);
+  EXPECT_GT(slow.b, slow.r + 60) << "fluid at rest: blue";
+  EXPECT_GT(fast.r, fast.b + 60) << "fluid at the top of the scale: red";
+  EXPECT_GT(wall.r, wall.b + 30) << "wall: tan";
+  EXPECT_GT(wall.g, wall.b + 15);
+  EXPECT_EQ(boundary.r, background.r) << "rigid boundary hidden by default";
+  EXPECT_EQ(boundary.g, background.g);
+
+  options.boundary = true;
+  rgba = draw();
+  const Rgb shown = at(3);
+  EXPECT_NE(shown.r, background.r) << "rigid boundary shown on request";
+  EXPECT_EQ(shown.r, shown.g) << "grey";
+
+  // PNG output: a valid signature and the image's size in the header.
+  const auto path = std::filesystem::temp_directory_path() / "hemo_test_particles.png";
+  render::writePng(path, W, H, rgba);
+  std::ifstream in(path, std::ios::binary);
+  unsigned char head[24];
+  in.read(reinterpret_cast<char*>(head), 24);
+  ASSERT_TRUE(in);
+  EXPECT_EQ(head[1], 'P');
+  EXPECT_EQ(head[2], 'N');
+  EXPECT_EQ(head[3], 'G');
+  EXPECT_EQ((head[16] << 24 | head[17] << 16 | head[18] << 8 | head[19]), int(W));
+  EXPECT_EQ((head[20] << 24 | head[21] << 16 | head[22] << 8 | head[23]), int(H));
+  std::filesystem::remove(path);
+  EXPECT_THROW(render::writePng(path, W, H, std::vector<std::uint8_t>(7)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace hemo::test
