@@ -11,6 +11,7 @@ packages=(
   glslang-tools spirv-tools
   libglm-dev nlohmann-json3-dev libglfw3-dev libgtest-dev
   libpng-dev               # PNG frames (render/)
+  xvfb xauth               # a virtual X server: the windowed viewer runs in CI
 )
 
 missing=()

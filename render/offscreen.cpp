@@ -66,8 +66,9 @@ Camera Camera::framing(glm::vec3 lo, glm::vec3 hi, float aspect, glm::vec3 direc
     }
   }
   c.eye = c.target + dir * far;
-  c.nearPlane = std::max(far - 1.5f * radius, 1e-3f * far);
-  c.farPlane = far + 1.5f * radius;
+  // Generous depth range: things may come closer than the box (escaping blood).
+  c.nearPlane = 0.02f * far;
+  c.farPlane = far + 4.0f * radius;
   return c;
 }
 

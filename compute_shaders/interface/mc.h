@@ -38,7 +38,7 @@
 #define HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS 3  // uvec4: the splat's dispatch
 #define HEMO_MC_BOUNDS_BINDING_COUNT 4
 // push: uint n; uint resolution (voxels along the longest side); float margin (m); float iso;
-//       uint splatWorkgroup
+//       uint splatWorkgroup, 3 x pad; vec4 clipLo, clipHi (m: the region the grid may cover)
 
 // mc/splat.comp: each fluid particle adds round(scale V_j W(|x - x_j|, h)) to the points
 // within its support (integer atomics).

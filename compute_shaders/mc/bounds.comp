@@ -1,7 +1,8 @@
 #version 450
 // The grid the blood surface is extracted on: the bounding box of the finite fluid particles,
 // grown by `margin` on every side (the field's support, so the surface closes inside the
-// grid), cut into cubic voxels with `resolution` voxels along its longest side. One workgroup
+// grid) and clipped to a region of interest (particles that fly far away would otherwise
+// stretch the grid and coarsen the voxels), cut into cubic voxels with `resolution` voxels along its longest side. One workgroup
 // reduces the box (min and max are exact, so the order does not matter) and invocation 0
 // writes origin, voxel size and point counts, and the splat's dispatch: one invocation per
 // (fluid-or-not particle, z-plane of its support). The voxel is never finer than margin / 126
@@ -25,6 +26,9 @@ layout(push_constant) uniform Push {
   float margin;  // the field's support radius 2h (m)
   float iso;
   uint splatWorkgroup;
+  uint pad0, pad1, pad2;
+  vec4 clipLo;  // xyz: the grid never extends below this (m)
+  vec4 clipHi;  // xyz: ... nor above this
 } pc;
 
 shared vec3 s_lo[gl_WorkGroupSize.x];
@@ -69,8 +73,18 @@ void main() {
     splatArgs[2] = 0u;
     return;
   }
-  lo -= vec3(pc.margin);
-  hi += vec3(pc.margin);
+  lo = max(lo - vec3(pc.margin), pc.clipLo.xyz);
+  hi = min(hi + vec3(pc.margin), pc.clipHi.xyz);
+  if (any(greaterThanEqual(lo, hi))) {
+    grid.origin = vec4(0.0, 0.0, 0.0, 1.0);
+    grid.points = uvec4(0u);
+    grid.runs = uvec4(0u);
+    grid.level = vec4(pc.iso, 0.0, 0.0, 0.0);
+    splatArgs[0] = 0u;
+    splatArgs[1] = 0u;
+    splatArgs[2] = 0u;
+    return;
+  }
   const vec3 extent = hi - lo;
   const float voxel = max(max(extent.x, max(extent.y, extent.z)) / float(pc.resolution), pc.margin / 126.0);
   // Enough voxels to cover the extent, never more than the resolution (rounding).

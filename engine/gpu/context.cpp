@@ -61,7 +61,7 @@ bool hasLayer(const char* name) {
                      [&](const VkLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
 }
 
-VkInstance createInstance(bool validation) {
+VkInstance createInstance(bool validation, const std::vector<std::string>& extra = {}) {
   std::uint32_t loaderVersion = VK_API_VERSION_1_0;
   vkEnumerateInstanceVersion(&loaderVersion);
   if (loaderVersion < VK_API_VERSION_1_2) {
@@ -83,6 +83,7 @@ VkInstance createInstance(bool validation) {
     layers.push_back(kValidationLayer);
     extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
   }
+  for (const std::string& e : extra) extensions.push_back(e.c_str());
   VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
   info.pApplicationInfo = &app;
   info.enabledLayerCount = static_cast<std::uint32_t>(layers.size());
@@ -140,8 +141,9 @@ std::string deviceListText(const std::vector<DeviceInfo>& infos) {
   return out.str();
 }
 
-// The compute-capable queue family of `device`, or -1.
-int computeFamily(VkPhysicalDevice device) {
+// The compute-capable queue family of `device`, or -1. With a presentation surface, only a
+// family with compute, graphics and present to that surface qualifies.
+int computeFamily(VkPhysicalDevice device, VkSurfaceKHR surface = VK_NULL_HANDLE) {
   std::uint32_t count = 0;
   vkGetPhysicalDeviceQueueFamilyProperties(device, &count, nullptr);
   std::vector<VkQueueFamilyProperties> families(count);
@@ -150,11 +152,18 @@ int computeFamily(VkPhysicalDevice device) {
   int computeOnly = -1;
   for (std::uint32_t i = 0; i < count; ++i) {
     const VkQueueFlags flags = families[i].queueFlags;
-    if ((flags & VK_QUEUE_COMPUTE_BIT) && (flags & VK_QUEUE_GRAPHICS_BIT)) return static_cast<int>(i);
+    const bool both = (flags & VK_QUEUE_COMPUTE_BIT) && (flags & VK_QUEUE_GRAPHICS_BIT);
+    if (surface) {
+      VkBool32 present = VK_FALSE;
+      if (both && vkGetPhysicalDeviceSurfaceSupportKHR(device, i, surface, &present) == VK_SUCCESS && present) {
+        return static_cast<int>(i);
+      }
+      continue;
+    }
+    if (both) return static_cast<int>(i);
     if ((flags & VK_QUEUE_COMPUTE_BIT) && computeOnly < 0) computeOnly = static_cast<int>(i);
   }
-  const int best = computeOnly;
-  return best;
+  return computeOnly;
 }
 
 }  // namespace
@@ -196,7 +205,7 @@ bool validationFromEnvironment() {
 }  // namespace
 
 Context::Context(const ContextOptions& options) : validation_(options.validation || validationFromEnvironment()) {
-  instance_ = createInstance(validation_);
+  instance_ = createInstance(validation_, options.instanceExtensions);
   try {
     if (validation_) {
       VkDebugUtilsMessengerCreateInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
@@ -216,6 +225,10 @@ Context::Context(const ContextOptions& options) : validation_(options.validation
     if (selector.empty()) {
       if (const char* env = std::getenv("HEMO_DEVICE")) selector = env;
     }
+    if (options.createSurface) {
+      surface_ = options.createSurface(instance_);
+      if (!surface_) throw GpuError("the window system could not create a Vulkan surface");
+    }
     pickDevice(selector);
 
     const float priority = 1.0f;
@@ -226,6 +239,11 @@ Context::Context(const ContextOptions& options) : validation_(options.validation
     VkDeviceCreateInfo deviceInfo{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
     deviceInfo.queueCreateInfoCount = 1;
     deviceInfo.pQueueCreateInfos = &queueInfo;
+    const char* swapchain = VK_KHR_SWAPCHAIN_EXTENSION_NAME;
+    if (surface_) {
+      deviceInfo.enabledExtensionCount = 1;
+      deviceInfo.ppEnabledExtensionNames = &swapchain;
+    }
     check(vkCreateDevice(physical_, &deviceInfo, nullptr, &device_), "vkCreateDevice");
     vkGetDeviceQueue(device_, queueFamily_, 0, &queue_);
 
@@ -236,6 +254,7 @@ Context::Context(const ContextOptions& options) : validation_(options.validation
     pipelines_ = std::make_unique<PipelineCache>(*this);
   } catch (...) {
     if (device_) vkDestroyDevice(device_, nullptr);
+    if (surface_) vkDestroySurfaceKHR(instance_, surface_, nullptr);
     if (messenger_) {
       auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
           vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
@@ -259,8 +278,8 @@ void Context::pickDevice(const std::string& selector) {
                       "." + std::to_string(VK_API_VERSION_MINOR(infos[i].apiVersion)) + " (hemo needs 1.2)";
       return false;
     }
-    if (computeFamily(devices[i]) < 0) {
-      if (why) *why = "it has no compute queue";
+    if (computeFamily(devices[i], surface_) < 0) {
+      if (why) *why = surface_ ? "it has no queue that computes, draws and presents to the window" : "it has no compute queue";
       return false;
     }
     VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
@@ -315,7 +334,7 @@ void Context::pickDevice(const std::string& selector) {
 
   physical_ = devices[chosen];
   info_ = infos[chosen];
-  queueFamily_ = static_cast<std::uint32_t>(computeFamily(physical_));
+  queueFamily_ = static_cast<std::uint32_t>(computeFamily(physical_, surface_));
 
   VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
   VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
@@ -342,6 +361,7 @@ Context::~Context() {
     vkDestroyCommandPool(device_, oneShotPool_, nullptr);
     vkDestroyDevice(device_, nullptr);
   }
+  if (surface_) vkDestroySurfaceKHR(instance_, surface_, nullptr);
   if (messenger_) {
     auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
         vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));

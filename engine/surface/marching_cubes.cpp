@@ -29,8 +29,10 @@ struct GeneratePush {
 struct BoundsPush {
   std::uint32_t n, resolution;
   float margin, iso;
-  std::uint32_t splatWorkgroup;
+  std::uint32_t splatWorkgroup, pad[3];
+  float clipLo[4], clipHi[4];
 };
+static_assert(sizeof(BoundsPush) == 64);
 struct SplatPush {
   std::uint32_t n;
   float h, kernelNorm, rho0;
@@ -205,6 +207,9 @@ ParticleField::ParticleField(gpu::Context& context, MarchingCubes& target, const
   }
   if (!(settings.h > 0.0f) || !std::isfinite(settings.h)) throw std::invalid_argument("surface: h must be positive");
   if (!std::isfinite(settings.iso)) throw std::invalid_argument("surface: the iso level must be finite");
+  for (int a = 0; a < 3; ++a) {
+    if (!(settings.clipLo[a] < settings.clipHi[a])) throw std::invalid_argument("surface: an empty clip box");
+  }
   auto& cache = context.pipelines();
   bounds_ = &cache.get({"mc/bounds", HEMO_MC_BOUNDS_BINDING_COUNT, sizeof(BoundsPush), kBoundsWorkgroup, {}});
   splat_ = &cache.get({"mc/splat", HEMO_MC_SPLAT_BINDING_COUNT, sizeof(SplatPush), kWorkgroup, {}});
@@ -226,8 +231,12 @@ void ParticleField::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
   rec.computeToTransfer();
   rec.fill(target_->field(), 0u);
   rec.transferToCompute();
-  rec.dispatch(*bounds_, boundsSet_,
-               BoundsPush{n, settings_.resolution, 2.0f * h, settings_.iso, splat_->workgroupSize()}, gpu::Groups{1, 1});
+  BoundsPush push{n, settings_.resolution, 2.0f * h, settings_.iso, splat_->workgroupSize(), {}, {}, {}};
+  for (int a = 0; a < 3; ++a) {
+    push.clipLo[a] = settings_.clipLo[a];
+    push.clipHi[a] = settings_.clipHi[a];
+  }
+  rec.dispatch(*bounds_, boundsSet_, push, gpu::Groups{1, 1});
   rec.computeToCompute();
   rec.computeToIndirect();
   rec.dispatchIndirect(*splat_, splatSet_, SplatPush{n, h, kernelNorm, settings_.restDensity}, splatArgs_, 0);

@@ -364,6 +364,50 @@ TEST_F(MarchingCubesTest, ParticleFieldOnAGridFarFinerThanTheKernel) {
   EXPECT_GT(largest, 0.5);
 }
 
+// A droplet that flew far away would stretch the grid over metres; the clip box keeps the
+// grid (and its voxel) on the region of interest.
+TEST_F(MarchingCubesTest, TheGridStaysInsideTheClipBox) {
+  const float dp = 1.0e-3f, h = 1.3f * dp;
+  Block block = fluidBlock(dp, glm::uvec3(6, 6, 6), 1000.0f);
+  block.positions.emplace_back(block.lo + glm::vec3(1.0f, 0.0f, 0.0f), block.positions[0].w);  // 1 m away
+  block.velocities.emplace_back(0.0f);
+  block.state.emplace_back(1000.0f, 0.0f, 0.0f, 0.0f);
+  const auto n = std::uint32_t(block.positions.size());
+  sim::ParticleStore store(ctx(), n);
+  store.upload(block.positions, block.velocities);
+  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
+  state.upload(block.state);
+  surface::MarchingCubes mc(ctx(), 32);
+  surface::FieldSettings settings;
+  settings.resolution = 32;
+  settings.h = h;
+  settings.clipLo = block.lo - glm::vec3(4.0f * dp);
+  settings.clipHi = block.hi + glm::vec3(4.0f * dp);
+  surface::ParticleField field(ctx(), mc, store, state, settings);
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  field.record(rec, n);
+  mc.record(rec);
+  rec.end();
+  rec.submitAndWait();
+  const surface::SurfaceMesh mesh = mc.readMesh();
+  const surface::McGrid& g = mesh.grid;
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_GE(g.origin[a], settings.clipLo[a] - 1e-7f);
+    EXPECT_LE(g.origin[a] + g.origin[3] * float(g.points[a] - 1), settings.clipHi[a] + g.origin[3]);
+  }
+  EXPECT_LT(g.origin[3], 14.0f * dp / 32.0f + 1e-7f) << "voxel set by the clipped box";
+  ASSERT_GT(mesh.totals.written, 100u);
+  for (const McVertex& v : mesh.vertices) ASSERT_LT(v.position.x, block.hi.x + 2.0f * h);
+  EXPECT_THROW(surface::ParticleField(ctx(), mc, store, state,
+                                      [&] {
+                                        surface::FieldSettings bad = settings;
+                                        bad.clipHi.y = bad.clipLo.y;
+                                        return bad;
+                                      }()),
+               std::invalid_argument);
+}
+
 TEST_F(MarchingCubesTest, NoFluidGivesNoSurface) {
   const float dp = 1.0e-3f;
   Block block = fluidBlock(dp, glm::uvec3(2, 2, 2), 1000.0f);

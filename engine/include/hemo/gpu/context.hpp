@@ -40,6 +40,12 @@ struct ContextOptions {
   // device name. Empty: the HEMO_DEVICE environment variable, else the default choice
   // (discrete > integrated > virtual > CPU).
   std::string device;
+  // Window-system integration (hemo-view), supplied by the app so the engine never links a
+  // window system: extra instance extensions (e.g. GLFW's required ones) and a function that
+  // creates the presentation surface once the instance exists. With a surface, the queue
+  // family must also draw and present to it, and VK_KHR_swapchain is enabled.
+  std::vector<std::string> instanceExtensions;
+  std::function<VkSurfaceKHR(VkInstance)> createSurface;
 };
 
 // Devices visible to the Vulkan loader (creates a short-lived instance).
@@ -56,6 +62,7 @@ class Context {
   VkPhysicalDevice physicalDevice() const { return physical_; }
   VkDevice device() const { return device_; }
   VkQueue queue() const { return queue_; }
+  VkSurfaceKHR surface() const { return surface_; }  // VK_NULL_HANDLE when headless
   std::uint32_t queueFamily() const { return queueFamily_; }
   const DeviceInfo& info() const { return info_; }
   const VkPhysicalDeviceLimits& limits() const { return properties_.limits; }
@@ -90,6 +97,7 @@ class Context {
 
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+  VkSurfaceKHR surface_ = VK_NULL_HANDLE;
   VkPhysicalDevice physical_ = VK_NULL_HANDLE;
   VkDevice device_ = VK_NULL_HANDLE;
   VkQueue queue_ = VK_NULL_HANDLE;

@@ -111,6 +111,10 @@ struct FieldSettings {
   float iso = 0.5f;                // surface where phi = iso
   float h = 0.0f;                  // smoothing length (m)
   float restDensity = 1000.0f;     // kg/m^3, for particles whose density is not known yet
+  // The grid stays inside this box (m): fluid that has flown far away is left out rather than
+  // stretching the grid.
+  glm::vec3 clipLo{-3.0e38f};
+  glm::vec3 clipHi{3.0e38f};
 };
 
 class ParticleField {

@@ -68,6 +68,9 @@ class OffscreenRenderer {
               const ParticleView& particles, const surface::MarchingCubes* surface);
   // RGBA8 pixels of the last recorded frame (after its submission completed), top row first.
   std::vector<std::uint8_t> readPixels() const;
+  // The rendered image (TRANSFER_SRC_OPTIMAL after a frame), for presenting (Swapchain).
+  VkImage colorImage() const { return color_; }
+  VkExtent2D extent() const { return {width_, height_}; }
   std::uint32_t width() const { return width_; }
   std::uint32_t height() const { return height_; }
 
