@@ -220,8 +220,10 @@ int main(int argc, char** argv) {
       }
       frameRec->begin();
       sim.recordSurface(*frameRec);
+      sim.recordWallShade(*frameRec);
       renderer->record(*frameRec, camera, frame,
-                       {&sim.store().live().positions, &sim.store().live().velocities, sim.store().count()},
+                       {&sim.store().live().positions, &sim.store().live().velocities, sim.store().count(),
+                        sim.wallShade()},
                        sim.surfaceExtractor());
       frameRec->end();
       frameRec->submitAndWait();

@@ -208,8 +208,10 @@ int main(int argc, char** argv) {
       camera.farPlane = state.distance * 4.0f + glm::length(hi - lo);
       rec.begin();
       if (state.surface) sim.recordSurface(rec);
+      sim.recordWallShade(rec);
       renderer.record(rec, camera, state.frame,
-                      {&sim.store().live().positions, &sim.store().live().velocities, sim.store().count()},
+                      {&sim.store().live().positions, &sim.store().live().velocities, sim.store().count(),
+                       sim.wallShade()},
                       state.surface ? sim.surfaceExtractor() : nullptr);
       rec.end();
       rec.submitAndWait();

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
@@ -84,7 +85,8 @@ OffscreenRenderer::OffscreenRenderer(gpu::Context& context, std::uint32_t width,
     : context_(&context),
       width_(width),
       height_(height),
-      pixels_(context, VkDeviceSize(width) * height * 4, gpu::MemoryUse::Readback, "rendered pixels") {
+      pixels_(context, VkDeviceSize(width) * height * 4, gpu::MemoryUse::Readback, "rendered pixels"),
+      noShade_(context, 16, gpu::MemoryUse::Device, "no wall shade") {
   if (width == 0 || height == 0 || width > 8192 || height > 8192) {
     throw std::invalid_argument("image size " + std::to_string(width) + "x" + std::to_string(height) +
                                 " is outside 1..8192");
@@ -332,7 +334,8 @@ void OffscreenRenderer::createPipelines() {
 }
 
 VkDescriptorSet OffscreenRenderer::particleSet(const ParticleView& view) {
-  const auto key = std::make_pair(view.positions->handle(), view.velocities->handle());
+  const gpu::Buffer& shade = view.wallShade ? *view.wallShade : noShade_;
+  const auto key = std::make_tuple(view.positions->handle(), view.velocities->handle(), shade.handle());
   if (auto it = particleSets_.find(key); it != particleSets_.end()) return it->second;
   if (particleSets_.size() >= kMaxParticleSets) {
     throw std::invalid_argument("the renderer draws at most " + std::to_string(kMaxParticleSets) +
@@ -344,18 +347,21 @@ VkDescriptorSet OffscreenRenderer::particleSet(const ParticleView& view) {
   alloc.pSetLayouts = &particleLayout_;
   VkDescriptorSet set = VK_NULL_HANDLE;
   gpu::check(vkAllocateDescriptorSets(context_->device(), &alloc, &set), "vkAllocateDescriptorSets");
-  VkDescriptorBufferInfo infos[2] = {{view.positions->handle(), 0, VK_WHOLE_SIZE},
-                                     {view.velocities->handle(), 0, VK_WHOLE_SIZE}};
-  VkWriteDescriptorSet writes[2]{};
-  for (std::uint32_t b = 0; b < 2; ++b) {
+  VkDescriptorBufferInfo infos[3] = {{view.positions->handle(), 0, VK_WHOLE_SIZE},
+                                     {view.velocities->handle(), 0, VK_WHOLE_SIZE},
+                                     {shade.handle(), 0, VK_WHOLE_SIZE}};
+  const std::uint32_t slots[3] = {HEMO_RENDER_BINDING_POSITIONS, HEMO_RENDER_BINDING_VELOCITIES,
+                                  HEMO_RENDER_BINDING_WALL_SHADE};
+  VkWriteDescriptorSet writes[3]{};
+  for (std::uint32_t b = 0; b < 3; ++b) {
     writes[b] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     writes[b].dstSet = set;
-    writes[b].dstBinding = b == 0 ? HEMO_RENDER_BINDING_POSITIONS : HEMO_RENDER_BINDING_VELOCITIES;
+    writes[b].dstBinding = slots[b];
     writes[b].descriptorCount = 1;
     writes[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[b].pBufferInfo = &infos[b];
   }
-  vkUpdateDescriptorSets(context_->device(), 2, writes, 0, nullptr);
+  vkUpdateDescriptorSets(context_->device(), 3, writes, 0, nullptr);
   particleSets_.emplace(key, set);
   return set;
 }
@@ -393,6 +399,8 @@ void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, 
     push.show[0] = options.fluid;
     push.show[1] = options.wall;
     push.show[2] = options.boundary;
+    const float strainScale = particles.wallShade ? std::max(options.strainScale, 1e-9f) : 0.0f;
+    std::memcpy(&push.show[3], &strainScale, sizeof(float));
     if (options.cutaway) {
       // The plane through the target facing the camera: the near half of the wall goes.
       const glm::vec3 n = glm::normalize(camera.eye - camera.target);

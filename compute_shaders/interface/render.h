@@ -5,9 +5,12 @@
 // render/particles.vert: storage buffers of the particle store, read by the vertex shader.
 #define HEMO_RENDER_BINDING_POSITIONS 0
 #define HEMO_RENDER_BINDING_VELOCITIES 1
-#define HEMO_RENDER_BINDING_COUNT 2
+#define HEMO_RENDER_BINDING_WALL_SHADE 2  // vec2 per slot (wall/point_shade.comp); read only
+                                          // when push show.w (the strain scale) is non-zero
+#define HEMO_RENDER_BINDING_COUNT 3
 // push (128 bytes): mat4 viewProj; vec4 right (w radius m); vec4 up (w speed scale m/s);
-//                   uvec4 show (fluid, wall, boundary); vec4 cut (wall particles with
+//                   uvec4 show (fluid, wall, boundary, float bits of the strain scale);
+//                   vec4 cut (wall particles with
 //                   dot(cut.xyz, x) > cut.w are hidden)
 
 // render/surface.vert + .frag: vertex attributes from the marching-cubes vertex buffer

@@ -51,6 +51,19 @@
 #define HEMO_SPRINGF_BINDING_FRAMES 17    // uvec2 per id: the normal's two frame points
 #define HEMO_SPRINGF_BINDING_COUNT 18
 
+// wall/point_shade.comp: per particle slot, vec2(largest strain of its unbroken springs,
+// fraction of its springs broken) for the renderer; push: uint n, uint idCount.
+#define HEMO_SHADE_BINDING_POSITIONS 0
+#define HEMO_SHADE_BINDING_VELOCITIES 1
+#define HEMO_SHADE_BINDING_IDS 2
+#define HEMO_SHADE_BINDING_SLOT_OF_ID 3
+#define HEMO_SHADE_BINDING_SPRINGS 4
+#define HEMO_SHADE_BINDING_FIRST 5
+#define HEMO_SHADE_BINDING_SPRINGS_OF 6
+#define HEMO_SHADE_BINDING_PARAMS 7
+#define HEMO_SHADE_BINDING_SHADE 8
+#define HEMO_SHADE_BINDING_COUNT 9
+
 // A wall particle's normal follows the deformed wall: n = normalize((x_A - x) x (x_B - x)) for
 // its frame points A and B (ids; HEMO_NO_FRAME keeps the normal it has).
 #define HEMO_NO_FRAME 0xffffffffu

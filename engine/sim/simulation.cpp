@@ -173,6 +173,10 @@ void Simulation::recordSurface(gpu::CommandRecorder& rec, gpu::TimestampQueries*
   surface_->record(rec, timestamps);
 }
 
+void Simulation::recordWallShade(gpu::CommandRecorder& rec) {
+  if (auto* wall = solver_->wall()) wall->recordShade(rec, store_->count());
+}
+
 surface::SurfaceMesh Simulation::extractSurface() {
   recorder_->begin();
   recordSurface(*recorder_);

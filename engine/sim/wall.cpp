@@ -62,6 +62,12 @@ void SpringNetwork::validate() const {
   }
 }
 
+namespace {
+struct ShadePush {
+  std::uint32_t n, idCount;
+};
+}  // namespace
+
 MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, const FluidBuffers& fluid,
                        const SpringNetwork& network, glm::vec3 gravity, float acousticLength, float soundSpeed)
     : particles_(&particles),
@@ -76,7 +82,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
       springsOf_(context, std::max<std::uint64_t>(network.springs.size() * 2, 1) * 4, gpu::MemoryUse::Device, "springs of each point"),
       wallInfo_(context, std::max<std::uint64_t>(network.points.size(), 1) * 16, gpu::MemoryUse::Device, "wall mass and anchors"),
       frames_(context, std::max<std::uint64_t>(network.points.size(), 1) * 8, gpu::MemoryUse::Device, "wall normal frames"),
-      counters_(context, 16, gpu::MemoryUse::Device, "wall counters") {
+      counters_(context, 16, gpu::MemoryUse::Device, "wall counters"),
+      shade_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "wall shade") {
   network.validate();
   if (idCount_ > particles.capacity()) {
     throw std::invalid_argument("spring network: " + std::to_string(idCount_) + " points but the particle store holds " +
@@ -114,6 +121,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   auto& cache = context.pipelines();
   rupture_ = &cache.get({"wall/rupture", HEMO_RUPTURE_BINDING_COUNT, sizeof(RupturePush), kWorkgroup, {}});
   forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, {}});
+  shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}});
   const ParticleArrays& a = particles.live();
   ruptureSet_ = rupture_->makeSet({{HEMO_RUPTURE_BINDING_POSITIONS, &a.positions},
                                    {HEMO_RUPTURE_BINDING_VELOCITIES, &a.velocities},
@@ -139,6 +147,21 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.wallVelocities},
                                  {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
                                  {HEMO_SPRINGF_BINDING_FRAMES, &frames_}});
+  shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
+                                    {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
+                                    {HEMO_SHADE_BINDING_IDS, &a.ids},
+                                    {HEMO_SHADE_BINDING_SLOT_OF_ID, fluid.slotOfId},
+                                    {HEMO_SHADE_BINDING_SPRINGS, &springs_},
+                                    {HEMO_SHADE_BINDING_FIRST, &first_},
+                                    {HEMO_SHADE_BINDING_SPRINGS_OF, &springsOf_},
+                                    {HEMO_SHADE_BINDING_PARAMS, fluid.params},
+                                    {HEMO_SHADE_BINDING_SHADE, &shade_}});
+}
+
+void MassSpring::recordShade(gpu::CommandRecorder& rec, std::uint32_t n) {
+  rec.computeToCompute();
+  rec.dispatch(*shadeStage_, shadeSet_, ShadePush{n, idCount_}, shadeStage_->groupsFor(std::max(n, 1u)));
+  rec.computeToCompute();
 }
 
 void MassSpring::recordReset(gpu::CommandRecorder& rec) {

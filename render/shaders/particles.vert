@@ -1,7 +1,9 @@
 #version 450
 // Particles as camera-facing discs: one instance per particle slot, six vertices (two
 // triangles) per instance; position and kind come straight from the engine's buffers.
-// Fluid is coloured by speed, wall particles tan, rigid boundary particles grey; kinds not
+// Fluid is coloured by speed; wall particles by the strain of their springs (tan at rest,
+// orange-red when stretched) and marked purple as their springs break (wall/point_shade.comp);
+// rigid boundary particles grey. Kinds not
 // shown (and non-finite positions) are moved beyond the far plane and clipped. A cutaway
 // plane hides the wall particles in front of it, so the blood inside a vessel shows.
 #extension GL_GOOGLE_include_directive : require
@@ -10,11 +12,13 @@
 
 layout(std430, set = 0, binding = HEMO_RENDER_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, set = 0, binding = HEMO_RENDER_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+layout(std430, set = 0, binding = HEMO_RENDER_BINDING_WALL_SHADE) readonly buffer WallShade { vec2 wallShade[]; };
 layout(push_constant) uniform Push {
   mat4 viewProj;
   vec4 right;  // xyz: camera right (unit); w: disc radius (m)
   vec4 up;     // xyz: camera up (unit); w: speed (m/s) at the top of the colour scale
-  uvec4 show;  // x: fluid, y: wall, z: boundary
+  uvec4 show;  // x: fluid, y: wall, z: boundary; w: float bits of the strain at the red end
+               // of the wall's scale (0: no wall shade buffer, plain wall colour)
   vec4 cut;    // wall particles with dot(cut.xyz, x) > cut.w are hidden (cut.xyz = 0: none)
 } pc;
 
@@ -55,6 +59,12 @@ void main() {
     color = speed_color(length(v.xyz) / pc.up.w);
   } else if (kind == HEMO_KIND_WALL) {
     color = vec3(0.86, 0.72, 0.58);
+    const float strainScale = uintBitsToFloat(pc.show.w);
+    if (strainScale > 0.0) {
+      const vec2 shade = wallShade[gl_InstanceIndex];
+      color = mix(color, vec3(0.85, 0.22, 0.08), clamp(shade.x / strainScale, 0.0, 1.0));
+      color = mix(color, vec3(0.35, 0.10, 0.45), clamp(shade.y, 0.0, 1.0));
+    }
   } else {
     color = vec3(0.55);
   }

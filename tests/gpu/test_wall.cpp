@@ -179,6 +179,36 @@ TEST_F(WallTest, RandomNetworkMatchesReference) {
     const double want = anchored[i] ? 3.0e38 : stiffness[i] > 0 ? std::min(acoustic, 0.1 * std::sqrt(mass[i] / stiffness[i])) : acoustic;
     EXPECT_NEAR(limits[slot], want, 1e-5 * want) << "time-step limit of point " << i;
   }
+
+  // The renderer's wall shade (wall/point_shade.comp): per point, the largest strain of its
+  // unbroken springs (0 if none is stretched) and the fraction of its springs broken.
+  rec_->begin();
+  solver_->wall()->recordShade(*rec_, n);
+  rec_->end();
+  rec_->submitAndWait();
+  const auto shade = solver_->wall()->shade().readback<glm::vec2>(n);
+  std::vector<double> strain(n, 0.0), total(n, 0.0), broken(n, 0.0);
+  for (const auto& r : ref) {
+    total[r.a] += 1, total[r.b] += 1;
+    if (r.broken) {
+      broken[r.a] += 1, broken[r.b] += 1;
+      continue;
+    }
+    glm::dvec3 d = dx[r.b] - dx[r.a];
+    d.x -= 0.1 * std::round(d.x / 0.1);
+    const double e = glm::length(d) / r.restLength - 1.0;
+    strain[r.a] = std::max(strain[r.a], e), strain[r.b] = std::max(strain[r.b], e);
+  }
+  std::size_t stretched = 0, partlyBroken = 0;
+  for (std::uint32_t slot = 0; slot < n; ++slot) {
+    const std::uint32_t i = ids[slot];
+    EXPECT_NEAR(shade[slot].x, strain[i], 1e-5 * std::max(1.0, strain[i])) << "strain of point " << i;
+    EXPECT_NEAR(shade[slot].y, total[i] > 0 ? broken[i] / total[i] : 0.0, 1e-6) << "broken fraction of point " << i;
+    stretched += strain[i] > 0.05;
+    partlyBroken += broken[i] > 0;
+  }
+  EXPECT_GT(stretched, 50u);
+  EXPECT_GT(partlyBroken, 20u);
 }
 
 // A sheet of wall particles (two layers, springs to the lattice and diagonal neighbours and

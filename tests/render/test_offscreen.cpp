@@ -134,6 +134,26 @@ TEST_F(RenderTest, ParticlesAreDrawnInTheirKindsColours) {
   EXPECT_NE(shown.r, background.r) << "rigid boundary shown on request";
   EXPECT_EQ(shown.r, shown.g) << "grey";
 
+  // Wall shade: a stretched wall particle turns red, one whose springs all broke purple.
+  gpu::Buffer shade(ctx(), 4 * 8, gpu::MemoryUse::Device, "test wall shade");
+  const auto drawShaded = [&](glm::vec2 wallShade) {
+    shade.upload(std::vector<glm::vec2>{glm::vec2(0.0f), glm::vec2(0.0f), wallShade, glm::vec2(0.0f)});
+    rec.begin();
+    renderer.record(rec, camera, options, {&store.live().positions, &store.live().velocities, 4, &shade}, nullptr);
+    rec.end();
+    rec.submitAndWait();
+    rgba = renderer.readPixels();
+    return at(2);
+  };
+  const Rgb plain = drawShaded(glm::vec2(0.0f));
+  EXPECT_EQ(plain.r, wall.r) << "no strain: the plain wall colour";
+  EXPECT_EQ(plain.g, wall.g);
+  const Rgb stretched = drawShaded(glm::vec2(0.2f, 0.0f));
+  EXPECT_GT(stretched.r, stretched.g + 80) << "strain beyond the scale: red";
+  const Rgb torn = drawShaded(glm::vec2(0.0f, 1.0f));
+  EXPECT_GT(torn.b, torn.g + 30) << "all springs broken: purple";
+  EXPECT_GT(torn.r, torn.g);
+
   // PNG output: a valid signature and the image's size in the header.
   const auto path = std::filesystem::temp_directory_path() / "hemo_test_particles.png";
   render::writePng(path, W, H, rgba);

@@ -78,6 +78,10 @@ class Simulation {
   void recordSurface(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   surface::SurfaceMesh extractSurface();
   const surface::MarchingCubes* surfaceExtractor() const { return surface_.get(); }
+  // The wall's per-particle strain and broken fraction for the renderer (recorded on request;
+  // nullptr without a wall).
+  void recordWallShade(gpu::CommandRecorder& rec);
+  const gpu::Buffer* wallShade() const { return solver_->wall() ? &solver_->wall()->shade() : nullptr; }
   const scene::Scene& scene() const { return scene_; }
   std::uint32_t fluidParticles() const { return fluid_; }
   std::uint32_t boundaryParticles() const { return boundary_; }

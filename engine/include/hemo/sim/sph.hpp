@@ -138,6 +138,7 @@ class SphSolver {
   // Set-up only, before the first step.
   void attachWall(const SpringNetwork& network);
   const MassSpring* wall() const { return wall_.get(); }
+  MassSpring* wall() { return wall_.get(); }
   // Drives the fluid in a vessel's inflow zone (hemo/sim/inflow.hpp). Set-up only (an upload);
   // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
   void setInflow(const Inflow& inflow);

@@ -94,6 +94,11 @@ class MassSpring {
   std::uint32_t readDetachedCount() const;
   std::vector<GpuSpring> readSprings() const;        // with their broken flags (a readback)
   const gpu::Buffer& counters() const { return counters_; }  // uint[4] (interface/wall.h)
+  // Per slot of the first n: vec2(largest strain of the particle's unbroken springs, fraction
+  // of its springs broken) for wall particles, 0 for others (wall/point_shade.comp), into
+  // shade(); what the renderer colours the wall by.
+  void recordShade(gpu::CommandRecorder& rec, std::uint32_t n);
+  const gpu::Buffer& shade() const { return shade_; }
 
  private:
   const ParticleStore* particles_;
@@ -101,10 +106,11 @@ class MassSpring {
   std::uint32_t idCount_;
   float gravity_[4];
   float timeStepFactor_, acousticLength_, soundSpeed_;
-  gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_;
+  gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_, shade_;
   const gpu::ComputePipeline* rupture_;
   const gpu::ComputePipeline* forces_;
-  gpu::DescriptorSet ruptureSet_, forcesSet_;
+  const gpu::ComputePipeline* shadeStage_;
+  gpu::DescriptorSet ruptureSet_, forcesSet_, shadeSet_;
 };
 
 }  // namespace hemo::sim

@@ -15,6 +15,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -42,6 +43,7 @@ struct FrameOptions {
   bool cutaway = false;   // hide the wall particles between the camera and the target's plane
   float particleRadius = 0.0f;  // m (0: nothing drawn for particles)
   float speedScale = 1.0f;      // m/s at the red end of the fluid's colour scale
+  float strainScale = 0.1f;     // spring strain at the red end of the wall's colour scale
   glm::vec4 background{0.95f, 0.95f, 0.96f, 1.0f};
   glm::vec3 surfaceColor{0.62f, 0.05f, 0.06f};
   glm::vec3 lightDirection{0.3f, -0.5f, 0.8f};  // towards the light
@@ -52,6 +54,8 @@ struct ParticleView {
   const gpu::Buffer* positions = nullptr;   // vec4 xyz m
   const gpu::Buffer* velocities = nullptr;  // vec4 xyz m/s, w kind
   std::uint32_t count = 0;
+  // Optional: vec2 per slot (strain, broken fraction) from sim::MassSpring::recordShade.
+  const gpu::Buffer* wallShade = nullptr;
 };
 
 class OffscreenRenderer {
@@ -93,8 +97,9 @@ class OffscreenRenderer {
   VkPipelineLayout particlePipelineLayout_ = VK_NULL_HANDLE, surfacePipelineLayout_ = VK_NULL_HANDLE;
   VkPipeline particlePipeline_ = VK_NULL_HANDLE, surfacePipeline_ = VK_NULL_HANDLE;
   std::vector<VkShaderModule> modules_;
-  std::map<std::pair<VkBuffer, VkBuffer>, VkDescriptorSet> particleSets_;
+  std::map<std::tuple<VkBuffer, VkBuffer, VkBuffer>, VkDescriptorSet> particleSets_;
   gpu::Buffer pixels_;
+  gpu::Buffer noShade_;  // bound when a view has no wall shade (never read then)
 };
 
 // Writes RGBA8 pixels (top row first) as an 8-bit RGBA PNG. Throws std::runtime_error naming

@@ -1,0 +1,52 @@
+#version 450
+// What the renderer colours wall particles by: per particle slot, vec2(largest strain of its
+// unbroken springs (|x_b - x_a| / rest - 1, minimum image on periodic axes; 0 when all are
+// compressed or broken), fraction of its springs that broke); vec2(0) for other kinds. A
+// gather over the particle's springs (CSR by id), like wall/spring_forces.comp. The CPU twin
+// is io::wallPointStats.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/sph.h"
+#include "interface/wall.h"
+#include "common/index.glsl"
+#include "wall/spring.glsl"
+#include "common/sph_params.glsl"
+
+layout(std430, binding = HEMO_SHADE_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_IDS) readonly buffer Ids { uint ids[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_SLOT_OF_ID) readonly buffer SlotOfId { uint slotOfId[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_SPRINGS) readonly buffer Springs { Spring springs[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_FIRST) readonly buffer First { uint first[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_SPRINGS_OF) readonly buffer SpringsOf { uint springsOf[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+layout(std430, binding = HEMO_SHADE_BINDING_SHADE) writeonly buffer Shade { vec2 shade[]; };
+layout(push_constant) uniform Push {
+  uint n;
+  uint idCount;
+} pc;
+
+void main() {
+  const uint i = hemo_global_index();
+  if (i >= pc.n) {
+    return;
+  }
+  const uint id = ids[i];
+  if (uint(velocities[i].w) != HEMO_KIND_WALL || id >= pc.idCount) {
+    shade[i] = vec2(0.0);
+    return;
+  }
+  const HemoPairParams pp = hemo_pair_params();
+  float strain = 0.0;
+  uint total = 0u, broken = 0u;
+  for (uint k = first[id]; k < first[id + 1u]; ++k) {
+    const Spring s = springs[springsOf[k]];
+    ++total;
+    if (s.broken != 0u) {
+      ++broken;
+      continue;
+    }
+    const vec3 delta = hemo_min_image(positions[slotOfId[s.b]].xyz - positions[slotOfId[s.a]].xyz, pp);
+    strain = max(strain, length(delta) / s.restLength - 1.0);
+  }
+  shade[i] = vec2(strain, total > 0u ? float(broken) / float(total) : 0.0);
+}
