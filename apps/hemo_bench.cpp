@@ -1,11 +1,11 @@
 // hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N]
 // Benchmarks (not tests): GPU times from timestamp queries, medians over repeated runs after a
-// warm-up. Suites: primitives, accuracy, table1, render (surface field and extraction; the
-// draw arrives with the renderer).
+// warm-up. Suites: primitives, accuracy, table1, render (surface field, extraction and draw).
 #include "cli.hpp"
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/gpu/primitives.hpp"
 #include "hemo/reference/marching_cubes.hpp"
+#include "hemo/render/renderer.hpp"
 #include "hemo/reference/published.hpp"
 #include "hemo/scene/builders.hpp"
 #include "hemo/scene/scene.hpp"
@@ -372,18 +372,42 @@ Json table1(Context& ctx, int repeat) {
 
 // Marching-cubes rendering benchmark: for the dam break and the aneurysm (after a few hundred
 // steps, so the surface has moved), the GPU field (bounds + splat) and extraction (classify,
-// scans, compact, generate) at grids of 64^3, 128^3 and 256^3 voxels over the fluid's box, and
-// the CPU reference extracting the same field (double precision, one thread) in the same run.
+// scans, compact, generate) at grids of 64^3, 128^3 and 256^3 voxels over the fluid's box, the
+// surface draw (960x540, offscreen, with the copy to host memory), the CPU reference
+// extracting the same field (double precision, one thread) in the same run, and the cost of a
+// frame with the surface (one step + field + extraction + draw) over one without (one step +
+// the particles drawn).
 Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
   Json rows = Json::array();
-  std::printf("%-10s %5s %10s %10s %12s %12s %9s %10s %12s\n", "scene", "grid", "particles", "field_ms", "extract_ms",
-              "cpu_mc_ms", "speed-up", "triangles", "Mtri/s");
+  std::printf("%-10s %5s %10s %10s %12s %12s %9s %10s %12s %8s %9s\n", "scene", "grid", "particles", "field_ms",
+              "extract_ms", "cpu_mc_ms", "speed-up", "triangles", "Mtri/s", "draw_ms", "frame_x");
   for (const char* name : {"dam_break", "aneurysm"}) {
     const hemo::scene::Scene scene = hemo::scene::loadScene(scenes / (std::string(name) + ".json"));
     hemo::sim::Simulation sim(ctx, scene);
     hemo::sim::RunOptions opt;
     opt.steps = 300;
     sim.run(opt);
+    // A frame without the surface: one simulation step and the particles drawn (fluid by
+    // speed, the wall by strain); the draws are timed in a 960x540 offscreen image.
+    double stepMs = 0.0;
+    for (const auto& [stage, ms] : sim.profileStep(5)) stepMs += ms;
+    hemo::render::OffscreenRenderer renderer(ctx, 960, 540);
+    glm::vec3 lo(3e38f), hi(-3e38f);
+    for (const glm::vec4& q : sim.store().readPositions()) {
+      if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) {
+        lo = glm::min(lo, glm::vec3(q));
+        hi = glm::max(hi, glm::vec3(q));
+      }
+    }
+    const hemo::render::Camera camera = hemo::render::Camera::framing(lo, hi, 960.0f / 540.0f);
+    hemo::render::FrameOptions frame;
+    frame.particleRadius = 0.5f * scene.sph.spacing;
+    const hemo::render::ParticleView view{&sim.store().live().positions, &sim.store().live().velocities,
+                                          sim.store().count(), nullptr};
+    const double particlesDrawMs = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+      renderer.record(rec, camera, frame, view, nullptr);
+    });
+    frame.fluid = false;  // with the surface, the surface shows the blood
     for (std::uint32_t grid : {64u, 128u, 256u}) {
       hemo::surface::MarchingCubes mc(ctx, grid);
       hemo::surface::FieldSettings fs;
@@ -414,6 +438,11 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
         (stage == "field" ? fieldMs : extractMs) += m;
       }
       const hemo::surface::McTotals totals = mc.readTotals();
+      const double surfaceDrawMs = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& r) {
+        renderer.record(r, camera, frame, view, &mc);
+      });
+      const double frameWithout = stepMs + particlesDrawMs;
+      const double frameWith = stepMs + fieldMs + extractMs + surfaceDrawMs;
       // The CPU reference on the same field.
       const hemo::surface::McGrid g = mc.readGrid();
       const auto fixed = mc.readField();
@@ -432,8 +461,9 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
         cpu.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
       }
       const double cpuMs = median(cpu);
-      std::printf("%-10s %5u %10u %10.2f %12.2f %12.1f %9.1f %10u %12.2f%s\n", name, grid, sim.fluidParticles(), fieldMs,
-                  extractMs, cpuMs, cpuMs / extractMs, totals.triangles, totals.triangles / (fieldMs + extractMs) / 1e3,
+      std::printf("%-10s %5u %10u %10.2f %12.2f %12.1f %9.1f %10u %12.2f %8.2f %9.2f%s\n", name, grid, sim.fluidParticles(),
+                  fieldMs, extractMs, cpuMs, cpuMs / extractMs, totals.triangles,
+                  totals.triangles / (fieldMs + extractMs) / 1e3, surfaceDrawMs, frameWith / frameWithout,
                   cpuTriangles == totals.triangles ? "" : "  (CPU triangle count differs!)");
       std::fflush(stdout);
       rows.push_back({{"scene", name},
@@ -443,7 +473,12 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
                       {"gpu_ms", fieldMs + extractMs},
                       {"gpu_field_ms", fieldMs},
                       {"gpu_extract_ms", extractMs},
-                      {"draw_ms", nullptr},
+                      {"draw_ms", surfaceDrawMs},
+                      {"step_ms", stepMs},
+                      {"particles_draw_ms", particlesDrawMs},
+                      {"frame_ms", frameWith},
+                      {"frame_without_surface_ms", frameWithout},
+                      {"frame_cost_ratio", frameWith / frameWithout},
                       {"cpu_ms", cpuMs},
                       {"speedup_extract", cpuMs / extractMs},
                       {"triangles", totals.triangles},

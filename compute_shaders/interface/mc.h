@@ -3,7 +3,8 @@
 #ifndef HEMO_INTERFACE_MC_H
 #define HEMO_INTERFACE_MC_H
 
-// The field lives at the points of a uniform grid, x fastest, as fixed-point integers:
+// The field lives at the points of a uniform grid, x fastest (rows padded to multiples of 4
+// values), as fixed-point integers:
 // value = int / HEMO_MC_FIXED_SCALE. Integers make the particle splat deterministic (integer
 // addition does not depend on order) without float atomics.
 #define HEMO_MC_FIXED_SCALE 1048576.0
@@ -12,7 +13,9 @@
 
 // McGrid, std430, 64 bytes:
 //   vec4  origin    xyz: position of point (0,0,0) (m); w: voxel size (m)
-//   uvec4 points    xyz: points per axis (>= 2 for any voxel); w: point count
+//   uvec4 points    xyz: points per axis (>= 2 for any voxel); w: row stride, the ints per
+//                   x-row (points.x rounded up to a multiple of 4; the padding stays 0):
+//                   point (x, y, z) is field[x + stride (y + points.y z)]
 //   uvec4 runs      x: runs per x-row = ceil((points.x - 1) / HEMO_MC_RUN); y, z: voxels
 //                   along y and z; w: run count (written by mc/prepare.comp)
 //   vec4  level     x: iso level (inside: field > iso); y: z-planes a particle's support
@@ -59,12 +62,13 @@
 // mc/classify.comp: per run, the cases of its voxels and their triangle count.
 #define HEMO_MC_CLASSIFY_BINDING_GRID 0
 #define HEMO_MC_CLASSIFY_BINDING_FIELD 1
-#define HEMO_MC_CLASSIFY_BINDING_TABLE 2
-#define HEMO_MC_CLASSIFY_BINDING_RUN_TRIANGLES 3  // uint per run (then scanned: offsets)
-#define HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE 4     // uint per run, 0/1 (then scanned)
-#define HEMO_MC_CLASSIFY_BINDING_RUN_CASES 5      // uint per run: four 8-bit cases, x ascending
-#define HEMO_MC_CLASSIFY_BINDING_ARGS 6
-#define HEMO_MC_CLASSIFY_BINDING_COUNT 7
+#define HEMO_MC_CLASSIFY_BINDING_RUN_TRIANGLES 2  // uint per run (then scanned: offsets)
+#define HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE 3     // uint per run, 0/1 (then scanned)
+#define HEMO_MC_CLASSIFY_BINDING_RUN_CASES 4      // uint per run: four 8-bit cases, x ascending
+#define HEMO_MC_CLASSIFY_BINDING_ARGS 5
+#define HEMO_MC_CLASSIFY_BINDING_COUNT 6
+// specialization constants 1-32: triangles per case, 4 bits each (case c in constant
+// 1 + c / 8, bits 4 (c % 8) ..)
 
 // mc/compact.comp: active run indices in order; invocation 0 writes the generate and draw
 // arguments and the totals.

@@ -91,7 +91,7 @@ void main() {
   const uvec3 voxels = min(uvec3(ceil(extent / voxel)), uvec3(pc.resolution));
   const uvec3 points = max(voxels, uvec3(1u)) + 1u;
   grid.origin = vec4(lo, voxel);
-  grid.points = uvec4(points, points.x * points.y * points.z);
+  grid.points = uvec4(points, hemo_mc_row_stride(points.x));
   grid.runs = uvec4(0u);
   // z-planes a support of radius `margin` can touch, and one invocation per (slot, plane).
   const uint planes = 2u * uint(floor(pc.margin / voxel)) + 2u;

@@ -40,7 +40,7 @@ void main() {
     return;
   }
   const McGrid g = grid;
-  if (g.points.w == 0u) {
+  if (g.points.x == 0u) {
     return;
   }
   const float rho = state[i].x;
@@ -57,22 +57,42 @@ void main() {
   const uvec3 a = uvec3(first), b = uvec3(last);
   const float support2 = support * support;
   const uint z = a.z + invocation % planes;
-  if (z <= b.z) {
-    for (uint y = a.y; y <= b.y; ++y) {
-      const vec2 dyz = vec2(float(y), float(z)) * voxel - rel.yz;
-      const float ryz2 = dot(dyz, dyz);
-      if (ryz2 >= support2) {
-        continue;
-      }
-      const uint row = g.points.x * (y + g.points.y * z);
-      for (uint x = a.x; x <= b.x; ++x) {
-        const float dx = float(x) * voxel - rel.x;
-        const float r2 = ryz2 + dx * dx;
-        if (r2 < support2) {
-          const int add = int(round(volume * hemo_kernel_w(sqrt(r2), pc.h, pc.kernelNorm) * HEMO_MC_FIXED_SCALE));
-          if (add != 0) {
-            atomicAdd(field[row + x], add);
-          }
+  if (z > b.z) {
+    return;
+  }
+  // Only the rows and, in each row, the points the support sphere covers.
+  const float dz = float(z) * voxel - rel.z;
+  const float planeRadius2 = support2 - dz * dz;
+  if (planeRadius2 <= 0.0) {
+    return;
+  }
+  const float planeRadius = sqrt(planeRadius2);
+  const float y0 = max(ceil((rel.y - planeRadius) / voxel), float(a.y));
+  const float y1 = min(floor((rel.y + planeRadius) / voxel), float(b.y));
+  if (y1 < y0) {
+    return;
+  }
+  for (uint y = uint(y0); y <= uint(y1); ++y) {
+    const float dy = float(y) * voxel - rel.y;
+    const float ryz2 = dy * dy + dz * dz;
+    const float chord2 = support2 - ryz2;
+    if (chord2 <= 0.0) {
+      continue;
+    }
+    const float chord = sqrt(chord2);
+    const float x0 = max(ceil((rel.x - chord) / voxel), float(a.x));
+    const float x1 = min(floor((rel.x + chord) / voxel), float(b.x));
+    if (x1 < x0) {
+      continue;
+    }
+    const uint row = g.points.w * (y + g.points.y * z);
+    for (uint x = uint(x0); x <= uint(x1); ++x) {
+      const float dx = float(x) * voxel - rel.x;
+      const float r2 = ryz2 + dx * dx;
+      if (r2 < support2) {
+        const int add = int(round(volume * hemo_kernel_w(sqrt(r2), pc.h, pc.kernelNorm) * HEMO_MC_FIXED_SCALE));
+        if (add != 0) {
+          atomicAdd(field[row + x], add);
         }
       }
     }

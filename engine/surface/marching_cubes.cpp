@@ -3,6 +3,7 @@
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "interface/mc.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -48,6 +49,9 @@ std::uint64_t runsFor(std::uint64_t voxelsPerAxis) {
   return ((voxelsPerAxis + kRun - 1) / kRun) * voxelsPerAxis * voxelsPerAxis;
 }
 
+// Ints per x-row of the field (common/mc.glsl, hemo_mc_row_stride).
+std::uint32_t rowStride(std::uint32_t points) { return (points + 3u) & ~3u; }
+
 std::uint32_t defaultTriangles(std::uint32_t voxels, std::uint32_t requested) {
   if (requested) return requested;
   return std::uint32_t(std::min<std::uint64_t>(12ull * voxels * voxels, 1u << 22));
@@ -69,7 +73,7 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
     : context_(&context),
       maxVoxels_(checkedVoxels(maxVoxelsPerAxis)),
       maxTriangles_(defaultTriangles(maxVoxels_, maxTriangles)),
-      maxPoints_(std::uint64_t(maxVoxels_ + 1) * (maxVoxels_ + 1) * (maxVoxels_ + 1)),
+      maxPoints_(std::uint64_t(rowStride(maxVoxels_ + 1)) * (maxVoxels_ + 1) * (maxVoxels_ + 1)),
       maxRuns_(runsFor(maxVoxels_)),
       grid_(context, sizeof(McGrid), gpu::MemoryUse::Device, "surface grid"),
       field_(context, maxPoints_ * 4, gpu::MemoryUse::Device, "surface field"),
@@ -83,19 +87,21 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
                 "surface vertices"),
       triangleScan_(context, runTriangles_, maxRuns_ + 1),
       activeScan_(context, runActive_, maxRuns_ + 1) {
-  table_.upload(packCaseTable(buildCaseTable()));
+  const CaseTable table = buildCaseTable();
+  table_.upload(packCaseTable(table));
+  std::vector<std::uint32_t> counts(32, 0u);
+  for (int c = 0; c < 256; ++c) counts[c / 8] |= std::uint32_t(table.triangleCount[c]) << (4 * (c % 8));
   McGrid empty{};
   grid_.uploadBytes(&empty, sizeof(empty));
   args_.upload(std::vector<std::uint32_t>(16, 0u));
   auto& cache = context.pipelines();
   prepare_ = &cache.get({"mc/prepare", HEMO_MC_PREPARE_BINDING_COUNT, sizeof(PreparePush), 64, {}});
-  classify_ = &cache.get({"mc/classify", HEMO_MC_CLASSIFY_BINDING_COUNT, 0, kWorkgroup, {}});
+  classify_ = &cache.get({"mc/classify", HEMO_MC_CLASSIFY_BINDING_COUNT, 0, kWorkgroup, counts});
   compact_ = &cache.get({"mc/compact", HEMO_MC_COMPACT_BINDING_COUNT, sizeof(CompactPush), kWorkgroup, {}});
   generate_ = &cache.get({"mc/generate", HEMO_MC_GENERATE_BINDING_COUNT, sizeof(GeneratePush), kWorkgroup, {}});
   prepareSet_ = prepare_->makeSet({{HEMO_MC_PREPARE_BINDING_GRID, &grid_}, {HEMO_MC_PREPARE_BINDING_ARGS, &args_}});
   classifySet_ = classify_->makeSet({{HEMO_MC_CLASSIFY_BINDING_GRID, &grid_},
                                      {HEMO_MC_CLASSIFY_BINDING_FIELD, &field_},
-                                     {HEMO_MC_CLASSIFY_BINDING_TABLE, &table_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_TRIANGLES, &runTriangles_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE, &runActive_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_CASES, &runCases_},
@@ -155,8 +161,11 @@ void MarchingCubes::uploadField(glm::dvec3 origin, double voxel, glm::uvec3 poin
                                 std::to_string(count) + " points");
   }
   if (!(voxel > 0.0) || !std::isfinite(voxel)) throw std::invalid_argument("surface grid: the voxel size must be positive");
-  std::vector<std::int32_t> fixed(values.size());
-  for (std::size_t k = 0; k < values.size(); ++k) fixed[k] = toFixed(values[k]);
+  const std::uint32_t stride = rowStride(points.x);
+  std::vector<std::int32_t> fixed(std::size_t(stride) * points.y * points.z, 0);
+  for (std::uint32_t row = 0; row < points.y * points.z; ++row) {
+    for (std::uint32_t x = 0; x < points.x; ++x) fixed[std::size_t(row) * stride + x] = toFixed(values[std::size_t(row) * points.x + x]);
+  }
   McGrid g{};
   g.origin[0] = float(origin.x);
   g.origin[1] = float(origin.y);
@@ -165,7 +174,7 @@ void MarchingCubes::uploadField(glm::dvec3 origin, double voxel, glm::uvec3 poin
   g.points[0] = points.x;
   g.points[1] = points.y;
   g.points[2] = points.z;
-  g.points[3] = std::uint32_t(count);
+  g.points[3] = stride;
   g.level[0] = iso;
   grid_.uploadBytes(&g, sizeof(g));
   field_.upload(fixed);
@@ -193,7 +202,13 @@ SurfaceMesh MarchingCubes::readMesh() const {
 
 std::vector<std::int32_t> MarchingCubes::readField() const {
   const McGrid g = readGrid();
-  return field_.readback<std::int32_t>(std::size_t(g.points[0]) * g.points[1] * g.points[2]);
+  const std::size_t rows = std::size_t(g.points[1]) * g.points[2];
+  const auto padded = field_.readback<std::int32_t>(rows * g.points[3]);
+  std::vector<std::int32_t> values(rows * g.points[0]);
+  for (std::size_t row = 0; row < rows; ++row) {
+    std::copy_n(padded.begin() + std::ptrdiff_t(row * g.points[3]), g.points[0], values.begin() + std::ptrdiff_t(row * g.points[0]));
+  }
+  return values;
 }
 
 ParticleField::ParticleField(gpu::Context& context, MarchingCubes& target, const sim::ParticleStore& particles,

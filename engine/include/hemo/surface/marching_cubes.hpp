@@ -26,7 +26,7 @@ namespace hemo::surface {
 // Mirror of McGrid (compute_shaders/common/mc.glsl).
 struct McGrid {
   float origin[4];           // xyz m, w voxel size m
-  std::uint32_t points[4];   // xyz per axis, w total
+  std::uint32_t points[4];   // xyz per axis, w row stride (x padded to a multiple of 4)
   std::uint32_t runs[4];     // written by mc/prepare.comp
   float level[4];            // x iso
 };
@@ -78,7 +78,7 @@ class MarchingCubes {
   std::uint32_t maxVoxelsPerAxis() const { return maxVoxels_; }
   std::uint32_t maxTriangles() const { return maxTriangles_; }
   const gpu::Buffer& grid() const { return grid_; }
-  const gpu::Buffer& field() const { return field_; }  // int32 fixed point per point
+  const gpu::Buffer& field() const { return field_; }  // int32 fixed point per point, rows padded
   const gpu::Buffer& args() const { return args_; }    // McArgs (indirect dispatch + draw)
   const gpu::Buffer& vertices() const { return vertices_; }
   static constexpr VkDeviceSize drawArgsOffset() { return 8 * sizeof(std::uint32_t); }
@@ -87,7 +87,7 @@ class MarchingCubes {
   McTotals readTotals() const;
   McGrid readGrid() const;
   SurfaceMesh readMesh() const;
-  std::vector<std::int32_t> readField() const;
+  std::vector<std::int32_t> readField() const;  // without the row padding, x fastest
 
  private:
   gpu::Context* context_;
