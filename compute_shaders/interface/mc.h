@@ -66,9 +66,8 @@
 #define HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE 3     // uint per run, 0/1 (then scanned)
 #define HEMO_MC_CLASSIFY_BINDING_RUN_CASES 4      // uint per run: four 8-bit cases, x ascending
 #define HEMO_MC_CLASSIFY_BINDING_ARGS 5
-#define HEMO_MC_CLASSIFY_BINDING_COUNT 6
-// specialization constants 1-32: triangles per case, 4 bits each (case c in constant
-// 1 + c / 8, bits 4 (c % 8) ..)
+#define HEMO_MC_CLASSIFY_BINDING_TABLE 6
+#define HEMO_MC_CLASSIFY_BINDING_COUNT 7
 
 // mc/compact.comp: active run indices in order; invocation 0 writes the generate and draw
 // arguments and the totals.

@@ -27,33 +27,44 @@ float value(uvec3 p) {
   return float(field[hemo_mc_point(p, g)]) * (1.0 / HEMO_MC_FIXED_SCALE);
 }
 
+// Central difference at point p (one-sided on the grid's faces), in field units per m.
+// Written out per axis: dynamically indexed vectors and arrays cost memory round trips on
+// llvmpipe.
 vec3 gradient(uvec3 p) {
-  vec3 grad;
-  for (int axis = 0; axis < 3; ++axis) {
-    uvec3 lo = p, hi = p;
-    if (p[axis] > 0u) {
-      lo[axis] -= 1u;
-    }
-    if (p[axis] + 1u < g.points[axis]) {
-      hi[axis] += 1u;
-    }
-    grad[axis] = (value(hi) - value(lo)) / (float(hi[axis] - lo[axis]) * g.origin.w);
-  }
-  return grad;
+  const uvec3 lo = uvec3(max(ivec3(p) - 1, ivec3(0)));
+  const uvec3 hi = min(p + 1u, g.points.xyz - 1u);
+  const vec3 span = vec3(hi - lo) * g.origin.w;
+  return vec3((value(uvec3(hi.x, p.y, p.z)) - value(uvec3(lo.x, p.y, p.z))) / span.x,
+              (value(uvec3(p.x, hi.y, p.z)) - value(uvec3(p.x, lo.y, p.z))) / span.y,
+              (value(uvec3(p.x, p.y, hi.z)) - value(uvec3(p.x, p.y, lo.z))) / span.z);
 }
 
-// Cube edge e (hemo/surface/case_table.hpp): its lower corner and its axis.
-uint edge_corner(uint e, out uint axis) {
+// The vertex on cube edge e of `voxel`: position (m) and minus the interpolated gradient.
+void edge_vertex(uvec3 voxel, uint e, float iso, out vec3 position, out vec3 normal) {
+  // Edge e (hemo/surface/case_table.hpp): lower corner and axis.
+  uvec3 pa, step;
   if (e < 4u) {
-    axis = 0u;
-    return 2u * (e & 1u) + 4u * (e >> 1u);
+    pa = voxel + uvec3(0u, e & 1u, e >> 1u);
+    step = uvec3(1u, 0u, 0u);
+  } else if (e < 8u) {
+    pa = voxel + uvec3((e - 4u) & 1u, 0u, (e - 4u) >> 1u);
+    step = uvec3(0u, 1u, 0u);
+  } else {
+    pa = voxel + uvec3((e - 8u) & 1u, (e - 8u) >> 1u, 0u);
+    step = uvec3(0u, 0u, 1u);
   }
-  if (e < 8u) {
-    axis = 1u;
-    return ((e - 4u) & 1u) + 4u * ((e - 4u) >> 1u);
-  }
-  axis = 2u;
-  return ((e - 8u) & 1u) + 2u * ((e - 8u) >> 1u);
+  const uvec3 pb = pa + step;
+  const float va = value(pa), vb = value(pb);
+  const float s = (iso - va) / (vb - va);
+  const vec3 xa = g.origin.xyz + vec3(pa) * g.origin.w;
+  const vec3 xb = g.origin.xyz + vec3(pb) * g.origin.w;
+  position = xa + s * (xb - xa);
+  normal = -(gradient(pa) * (1.0 - s) + gradient(pb) * s);
+}
+
+vec3 unit_or(vec3 n, vec3 fallback) {
+  const float len = length(n);
+  return len > 1.0e-30 ? n / len : fallback;
 }
 
 uint table_edge(uvec4 entry, uint k) {
@@ -76,34 +87,27 @@ void main() {
   uint tri = runTriangles[r];
   for (uint k = 0u; k < HEMO_MC_RUN; ++k) {
     const uint cube = (cases >> (8u * k)) & 255u;
+    if (cube == 0u || cube == 255u) {
+      continue;
+    }
     const uvec4 entry = table[cube];
     const uvec3 voxel = runOrigin + uvec3(k, 0u, 0u);
     for (uint t = 0u; t < entry.x; ++t, ++tri) {
       if (tri >= pc.maxTriangles) {
         return;
       }
-      vec3 p[3], n[3];
-      for (uint v = 0u; v < 3u; ++v) {
-        uint axis;
-        const uint corner = edge_corner(table_edge(entry, 3u * t + v), axis);
-        const uvec3 pa = voxel + hemo_mc_corner(corner);
-        uvec3 pb = pa;
-        pb[axis] += 1u;
-        const float va = value(pa), vb = value(pb);
-        const float s = (iso - va) / (vb - va);
-        const vec3 xa = g.origin.xyz + vec3(pa) * g.origin.w;
-        const vec3 xb = g.origin.xyz + vec3(pb) * g.origin.w;
-        p[v] = xa + s * (xb - xa);
-        n[v] = -(gradient(pa) * (1.0 - s) + gradient(pb) * s);
-      }
-      const vec3 face = cross(p[1] - p[0], p[2] - p[0]);
-      const float faceLength = length(face);
-      for (uint v = 0u; v < 3u; ++v) {
-        const float len = length(n[v]);
-        const vec3 normal = len > 1.0e-30 ? n[v] / len : (faceLength > 0.0 ? face / faceLength : vec3(0.0));
-        vertices[2u * (3u * tri + v)] = vec4(p[v], 1.0);
-        vertices[2u * (3u * tri + v) + 1u] = vec4(normal, 0.0);
-      }
+      vec3 p0, p1, p2, n0, n1, n2;
+      edge_vertex(voxel, table_edge(entry, 3u * t), iso, p0, n0);
+      edge_vertex(voxel, table_edge(entry, 3u * t + 1u), iso, p1, n1);
+      edge_vertex(voxel, table_edge(entry, 3u * t + 2u), iso, p2, n2);
+      const vec3 face = unit_or(cross(p1 - p0, p2 - p0), vec3(0.0));
+      const uint base = 6u * tri;
+      vertices[base + 0u] = vec4(p0, 1.0);
+      vertices[base + 1u] = vec4(unit_or(n0, face), 0.0);
+      vertices[base + 2u] = vec4(p1, 1.0);
+      vertices[base + 3u] = vec4(unit_or(n1, face), 0.0);
+      vertices[base + 4u] = vec4(p2, 1.0);
+      vertices[base + 5u] = vec4(unit_or(n2, face), 0.0);
     }
   }
 }

@@ -87,21 +87,19 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
                 "surface vertices"),
       triangleScan_(context, runTriangles_, maxRuns_ + 1),
       activeScan_(context, runActive_, maxRuns_ + 1) {
-  const CaseTable table = buildCaseTable();
-  table_.upload(packCaseTable(table));
-  std::vector<std::uint32_t> counts(32, 0u);
-  for (int c = 0; c < 256; ++c) counts[c / 8] |= std::uint32_t(table.triangleCount[c]) << (4 * (c % 8));
+  table_.upload(packCaseTable(buildCaseTable()));
   McGrid empty{};
   grid_.uploadBytes(&empty, sizeof(empty));
   args_.upload(std::vector<std::uint32_t>(16, 0u));
   auto& cache = context.pipelines();
   prepare_ = &cache.get({"mc/prepare", HEMO_MC_PREPARE_BINDING_COUNT, sizeof(PreparePush), 64, {}});
-  classify_ = &cache.get({"mc/classify", HEMO_MC_CLASSIFY_BINDING_COUNT, 0, kWorkgroup, counts});
+  classify_ = &cache.get({"mc/classify", HEMO_MC_CLASSIFY_BINDING_COUNT, 0, kWorkgroup, {}});
   compact_ = &cache.get({"mc/compact", HEMO_MC_COMPACT_BINDING_COUNT, sizeof(CompactPush), kWorkgroup, {}});
   generate_ = &cache.get({"mc/generate", HEMO_MC_GENERATE_BINDING_COUNT, sizeof(GeneratePush), kWorkgroup, {}});
   prepareSet_ = prepare_->makeSet({{HEMO_MC_PREPARE_BINDING_GRID, &grid_}, {HEMO_MC_PREPARE_BINDING_ARGS, &args_}});
   classifySet_ = classify_->makeSet({{HEMO_MC_CLASSIFY_BINDING_GRID, &grid_},
                                      {HEMO_MC_CLASSIFY_BINDING_FIELD, &field_},
+                                     {HEMO_MC_CLASSIFY_BINDING_TABLE, &table_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_TRIANGLES, &runTriangles_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE, &runActive_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_CASES, &runCases_},
