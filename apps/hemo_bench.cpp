@@ -415,6 +415,15 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
       fs.iso = scene.surface.iso;
       fs.h = sim.solver().settings().h();
       fs.restDensity = sim.solver().settings().restDensity;
+      fs.splatVoxelOverH = scene.surface.splatVoxelOverH;
+      // The exact field (splat on the surface grid itself) for comparison, timed alone.
+      hemo::surface::FieldSettings exact = fs;
+      exact.splatVoxelOverH = 0.0f;
+      double exactFieldMs = 0.0;
+      {
+        hemo::surface::ParticleField direct(ctx, mc, sim.store(), sim.solver().state(), exact);
+        exactFieldMs = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& r) { direct.record(r, sim.store().count()); });
+      }
       hemo::surface::ParticleField field(ctx, mc, sim.store(), sim.solver().state(), fs);
       CommandRecorder rec(ctx);
       TimestampQueries ts(ctx, 16);
@@ -472,6 +481,8 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
                       {"grid_points", {g.points[0], g.points[1], g.points[2]}},
                       {"gpu_ms", fieldMs + extractMs},
                       {"gpu_field_ms", fieldMs},
+                      {"splat_voxel_h", fs.splatVoxelOverH},
+                      {"gpu_field_exact_ms", exactFieldMs},
                       {"gpu_extract_ms", extractMs},
                       {"draw_ms", surfaceDrawMs},
                       {"step_ms", stepMs},

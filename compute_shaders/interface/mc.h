@@ -38,10 +38,21 @@
 #define HEMO_MC_BOUNDS_BINDING_POSITIONS 0
 #define HEMO_MC_BOUNDS_BINDING_VELOCITIES 1  // w: particle kind; only fluid counts
 #define HEMO_MC_BOUNDS_BINDING_GRID 2
-#define HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS 3  // uvec4: the splat's dispatch
-#define HEMO_MC_BOUNDS_BINDING_COUNT 4
+#define HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS 3     // uvec4: the splat's dispatch
+#define HEMO_MC_BOUNDS_BINDING_SPLAT_GRID 4     // McGrid the splat writes on (= the grid, or coarser)
+#define HEMO_MC_BOUNDS_BINDING_UPSAMPLE_ARGS 5  // uvec4: mc/upsample.comp's dispatch (0 when direct)
+#define HEMO_MC_BOUNDS_BINDING_COUNT 6
 // push: uint n; uint resolution (voxels along the longest side); float margin (m); float iso;
-//       uint splatWorkgroup, 3 x pad; vec4 clipLo, clipHi (m: the region the grid may cover)
+//       uint splatWorkgroup; float splatVoxel (m, 0: splat on the extraction grid);
+//       uint upsampleWorkgroup; pad; vec4 clipLo, clipHi (m: the region the grid may cover)
+
+// mc/upsample.comp: the extraction grid's values by trilinear interpolation of the splat grid
+// (rounded to fixed point).
+#define HEMO_MC_UPSAMPLE_BINDING_GRID 0
+#define HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID 1
+#define HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD 2
+#define HEMO_MC_UPSAMPLE_BINDING_FIELD 3
+#define HEMO_MC_UPSAMPLE_BINDING_COUNT 4
 
 // mc/splat.comp: each fluid particle adds round(scale V_j W(|x - x_j|, h)) to the points
 // within its support (integer atomics).

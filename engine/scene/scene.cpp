@@ -135,6 +135,7 @@ const std::vector<Field>& schema() {
            {"grid_resolution", Kind::Integer, "1", 4, 512, false, 128, "Voxels along the longest side of the grid around the fluid's bounding box (grown by 2h)."},
            {"iso_level", Kind::Number, "1", 0, 1, true, 0.5, "The surface is where the volume fraction sum_j (m_j / rho_j) W(|x - x_j|, h) equals this (1 inside the fluid, 0 away from it)."},
            {"max_triangles", Kind::Integer, "1", 0, 4.0e7, false, 0, "Capacity of the triangle buffer (0: 12 grid_resolution^2). Triangles beyond it are counted and reported, not drawn."},
+           {"splat_voxel_h", Kind::Number, "h", 0, 4, false, 0.5, "The particles are splatted on a grid of this voxel (in smoothing lengths; never finer than the surface grid) and the surface grid's values interpolated from it: the field is smooth on the scale of h, and the splat's cost falls with the cube of this. 0: splat on the surface grid itself (exact, slow on fine grids)."},
        }},
       {"domain", Kind::Section, "", 0, 0, false, nullptr, "Region covered by the neighbour grid; particles that leave it are counted as escaped.", {},
        {
@@ -542,6 +543,7 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.surface.resolution = j["surface"]["grid_resolution"].get<std::uint32_t>();
   s.surface.iso = j["surface"]["iso_level"].get<float>();
   s.surface.maxTriangles = j["surface"]["max_triangles"].get<std::uint32_t>();
+  s.surface.splatVoxelOverH = j["surface"]["splat_voxel_h"].get<float>();
 
   s.domain = box(c, "domain", j["domain"]);
   const float slack = 1e-6f * s.sph.spacing;

@@ -158,6 +158,7 @@ surface::MarchingCubes& Simulation::enableSurface() {
     settings.iso = spec.iso;
     settings.h = solver_->settings().h();
     settings.restDensity = solver_->settings().restDensity;
+    settings.splatVoxelOverH = spec.splatVoxelOverH;
     // The scene's domain, grown by the kernel's support: fluid beyond it has escaped.
     settings.clipLo = scene_.domain.min - glm::vec3(settings.h * 2.0f);
     settings.clipHi = scene_.domain.max + glm::vec3(settings.h * 2.0f);

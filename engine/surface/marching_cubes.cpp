@@ -30,7 +30,9 @@ struct GeneratePush {
 struct BoundsPush {
   std::uint32_t n, resolution;
   float margin, iso;
-  std::uint32_t splatWorkgroup, pad[3];
+  std::uint32_t splatWorkgroup;
+  float splatVoxel;
+  std::uint32_t upsampleWorkgroup, pad;
   float clipLo[4], clipHi[4];
 };
 static_assert(sizeof(BoundsPush) == 64);
@@ -213,38 +215,55 @@ ParticleField::ParticleField(gpu::Context& context, MarchingCubes& target, const
                              const gpu::Buffer& state, const FieldSettings& settings)
     : target_(&target),
       settings_(settings),
-      splatArgs_(context, 16, gpu::MemoryUse::Device, "surface splat dispatch") {
+      splatArgs_(context, 16, gpu::MemoryUse::Device, "surface splat dispatch"),
+      upsampleArgs_(context, 16, gpu::MemoryUse::Device, "surface upsample dispatch"),
+      splatGrid_(context, sizeof(McGrid), gpu::MemoryUse::Device, "surface splat grid"),
+      splatField_(context, settings.splatVoxelOverH > 0.0f ? target.field().size() : 16, gpu::MemoryUse::Device,
+                  "surface splat field") {
   if (settings.resolution == 0 || settings.resolution > target.maxVoxelsPerAxis()) {
     throw std::invalid_argument("surface: resolution " + std::to_string(settings.resolution) +
                                 " must be between 1 and the extractor's " + std::to_string(target.maxVoxelsPerAxis()));
   }
   if (!(settings.h > 0.0f) || !std::isfinite(settings.h)) throw std::invalid_argument("surface: h must be positive");
   if (!std::isfinite(settings.iso)) throw std::invalid_argument("surface: the iso level must be finite");
+  if (!(settings.splatVoxelOverH >= 0.0f) || !std::isfinite(settings.splatVoxelOverH)) {
+    throw std::invalid_argument("surface: the splat voxel (in h) must be >= 0");
+  }
   for (int a = 0; a < 3; ++a) {
     if (!(settings.clipLo[a] < settings.clipHi[a])) throw std::invalid_argument("surface: an empty clip box");
   }
   auto& cache = context.pipelines();
   bounds_ = &cache.get({"mc/bounds", HEMO_MC_BOUNDS_BINDING_COUNT, sizeof(BoundsPush), kBoundsWorkgroup, {}});
   splat_ = &cache.get({"mc/splat", HEMO_MC_SPLAT_BINDING_COUNT, sizeof(SplatPush), kWorkgroup, {}});
+  upsample_ = &cache.get({"mc/upsample", HEMO_MC_UPSAMPLE_BINDING_COUNT, 0, kBoundsWorkgroup, {}});
+  const bool coarse = settings.splatVoxelOverH > 0.0f;
   boundsSet_ = bounds_->makeSet({{HEMO_MC_BOUNDS_BINDING_POSITIONS, &particles.live().positions},
                                  {HEMO_MC_BOUNDS_BINDING_VELOCITIES, &particles.live().velocities},
                                  {HEMO_MC_BOUNDS_BINDING_GRID, &target.grid()},
-                                 {HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS, &splatArgs_}});
+                                 {HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS, &splatArgs_},
+                                 {HEMO_MC_BOUNDS_BINDING_SPLAT_GRID, &splatGrid_},
+                                 {HEMO_MC_BOUNDS_BINDING_UPSAMPLE_ARGS, &upsampleArgs_}});
   splatSet_ = splat_->makeSet({{HEMO_MC_SPLAT_BINDING_POSITIONS, &particles.live().positions},
                                {HEMO_MC_SPLAT_BINDING_VELOCITIES, &particles.live().velocities},
                                {HEMO_MC_SPLAT_BINDING_STATE, &state},
-                               {HEMO_MC_SPLAT_BINDING_GRID, &target.grid()},
-                               {HEMO_MC_SPLAT_BINDING_FIELD, &target.field()}});
+                               {HEMO_MC_SPLAT_BINDING_GRID, coarse ? &splatGrid_ : &target.grid()},
+                               {HEMO_MC_SPLAT_BINDING_FIELD, coarse ? &splatField_ : &target.field()}});
+  upsampleSet_ = upsample_->makeSet({{HEMO_MC_UPSAMPLE_BINDING_GRID, &target.grid()},
+                                     {HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID, &splatGrid_},
+                                     {HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD, &splatField_},
+                                     {HEMO_MC_UPSAMPLE_BINDING_FIELD, &target.field()}});
 }
 
 void ParticleField::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps) const {
   const float h = settings_.h;
   const float kernelNorm = float(21.0 / (16.0 * std::numbers::pi * double(h) * h * h));
   // The field vanishes 2h from the nearest particle: that margin closes the surface.
+  const bool coarse = settings_.splatVoxelOverH > 0.0f;
   rec.computeToTransfer();
-  rec.fill(target_->field(), 0u);
+  rec.fill(coarse ? splatField_ : target_->field(), 0u);
   rec.transferToCompute();
-  BoundsPush push{n, settings_.resolution, 2.0f * h, settings_.iso, splat_->workgroupSize(), {}, {}, {}};
+  BoundsPush push{n, settings_.resolution, 2.0f * h, settings_.iso, splat_->workgroupSize(),
+                  coarse ? settings_.splatVoxelOverH * h : 0.0f, upsample_->workgroupSize(), 0, {}, {}};
   for (int a = 0; a < 3; ++a) {
     push.clipLo[a] = settings_.clipLo[a];
     push.clipHi[a] = settings_.clipHi[a];
@@ -254,6 +273,10 @@ void ParticleField::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
   rec.computeToIndirect();
   rec.dispatchIndirect(*splat_, splatSet_, SplatPush{n, h, kernelNorm, settings_.restDensity}, splatArgs_, 0);
   rec.computeToCompute();
+  if (coarse) {
+    rec.dispatchIndirect(*upsample_, upsampleSet_, upsampleArgs_, 0);
+    rec.computeToCompute();
+  }
   if (timestamps) timestamps->mark(rec, "field");
 }
 

@@ -79,6 +79,7 @@ struct SurfaceSpec {
   std::uint32_t resolution = 128;  // voxels along the longest side
   float iso = 0.5f;
   std::uint32_t maxTriangles = 0;  // 0: automatic
+  float splatVoxelOverH = 0.5f;    // splat grid voxel in h (0: splat on the surface grid)
 };
 
 struct Scene {

@@ -2,7 +2,10 @@
 // The blood surface on the GPU (compute_shaders/mc/), in the order it is recorded:
 //   bounds ..... (ParticleField) the fluid's bounding box -> a grid of cubic voxels
 //   splat ...... (ParticleField) the SPH volume fraction at the grid points, fixed point
-//                (indirect: one invocation per particle and z-plane of its support)
+//                (indirect: one invocation per particle and z-plane of its support), on the
+//                extraction grid or on a coarser one
+//   upsample ... (ParticleField, with a coarser splat grid) trilinear interpolation onto the
+//                extraction grid
 //   prepare .... runs of voxels and the classify dispatch (indirect)
 //   classify ... per run of 4 voxels: cases, triangle count, active flag
 //   scan ....... prefix sums of triangle counts and of active flags
@@ -111,6 +114,11 @@ struct FieldSettings {
   float iso = 0.5f;                // surface where phi = iso
   float h = 0.0f;                  // smoothing length (m)
   float restDensity = 1000.0f;     // kg/m^3, for particles whose density is not known yet
+  // > 0: splat on a grid of this voxel (in units of h; never finer than the extraction grid)
+  // and interpolate the extraction grid's values from it (mc/upsample.comp), so the splat's
+  // cost no longer grows with the cube of the extraction resolution. 0: splat directly on the
+  // extraction grid.
+  float splatVoxelOverH = 0.0f;
   // The grid stays inside this box (m): fluid that has flown far away is left out rather than
   // stretching the grid.
   glm::vec3 clipLo{-3.0e38f};
@@ -124,14 +132,17 @@ class ParticleField {
   // Records bounds, clear and splat for the store's first n particles.
   void record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps = nullptr) const;
   const FieldSettings& settings() const { return settings_; }
+  // The grid the splat wrote on (the extraction grid's parameters when direct), for tests.
+  McGrid readSplatGrid() const { return splatGrid_.readback<McGrid>(1)[0]; }
 
  private:
   MarchingCubes* target_;
   FieldSettings settings_;
   const gpu::ComputePipeline* bounds_;
   const gpu::ComputePipeline* splat_;
-  gpu::Buffer splatArgs_;
-  gpu::DescriptorSet boundsSet_, splatSet_;
+  const gpu::ComputePipeline* upsample_;
+  gpu::Buffer splatArgs_, upsampleArgs_, splatGrid_, splatField_;
+  gpu::DescriptorSet boundsSet_, splatSet_, upsampleSet_;
 };
 
 }  // namespace hemo::surface
