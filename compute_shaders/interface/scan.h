@@ -9,8 +9,14 @@
 // scan/scan_add.comp:   adds the (scanned) block offset sums[block] to every element.
 #define HEMO_SCAN_BINDING_DATA 0
 #define HEMO_SCAN_BINDING_SUMS 1
-#define HEMO_SCAN_BINDING_COUNT 2
-// push constants: uint n  (4 bytes)
+#define HEMO_SCAN_BINDING_LENGTH 2  // uint[]: a length the GPU computed (indirect scans)
+#define HEMO_SCAN_BINDING_COUNT 3
+// push constants (16 bytes): uint n (elements at this level; with a GPU length, the most);
+// uint lengthIndex (0xffffffff: n is the length; else the level-0 length is
+// length[lengthIndex] + lengthPlus); uint lengthPlus; uint level (0: the data; k: block sums
+// of level k - 1, whose length is the level-0 length divided by the block size k times,
+// rounded up).
+#define HEMO_SCAN_NO_LENGTH 0xffffffffu
 
 // scan/reduce_minmax.comp: per-workgroup (min, max) of floats or of earlier partials.
 #define HEMO_REDUCE_ITEMS 8

@@ -31,7 +31,7 @@ void main() {
     const uint triangles = runTriangles[runs];
     const uint activeCount = runActive[runs];
     const uint written = min(triangles, pc.maxTriangles);
-    const uvec3 groups = hemo_mc_groups(activeCount, pc.generateWorkgroup);
+    const uvec3 groups = hemo_mc_groups(activeCount * HEMO_MC_RUN, pc.generateWorkgroup);
     args[HEMO_MC_ARGS_GENERATE + 0] = groups.x;
     args[HEMO_MC_ARGS_GENERATE + 1] = groups.y;
     args[HEMO_MC_ARGS_GENERATE + 2] = groups.z;

@@ -1,7 +1,10 @@
 #version 450
-// Generate: one invocation per active run writes the triangles of its voxels at the run's
-// scanned offset, in voxel order and in the case table's order (the CPU reference,
-// hemo/reference/marching_cubes.hpp, visits them the same way). A vertex is interpolated
+// Generate: one invocation per voxel of each active run writes the voxel's triangles at the
+// run's scanned offset plus the triangles of the run's voxels before it, so the output is in
+// voxel order and in the case table's order (the CPU reference,
+// hemo/reference/marching_cubes.hpp, visits them the same way). Per voxel rather than per run:
+// a run's triangles are written side by side, not one invocation after another (generate at
+// 128^3 on the aneurysm: 11 -> 6.5 ms). A vertex is interpolated
 // linearly along its grid edge from the lower to the upper point, so the two voxels sharing
 // an edge compute bit-identical vertices. Its normal is minus the field gradient (central
 // differences at the edge's two points, one-sided on the grid's faces, interpolated), or the
@@ -73,41 +76,46 @@ uint table_edge(uvec4 entry, uint k) {
 }
 
 void main() {
-  const uint a = hemo_global_index();
+  // One invocation per voxel of an active run: HEMO_MC_RUN per run, so a run's triangles are
+  // written by several invocations side by side rather than one after another.
+  const uint index = hemo_global_index();
+  const uint a = index / HEMO_MC_RUN;
+  const uint k = index % HEMO_MC_RUN;
   if (a >= args[HEMO_MC_ARGS_ACTIVE_RUNS]) {
     return;
   }
-  g = grid;
   const uint r = activeRuns[a];
+  const uint cases = runCases[r];
+  const uint cube = (cases >> (8u * k)) & 255u;
+  if (cube == 0u || cube == 255u) {
+    return;
+  }
+  g = grid;
   const uint rx = r % g.runs.x;
   const uint rest = r / g.runs.x;
-  const uvec3 runOrigin = uvec3(rx * HEMO_MC_RUN, rest % g.runs.y, rest / g.runs.y);
-  const uint cases = runCases[r];
+  const uvec3 voxel = uvec3(rx * HEMO_MC_RUN + k, rest % g.runs.y, rest / g.runs.y);
   const float iso = g.level.x;
+  // This voxel's first triangle: the run's offset plus the voxels before it in the run.
   uint tri = runTriangles[r];
-  for (uint k = 0u; k < HEMO_MC_RUN; ++k) {
-    const uint cube = (cases >> (8u * k)) & 255u;
-    if (cube == 0u || cube == 255u) {
-      continue;
+  for (uint j = 0u; j < k; ++j) {
+    tri += table[(cases >> (8u * j)) & 255u].x;
+  }
+  const uvec4 entry = table[cube];
+  for (uint t = 0u; t < entry.x; ++t, ++tri) {
+    if (tri >= pc.maxTriangles) {
+      return;
     }
-    const uvec4 entry = table[cube];
-    const uvec3 voxel = runOrigin + uvec3(k, 0u, 0u);
-    for (uint t = 0u; t < entry.x; ++t, ++tri) {
-      if (tri >= pc.maxTriangles) {
-        return;
-      }
-      vec3 p0, p1, p2, n0, n1, n2;
-      edge_vertex(voxel, table_edge(entry, 3u * t), iso, p0, n0);
-      edge_vertex(voxel, table_edge(entry, 3u * t + 1u), iso, p1, n1);
-      edge_vertex(voxel, table_edge(entry, 3u * t + 2u), iso, p2, n2);
-      const vec3 face = unit_or(cross(p1 - p0, p2 - p0), vec3(0.0));
-      const uint base = 6u * tri;
-      vertices[base + 0u] = vec4(p0, 1.0);
-      vertices[base + 1u] = vec4(unit_or(n0, face), 0.0);
-      vertices[base + 2u] = vec4(p1, 1.0);
-      vertices[base + 3u] = vec4(unit_or(n1, face), 0.0);
-      vertices[base + 4u] = vec4(p2, 1.0);
-      vertices[base + 5u] = vec4(unit_or(n2, face), 0.0);
-    }
+    vec3 p0, p1, p2, n0, n1, n2;
+    edge_vertex(voxel, table_edge(entry, 3u * t), iso, p0, n0);
+    edge_vertex(voxel, table_edge(entry, 3u * t + 1u), iso, p1, n1);
+    edge_vertex(voxel, table_edge(entry, 3u * t + 2u), iso, p2, n2);
+    const vec3 face = unit_or(cross(p1 - p0, p2 - p0), vec3(0.0));
+    const uint base = 6u * tri;
+    vertices[base + 0u] = vec4(p0, 1.0);
+    vertices[base + 1u] = vec4(unit_or(n0, face), 0.0);
+    vertices[base + 2u] = vec4(p1, 1.0);
+    vertices[base + 3u] = vec4(unit_or(n1, face), 0.0);
+    vertices[base + 4u] = vec4(p2, 1.0);
+    vertices[base + 5u] = vec4(unit_or(n2, face), 0.0);
   }
 }

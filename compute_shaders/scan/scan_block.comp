@@ -13,13 +13,35 @@
 
 layout(std430, binding = HEMO_SCAN_BINDING_DATA) buffer Data { uint data[]; };
 layout(std430, binding = HEMO_SCAN_BINDING_SUMS) writeonly buffer Sums { uint sums[]; };
-layout(push_constant) uniform Push { uint n; } pc;
+layout(std430, binding = HEMO_SCAN_BINDING_LENGTH) readonly buffer Lengths { uint lengths[]; };
+layout(push_constant) uniform Push {
+  uint n;
+  uint lengthIndex;
+  uint lengthPlus;
+  uint level;
+} pc;
+
+// The number of elements this dispatch scans: push n, or the GPU length carried down `level`
+// levels of blocks (never more than n, the capacity this dispatch was sized for).
+uint hemo_scan_length() {
+  if (pc.lengthIndex == HEMO_SCAN_NO_LENGTH) {
+    return pc.n;
+  }
+  const uint block = gl_WorkGroupSize.x * HEMO_SCAN_ITEMS;
+  uint len = lengths[pc.lengthIndex] + pc.lengthPlus;
+  for (uint k = 0u; k < pc.level; ++k) {
+    len = (len + block - 1u) / block;
+  }
+  return min(len, pc.n);
+}
+
 
 // At most one entry per subgroup; a subgroup has at least one invocation.
 shared uint s_subgroupOffset[gl_WorkGroupSize.x];
 shared uint s_blockTotal;
 
 void main() {
+  const uint n = hemo_scan_length();
   const uint block = hemo_group_index();
   const uint base = (block * gl_WorkGroupSize.x + gl_LocalInvocationID.x) * HEMO_SCAN_ITEMS;
 
@@ -27,7 +49,7 @@ void main() {
   uint total = 0u;
   for (uint k = 0u; k < HEMO_SCAN_ITEMS; ++k) {
     const uint idx = base + k;
-    items[k] = idx < pc.n ? data[idx] : 0u;
+    items[k] = idx < n ? data[idx] : 0u;
     total += items[k];
   }
 
@@ -59,12 +81,12 @@ void main() {
   uint running = s_subgroupOffset[gl_SubgroupID] + inclusive - total;
   for (uint k = 0u; k < HEMO_SCAN_ITEMS; ++k) {
     const uint idx = base + k;
-    if (idx < pc.n) {
+    if (idx < n) {
       data[idx] = running;
     }
     running += items[k];
   }
-  const uint blocks = (pc.n + gl_WorkGroupSize.x * HEMO_SCAN_ITEMS - 1u) / (gl_WorkGroupSize.x * HEMO_SCAN_ITEMS);
+  const uint blocks = (n + gl_WorkGroupSize.x * HEMO_SCAN_ITEMS - 1u) / (gl_WorkGroupSize.x * HEMO_SCAN_ITEMS);
   if (gl_LocalInvocationID.x == 0u && block < blocks) {
     sums[block] = s_blockTotal;
   }

@@ -11,8 +11,11 @@ constexpr std::uint32_t kWorkgroup = 256;
 
 struct ScanPush {
   std::uint32_t n;
+  std::uint32_t lengthIndex = HEMO_SCAN_NO_LENGTH;
+  std::uint32_t lengthPlus = 0;
+  std::uint32_t level = 0;
 };
-static_assert(sizeof(ScanPush) == 4);
+static_assert(sizeof(ScanPush) == 16);
 
 struct ReducePush {
   std::uint32_t n;
@@ -47,8 +50,10 @@ std::uint32_t bitsFor(std::uint64_t maxValue) {
 }
 
 // ---------------------------------------------------------------------------------------------
-PrefixScan::PrefixScan(Context& context, const Buffer& data, std::uint64_t capacity, VkDeviceSize byteOffset)
-    : capacity_(capacity) {
+PrefixScan::PrefixScan(Context& context, const Buffer& data, std::uint64_t capacity, VkDeviceSize byteOffset,
+                       const Buffer* lengths)
+    : capacity_(capacity), noLengths_(context, 16, MemoryUse::Device, "scan: no GPU length") {
+  const Buffer* lengthBuffer = lengths ? lengths : &noLengths_;
   checkCount(capacity, 0xffffffffull, "PrefixScan");
   if (byteOffset + capacity * 4 > data.allocatedSize()) {
     throw std::invalid_argument("PrefixScan: buffer '" + data.name() + "' is smaller than " +
@@ -65,7 +70,8 @@ PrefixScan::PrefixScan(Context& context, const Buffer& data, std::uint64_t capac
     const std::uint64_t blocks = std::max<std::uint64_t>(ceilDiv(len, block), 1);
     sums_.emplace_back(context, blocks * 4, MemoryUse::Device, "scan block sums L" + std::to_string(sums_.size()));
     sets_.push_back(blockScan_->makeSet({{HEMO_SCAN_BINDING_DATA, level, offset, std::max<std::uint64_t>(len, 1) * 4},
-                                         {HEMO_SCAN_BINDING_SUMS, &sums_.back()}}));
+                                         {HEMO_SCAN_BINDING_SUMS, &sums_.back()},
+                                         {HEMO_SCAN_BINDING_LENGTH, lengthBuffer}}));
     if (blocks <= 1) break;
     level = &sums_.back();
     offset = 0;
@@ -78,12 +84,23 @@ std::uint64_t PrefixScan::blockSize() const { return std::uint64_t(kWorkgroup) *
 void PrefixScan::record(CommandRecorder& rec, std::uint64_t n) const {
   checkCount(n, capacity_, "PrefixScan");
   if (n == 0) return;
+  recordLevels(rec, n, HEMO_SCAN_NO_LENGTH, 0);
+}
+
+void PrefixScan::recordGpuLength(CommandRecorder& rec, std::uint32_t lengthIndex, std::uint32_t lengthPlus) const {
+  if (capacity_ == 0) return;
+  recordLevels(rec, capacity_, lengthIndex, lengthPlus);
+}
+
+void PrefixScan::recordLevels(CommandRecorder& rec, std::uint64_t n, std::uint32_t lengthIndex,
+                              std::uint32_t lengthPlus) const {
   const std::uint64_t block = blockSize();
   std::vector<std::uint64_t> lengths;
   std::uint64_t len = n;
   for (std::size_t k = 0; k < sets_.size(); ++k) {
     lengths.push_back(len);
-    rec.dispatch(*blockScan_, sets_[k], ScanPush{static_cast<std::uint32_t>(len)},
+    rec.dispatch(*blockScan_, sets_[k],
+                 ScanPush{static_cast<std::uint32_t>(len), lengthIndex, lengthPlus, static_cast<std::uint32_t>(k)},
                  blockScan_->groupsFor(len, HEMO_SCAN_ITEMS));
     rec.computeToCompute();
     if (len <= block) break;
@@ -91,7 +108,8 @@ void PrefixScan::record(CommandRecorder& rec, std::uint64_t n) const {
   }
   // Down-sweep: level k gets the scanned totals of level k + 1 added to its blocks.
   for (std::size_t k = lengths.size() - 1; k-- > 0;) {
-    rec.dispatch(*addOffsets_, sets_[k], ScanPush{static_cast<std::uint32_t>(lengths[k])},
+    rec.dispatch(*addOffsets_, sets_[k],
+                 ScanPush{static_cast<std::uint32_t>(lengths[k]), lengthIndex, lengthPlus, static_cast<std::uint32_t>(k)},
                  addOffsets_->groupsFor(lengths[k], HEMO_SCAN_ITEMS));
     rec.computeToCompute();
   }

@@ -87,8 +87,8 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
       args_(context, kArgsBytes, gpu::MemoryUse::Device, "surface indirect arguments"),
       vertices_(context, std::uint64_t(maxTriangles_) * 3 * sizeof(McVertex), gpu::MemoryUse::Device,
                 "surface vertices"),
-      triangleScan_(context, runTriangles_, maxRuns_ + 1),
-      activeScan_(context, runActive_, maxRuns_ + 1) {
+      triangleScan_(context, runTriangles_, maxRuns_ + 1, 0, &args_),
+      activeScan_(context, runActive_, maxRuns_ + 1, 0, &args_) {
   table_.upload(packCaseTable(buildCaseTable()));
   McGrid empty{};
   grid_.uploadBytes(&empty, sizeof(empty));
@@ -134,8 +134,10 @@ void MarchingCubes::record(gpu::CommandRecorder& rec, gpu::TimestampQueries* tim
   rec.dispatchIndirect(*classify_, classifySet_, args_, HEMO_MC_ARGS_CLASSIFY * 4);
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "classify");
-  triangleScan_.record(rec, maxRuns_ + 1);
-  activeScan_.record(rec, maxRuns_ + 1);
+  // Over the grid's runs + 1 entries (entry `runs` becomes the total), a count only the GPU
+  // knows (prepare wrote it).
+  triangleScan_.recordGpuLength(rec, HEMO_MC_ARGS_RUNS, 1);
+  activeScan_.recordGpuLength(rec, HEMO_MC_ARGS_RUNS, 1);
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "scan");
   rec.dispatchIndirect(*compact_, compactSet_, CompactPush{maxTriangles_, generate_->workgroupSize()}, args_,

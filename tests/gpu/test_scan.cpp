@@ -75,6 +75,31 @@ TEST_F(ScanTest, RecordsForAnyCountUpToItsCapacity) {
   EXPECT_THROW(scan.record(rec, 10001), std::invalid_argument);
 }
 
+// A length only the GPU knows: the scan is recorded for its capacity and scans
+// lengths[index] + plus elements (clamped to the capacity), leaving the rest untouched.
+TEST_F(ScanTest, ScansALengthTheGpuWrote) {
+  const std::size_t capacity = 3 * 4096 * 4096 / 1000;  // 50,331: two levels
+  std::vector<std::uint32_t> input(capacity);
+  auto rng = rngFor();
+  for (auto& v : input) v = static_cast<std::uint32_t>(rng() % 50);
+  gpu::Buffer data(ctx(), capacity * 4, gpu::MemoryUse::Device, "scan data");
+  gpu::Buffer lengths(ctx(), 16, gpu::MemoryUse::Device, "scan lengths");
+  gpu::PrefixScan scan(ctx(), data, capacity, 0, &lengths);
+  gpu::CommandRecorder rec(ctx());
+  for (std::uint32_t length : {0u, 1u, 4095u, 4096u, 20000u, std::uint32_t(capacity) - 1, std::uint32_t(capacity) + 50}) {
+    data.upload(input);
+    lengths.upload(std::vector<std::uint32_t>{7u, length, 9u, 9u});
+    rec.begin();
+    scan.recordGpuLength(rec, 1, 1);
+    rec.end();
+    rec.submitAndWait();
+    const std::size_t n = std::min<std::size_t>(length + 1, capacity);
+    std::vector<std::uint32_t> expect(input);
+    std::exclusive_scan(input.begin(), input.begin() + std::ptrdiff_t(n), expect.begin(), 0u);
+    EXPECT_EQ(data.readback<std::uint32_t>(capacity), expect) << "length " << length << " + 1";
+  }
+}
+
 // A dispatch gate runs its region (here a multi-dispatch prefix scan) only when the decision
 // value exceeds the threshold or is NaN, counts its openings, and rejects a region whose
 // dispatches change between recordings.

@@ -16,8 +16,14 @@ namespace hemo::gpu {
 // std::exclusive_scan on uint32_t). Multi-level: one block scan per level, then adds.
 class PrefixScan {
  public:
-  PrefixScan(Context& context, const Buffer& data, std::uint64_t capacity, VkDeviceSize byteOffset = 0);
+  // `lengths` (optional): a buffer of uint32 lengths the GPU computes, for recordGpuLength.
+  PrefixScan(Context& context, const Buffer& data, std::uint64_t capacity, VkDeviceSize byteOffset = 0,
+             const Buffer* lengths = nullptr);
   void record(CommandRecorder& rec, std::uint64_t n) const;
+  // Scans lengths[lengthIndex] + lengthPlus elements (clamped to the capacity), a length only
+  // the GPU knows: the dispatches are sized for the capacity and the surplus invocations do
+  // nothing. Needs the `lengths` buffer given at construction, written before.
+  void recordGpuLength(CommandRecorder& rec, std::uint32_t lengthIndex, std::uint32_t lengthPlus = 0) const;
   std::uint64_t capacity() const { return capacity_; }
   // Elements one workgroup scans.
   std::uint64_t blockSize() const;
@@ -25,7 +31,10 @@ class PrefixScan {
  private:
   const ComputePipeline* blockScan_;
   const ComputePipeline* addOffsets_;
+  void recordLevels(CommandRecorder& rec, std::uint64_t n, std::uint32_t lengthIndex, std::uint32_t lengthPlus) const;
+
   std::uint64_t capacity_;
+  Buffer noLengths_;                  // bound when the scan has no GPU length
   std::deque<Buffer> sums_;           // block totals of each level
   std::vector<DescriptorSet> sets_;   // level k: data_k (user data or sums_{k-1}) with sums_k
 };

@@ -8,9 +8,11 @@
 //                extraction grid
 //   prepare .... runs of voxels and the classify dispatch (indirect)
 //   classify ... per run of 4 voxels: cases, triangle count, active flag
-//   scan ....... prefix sums of triangle counts and of active flags
+//   scan ....... prefix sums of triangle counts and of active flags, over the grid's runs (a
+//                length the GPU wrote: PrefixScan::recordGpuLength)
 //   compact .... active runs in order; generate dispatch, draw arguments and totals
-//   generate ... triangles (position + normal per vertex) at their scanned offsets
+//   generate ... one invocation per voxel of each active run: its triangles (position +
+//                normal per vertex) at their scanned offsets
 // Every count stays on the GPU: the renderer draws with vkCmdDrawIndirect from args(), and
 // the host reads totals or the mesh only when it writes a file. Deterministic: the splat adds
 // integers, everything else is a gather. The CPU twin is hemo/reference/marching_cubes.hpp.
