@@ -96,13 +96,18 @@ Json primitives(Context& ctx, int repeat) {
   // without workgroup barriers (scan/scan_add on 64 elements) in one command buffer.
   {
     hemo::gpu::Buffer data(ctx, 64 * 4, hemo::gpu::MemoryUse::Device, "dispatch probe");
-    const auto& probe = ctx.pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}});
-    const auto set = probe.makeSet({{HEMO_SCAN_BINDING_DATA, &data}, {HEMO_SCAN_BINDING_SUMS, &data}});
+    // Push constants of scan/scan_add (interface/scan.h): n, no GPU length, 0, level 0.
+    struct Push {
+      std::uint32_t n, lengthIndex, lengthPlus, level;
+    };
+    const auto& probe = ctx.pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, sizeof(Push), 256, {}});
+    const auto set = probe.makeSet({{HEMO_SCAN_BINDING_DATA, &data}, {HEMO_SCAN_BINDING_SUMS, &data},
+                                    {HEMO_SCAN_BINDING_LENGTH, &data}});
     const int k = 1000;
-    const std::uint32_t n = 64;
+    const Push n{64, HEMO_SCAN_NO_LENGTH, 0, 0};
     const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
       for (int i = 0; i < k; ++i) {
-        rec.dispatch(probe, set, n, probe.groupsFor(n, HEMO_SCAN_ITEMS));
+        rec.dispatch(probe, set, n, probe.groupsFor(n.n, HEMO_SCAN_ITEMS));
         rec.computeToCompute();
       }
     });

@@ -84,31 +84,31 @@ TEST_F(GpuLayerTest, FillAndCopyThroughTheRecorder) {
 }
 
 TEST_F(GpuLayerTest, BindingsAreCheckedBySlot) {
-  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}});
+  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
   gpu::Buffer a(ctx(), 64, gpu::MemoryUse::Device, "a");
   gpu::Buffer staging(ctx(), 64, gpu::MemoryUse::Upload, "staging");
-  EXPECT_THROW(p.makeSet({{HEMO_SCAN_BINDING_DATA, &a}}), std::invalid_argument);  // slot 1 missing
-  EXPECT_THROW(p.makeSet({{0, &a}, {0, &a}}), std::invalid_argument);               // twice
-  EXPECT_THROW(p.makeSet({{0, &a}, {5, &a}}), std::invalid_argument);               // no such slot
-  EXPECT_THROW(p.makeSet({{0, &a}, {1, &staging}}), std::invalid_argument);         // not a device buffer
-  EXPECT_NO_THROW(p.makeSet({{0, &a}, {1, &a}}));
+  EXPECT_THROW(p.makeSet({{HEMO_SCAN_BINDING_DATA, &a}, {2, &a}}), std::invalid_argument);  // slot 1 missing
+  EXPECT_THROW(p.makeSet({{0, &a}, {0, &a}, {2, &a}}), std::invalid_argument);               // twice
+  EXPECT_THROW(p.makeSet({{0, &a}, {1, &a}, {5, &a}}), std::invalid_argument);               // no such slot
+  EXPECT_THROW(p.makeSet({{0, &a}, {1, &staging}, {2, &a}}), std::invalid_argument);         // not a device buffer
+  EXPECT_NO_THROW(p.makeSet({{0, &a}, {1, &a}, {2, &a}}));
   // The same description returns the same pipeline object.
-  EXPECT_EQ(&p, &ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}}));
+  EXPECT_EQ(&p, &ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}}));
 }
 
 TEST_F(GpuLayerTest, PushConstantSizeMismatchIsRejected) {
-  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}});
+  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
   gpu::Buffer a(ctx(), 64, gpu::MemoryUse::Device, "a");
-  auto set = p.makeSet({{0, &a}, {1, &a}});
+  auto set = p.makeSet({{0, &a}, {1, &a}, {2, &a}});
   gpu::CommandRecorder rec(ctx());
   rec.begin();
-  const std::uint64_t wrong = 0;
+  const std::uint64_t wrong = 0;  // 8 bytes; the pipeline takes 16
   EXPECT_THROW(rec.dispatch(p, set, wrong, p.groupsFor(1)), std::invalid_argument);
   rec.end();
 }
 
 TEST_F(GpuLayerTest, GroupsFoldIntoTwoDimensionsPastTheLimit) {
-  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 4, 256, {}});
+  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
   const std::uint64_t maxX = ctx().limits().maxComputeWorkGroupCount[0];
   const auto small = p.groupsFor(1000);
   EXPECT_EQ(small.x, 4u);
