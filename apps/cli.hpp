@@ -2,7 +2,9 @@
 // Minimal command-line parsing shared by the hemo apps: positional arguments and
 // "--name value" options, with errors that name the argument.
 #include <cstdint>
+#include <cstdio>
 #include <map>
+#include <utility>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -42,6 +44,18 @@ struct Args {
                        ", got " + v);
     }
     return x;
+  }
+  // An image size "WxH" (16 <= W, H <= 8192), or `fallback` when the option is absent.
+  std::pair<std::uint32_t, std::uint32_t> size(const std::string& name,
+                                               std::pair<std::uint32_t, std::uint32_t> fallback) const {
+    auto it = options.find(name);
+    if (it == options.end()) return fallback;
+    unsigned w = 0, h = 0;
+    char tail = 0;
+    if (std::sscanf(it->second.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192) {
+      throw UsageError(name + " expects WxH with 16 <= W, H <= 8192, got '" + it->second + "'");
+    }
+    return {w, h};
   }
 };
 

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <tuple>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -102,16 +103,7 @@ int main(int argc, char** argv) {
     vtkEvery = static_cast<std::uint32_t>(args.count("--vtk-every", 0, 1, 1000000000));
     surfaceEvery = static_cast<std::uint32_t>(args.count("--surface-every", 0, 1, 1000000000));
     pngEvery = static_cast<std::uint32_t>(args.count("--png-every", 0, 1, 1000000000));
-    if (args.has("--png-size")) {
-      const std::string v = args.text("--png-size");
-      unsigned w = 0, h = 0;
-      char tail = 0;
-      if (std::sscanf(v.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192) {
-        throw hemo::cli::UsageError("--png-size expects WxH with 16 <= W, H <= 8192, got '" + v + "'");
-      }
-      pngWidth = w;
-      pngHeight = h;
-    }
+    std::tie(pngWidth, pngHeight) = args.size("--png-size", {960, 540});
     profileSteps = args.count("--profile", 0, 1, 1000);
     statsEvery = static_cast<std::uint32_t>(args.count("--stats-every", 0, 1, 1000000000));
     scene = hemo::scene::loadScene(args.positional[0]);

@@ -22,6 +22,7 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <tuple>
 
 namespace {
 
@@ -101,16 +102,7 @@ int main(int argc, char** argv) {
   try {
     args = hemo::cli::parse(argc, argv, {"--device", "--size", "--steps-per-frame", "--frames"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SCENE.json");
-    if (args.has("--size")) {
-      unsigned w = 0, h = 0;
-      char tail = 0;
-      const std::string v = args.text("--size");
-      if (std::sscanf(v.c_str(), "%ux%u%c", &w, &h, &tail) != 2 || w < 16 || h < 16 || w > 8192 || h > 8192) {
-        throw hemo::cli::UsageError("--size expects WxH with 16 <= W, H <= 8192, got '" + v + "'");
-      }
-      width = w;
-      height = h;
-    }
+    std::tie(width, height) = args.size("--size", {1280, 720});
     stepsPerFrame = static_cast<std::uint32_t>(args.count("--steps-per-frame", 8, 0, 100000));
     maxFrames = args.count("--frames", 0, 1, 1000000000);
     scene = hemo::scene::loadScene(args.positional[0]);

@@ -214,29 +214,76 @@ Block fluidBlock(float dp, glm::uvec3 cells, float rho0) {
   return b;
 }
 
+// A block on the GPU: its particles in a store, their densities in a state buffer, an
+// extractor, and the field stage over them.
+struct BlockField {
+  BlockField(gpu::Context& ctx, const Block& b, std::uint32_t maxVoxels, const surface::FieldSettings& settings)
+      : n(std::uint32_t(b.positions.size())),
+        store(ctx, n),
+        state(ctx, std::uint64_t(n) * 16, gpu::MemoryUse::Device, "test state"),
+        mc(ctx, maxVoxels),
+        field(ctx, mc, store, state, settings) {
+    store.upload(b.positions, b.velocities);
+    state.upload(b.state);
+  }
+  // Records the field (and the extraction) and waits.
+  void run(gpu::Context& ctx, bool extract = true) {
+    gpu::CommandRecorder rec(ctx);
+    rec.begin();
+    field.record(rec, n);
+    if (extract) mc.record(rec);
+    rec.end();
+    rec.submitAndWait();
+  }
+  std::uint32_t n;
+  sim::ParticleStore store;
+  gpu::Buffer state;
+  surface::MarchingCubes mc;
+  surface::ParticleField field;
+};
+
+surface::FieldSettings fieldSettings(std::uint32_t resolution, float h, float rho0) {
+  surface::FieldSettings s;
+  s.resolution = resolution;
+  s.h = h;
+  s.restDensity = rho0;
+  return s;
+}
+
+// The block's fluid particles and densities, for the double-precision field.
+struct FluidOfBlock {
+  explicit FluidOfBlock(const Block& b) {
+    for (std::size_t i = 0; i < b.positions.size(); ++i) {
+      if (b.velocities[i].w != 0.0f) continue;
+      particles.emplace_back(b.positions[i]);
+      densities.push_back(b.state[i].x);
+    }
+  }
+  double at(const glm::dvec3& x, double h) const { return reference::particleField(x, particles, densities, h); }
+  std::vector<glm::dvec4> particles;
+  std::vector<double> densities;
+};
+
+// The largest distance of a mesh vertex from the block's faces (m).
+double farthestFromFaces(const std::vector<McVertex>& vertices, const Block& block) {
+  double farthest = 0.0;
+  for (const McVertex& v : vertices) {
+    const glm::vec3 p(v.position);
+    const glm::vec3 outside = glm::max(glm::max(block.lo - p, p - block.hi), glm::vec3(0.0f));
+    const glm::vec3 inside = glm::min(p - block.lo, block.hi - p);
+    const float d = glm::length(outside) > 0.0f ? glm::length(outside) : std::min({inside.x, inside.y, inside.z});
+    farthest = std::max(farthest, double(d));
+  }
+  return farthest;
+}
+
 TEST_F(MarchingCubesTest, ParticleFieldMatchesTheReferenceAndWrapsTheBlock) {
   const float dp = 1.0e-3f, h = 1.3f * dp, rho0 = 1000.0f;
   const Block block = fluidBlock(dp, glm::uvec3(12, 8, 6), rho0);
-  const auto n = std::uint32_t(block.positions.size());
-  sim::ParticleStore store(ctx(), n);
-  store.upload(block.positions, block.velocities);
-  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
-  state.upload(block.state);
-  surface::MarchingCubes mc(ctx(), 64);
-  surface::FieldSettings settings;
-  settings.resolution = 48;
-  settings.h = h;
-  settings.restDensity = rho0;
-  surface::ParticleField field(ctx(), mc, store, state, settings);
-
+  BlockField gpuBlock(ctx(), block, 64, fieldSettings(48, h, rho0));
   const auto run = [&] {
-    gpu::CommandRecorder rec(ctx());
-    rec.begin();
-    field.record(rec, n);
-    mc.record(rec);
-    rec.end();
-    rec.submitAndWait();
-    return std::make_pair(mc.readField(), mc.readMesh());
+    gpuBlock.run(ctx());
+    return std::make_pair(gpuBlock.mc.readField(), gpuBlock.mc.readMesh());
   };
   const auto [values, mesh] = run();
 
@@ -248,13 +295,7 @@ TEST_F(MarchingCubesTest, ParticleFieldMatchesTheReferenceAndWrapsTheBlock) {
   EXPECT_EQ(g.points[0], 49u);
 
   // Field against the double-precision sum at every point.
-  std::vector<glm::dvec4> particles;
-  std::vector<double> densities;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    if (block.velocities[i].w != 0.0f) continue;
-    particles.emplace_back(block.positions[i]);
-    densities.push_back(block.state[i].x);
-  }
+  const FluidOfBlock fluid(block);
   double worst = 0.0;
   reference::ScalarGrid ref;
   ref.origin = glm::dvec3(g.origin[0], g.origin[1], g.origin[2]);
@@ -265,7 +306,7 @@ TEST_F(MarchingCubesTest, ParticleFieldMatchesTheReferenceAndWrapsTheBlock) {
     for (std::uint32_t j = 0; j < ref.points.y; ++j) {
       for (std::uint32_t i = 0; i < ref.points.x; ++i) {
         const glm::dvec3 x = ref.origin + ref.spacing * glm::dvec3(i, j, k);
-        const double expected = reference::particleField(x, particles, densities, h);
+        const double expected = fluid.at(x, h);
         const std::size_t idx = ref.index(i, j, k);
         worst = std::max(worst, std::abs(surface::fromFixed(values[idx]) - expected));
         ref.values[idx] = surface::fromFixed(values[idx]);
@@ -277,14 +318,7 @@ TEST_F(MarchingCubesTest, ParticleFieldMatchesTheReferenceAndWrapsTheBlock) {
   // The surface: closed, and within one particle spacing of the block's faces.
   ASSERT_GT(mesh.totals.written, 1000u);
   expectWatertight(mesh.vertices);
-  double farthest = 0.0;
-  for (const McVertex& v : mesh.vertices) {
-    const glm::vec3 p(v.position);
-    const glm::vec3 outside = glm::max(glm::max(block.lo - p, p - block.hi), glm::vec3(0.0f));
-    const glm::vec3 inside = glm::min(p - block.lo, block.hi - p);
-    const float d = glm::length(outside) > 0.0f ? glm::length(outside) : std::min({inside.x, inside.y, inside.z});
-    farthest = std::max(farthest, double(d));
-  }
+  const double farthest = farthestFromFaces(mesh.vertices, block);
   std::printf("block surface: %u triangles, farthest vertex %.3f dp from the block's faces\n", mesh.totals.written,
               farthest / dp);
   EXPECT_LT(farthest, dp);
@@ -322,40 +356,19 @@ TEST_F(MarchingCubesTest, ParticleFieldMatchesTheReferenceAndWrapsTheBlock) {
 TEST_F(MarchingCubesTest, ParticleFieldOnAGridFarFinerThanTheKernel) {
   const float dp = 1.0e-3f, h = 1.3f * dp, rho0 = 1000.0f;
   const Block block = fluidBlock(dp, glm::uvec3(4, 4, 3), rho0);
-  const auto n = std::uint32_t(block.positions.size());
-  sim::ParticleStore store(ctx(), n);
-  store.upload(block.positions, block.velocities);
-  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
-  state.upload(block.state);
-  surface::MarchingCubes mc(ctx(), 100);
-  surface::FieldSettings settings;
-  settings.resolution = 100;
-  settings.h = h;
-  settings.restDensity = rho0;
-  surface::ParticleField field(ctx(), mc, store, state, settings);
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  field.record(rec, n);
-  rec.end();
-  rec.submitAndWait();
-  const surface::McGrid g = mc.readGrid();
+  BlockField gpuBlock(ctx(), block, 100, fieldSettings(100, h, rho0));
+  gpuBlock.run(ctx(), false);
+  const surface::McGrid g = gpuBlock.mc.readGrid();
   ASSERT_GT(2.0f * h / g.origin[3], 30.0f) << "support radius in voxels";
-  const auto values = mc.readField();
-  std::vector<glm::dvec4> particles;
-  std::vector<double> densities;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    if (block.velocities[i].w != 0.0f) continue;
-    particles.emplace_back(block.positions[i]);
-    densities.push_back(block.state[i].x);
-  }
+  const auto values = gpuBlock.mc.readField();
+  const FluidOfBlock fluid(block);
   double worst = 0.0, largest = 0.0;
   for (std::uint32_t k = 0; k < g.points[2]; k += 3) {
     for (std::uint32_t j = 0; j < g.points[1]; j += 3) {
       for (std::uint32_t i = 0; i < g.points[0]; i += 3) {
         const glm::dvec3 x = glm::dvec3(g.origin[0], g.origin[1], g.origin[2]) + double(g.origin[3]) * glm::dvec3(i, j, k);
-        const double expected = reference::particleField(x, particles, densities, h);
         const double got = surface::fromFixed(values[i + std::size_t(g.points[0]) * (j + std::size_t(g.points[1]) * k)]);
-        worst = std::max(worst, std::abs(got - expected));
+        worst = std::max(worst, std::abs(got - fluid.at(x, h)));
         largest = std::max(largest, got);
       }
     }
@@ -372,43 +385,22 @@ TEST_F(MarchingCubesTest, ParticleFieldOnAGridFarFinerThanTheKernel) {
 TEST_F(MarchingCubesTest, CoarseSplatGridIsInterpolatedOntoTheExtractionGrid) {
   const float dp = 1.0e-3f, h = 1.3f * dp, rho0 = 1000.0f;
   const Block block = fluidBlock(dp, glm::uvec3(10, 7, 6), rho0);
-  const auto n = std::uint32_t(block.positions.size());
-  sim::ParticleStore store(ctx(), n);
-  store.upload(block.positions, block.velocities);
-  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
-  state.upload(block.state);
-  surface::MarchingCubes mc(ctx(), 96);
-  surface::FieldSettings settings;
-  settings.resolution = 96;
-  settings.h = h;
-  settings.restDensity = rho0;
+  surface::FieldSettings settings = fieldSettings(96, h, rho0);
   settings.splatVoxelOverH = 0.5f;
-  surface::ParticleField field(ctx(), mc, store, state, settings);
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  field.record(rec, n);
-  mc.record(rec);
-  rec.end();
-  rec.submitAndWait();
+  BlockField gpuBlock(ctx(), block, 96, settings);
+  gpuBlock.run(ctx());
+  const surface::MarchingCubes& mc = gpuBlock.mc;
   const surface::McGrid g = mc.readGrid();
-  const surface::McGrid sg = field.readSplatGrid();
+  const surface::McGrid sg = gpuBlock.field.readSplatGrid();
   ASSERT_NEAR(sg.origin[3], 0.5f * h, 1e-9f);
   ASSERT_GT(sg.origin[3], 2.5f * g.origin[3]) << "the splat grid is coarser";
   for (int a = 0; a < 3; ++a) {
     ASSERT_EQ(sg.origin[a], g.origin[a]);
     ASSERT_GE(double(sg.points[a] - 1) * sg.origin[3], double(g.points[a] - 1) * g.origin[3]);
   }
-  std::vector<glm::dvec4> particles;
-  std::vector<double> densities;
-  for (std::uint32_t i = 0; i < n; ++i) {
-    if (block.velocities[i].w != 0.0f) continue;
-    particles.emplace_back(block.positions[i]);
-    densities.push_back(block.state[i].x);
-  }
+  const FluidOfBlock fluid(block);
   const glm::dvec3 origin(g.origin[0], g.origin[1], g.origin[2]);
-  const auto coarseAt = [&](glm::uvec3 c) {
-    return reference::particleField(origin + double(sg.origin[3]) * glm::dvec3(c), particles, densities, h);
-  };
+  const auto coarseAt = [&](glm::uvec3 c) { return fluid.at(origin + double(sg.origin[3]) * glm::dvec3(c), h); };
   const auto values = mc.readField();
   double worstTwin = 0.0, worstDirect = 0.0;
   for (std::uint32_t k = 0; k < g.points[2]; k += 2) {
@@ -426,7 +418,7 @@ TEST_F(MarchingCubesTest, CoarseSplatGridIsInterpolatedOntoTheExtractionGrid) {
         const double got = surface::fromFixed(values[i + std::size_t(g.points[0]) * (j + std::size_t(g.points[1]) * k)]);
         worstTwin = std::max(worstTwin, std::abs(got - v));
         const glm::dvec3 x = origin + double(g.origin[3]) * glm::dvec3(i, j, k);
-        worstDirect = std::max(worstDirect, std::abs(got - reference::particleField(x, particles, densities, h)));
+        worstDirect = std::max(worstDirect, std::abs(got - fluid.at(x, h)));
       }
     }
   }
@@ -436,14 +428,7 @@ TEST_F(MarchingCubesTest, CoarseSplatGridIsInterpolatedOntoTheExtractionGrid) {
   const surface::SurfaceMesh mesh = mc.readMesh();
   ASSERT_GT(mesh.totals.written, 1000u);
   expectWatertight(mesh.vertices);
-  double farthest = 0.0;
-  for (const McVertex& v : mesh.vertices) {
-    const glm::vec3 p(v.position);
-    const glm::vec3 outside = glm::max(glm::max(block.lo - p, p - block.hi), glm::vec3(0.0f));
-    const glm::vec3 inside = glm::min(p - block.lo, block.hi - p);
-    farthest = std::max(farthest, double(glm::length(outside) > 0.0f ? glm::length(outside)
-                                                                    : std::min({inside.x, inside.y, inside.z})));
-  }
+  const double farthest = farthestFromFaces(mesh.vertices, block);
   std::printf("coarse splat: block surface within %.3f dp of its faces\n", farthest / dp);
   EXPECT_LT(farthest, dp);
 }
@@ -456,25 +441,12 @@ TEST_F(MarchingCubesTest, TheGridStaysInsideTheClipBox) {
   block.positions.emplace_back(block.lo + glm::vec3(1.0f, 0.0f, 0.0f), block.positions[0].w);  // 1 m away
   block.velocities.emplace_back(0.0f);
   block.state.emplace_back(1000.0f, 0.0f, 0.0f, 0.0f);
-  const auto n = std::uint32_t(block.positions.size());
-  sim::ParticleStore store(ctx(), n);
-  store.upload(block.positions, block.velocities);
-  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
-  state.upload(block.state);
-  surface::MarchingCubes mc(ctx(), 32);
-  surface::FieldSettings settings;
-  settings.resolution = 32;
-  settings.h = h;
+  surface::FieldSettings settings = fieldSettings(32, h, 1000.0f);
   settings.clipLo = block.lo - glm::vec3(4.0f * dp);
   settings.clipHi = block.hi + glm::vec3(4.0f * dp);
-  surface::ParticleField field(ctx(), mc, store, state, settings);
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  field.record(rec, n);
-  mc.record(rec);
-  rec.end();
-  rec.submitAndWait();
-  const surface::SurfaceMesh mesh = mc.readMesh();
+  BlockField gpuBlock(ctx(), block, 32, settings);
+  gpuBlock.run(ctx());
+  const surface::SurfaceMesh mesh = gpuBlock.mc.readMesh();
   const surface::McGrid& g = mesh.grid;
   for (int a = 0; a < 3; ++a) {
     EXPECT_GE(g.origin[a], settings.clipLo[a] - 1e-7f);
@@ -483,7 +455,7 @@ TEST_F(MarchingCubesTest, TheGridStaysInsideTheClipBox) {
   EXPECT_LT(g.origin[3], 14.0f * dp / 32.0f + 1e-7f) << "voxel set by the clipped box";
   ASSERT_GT(mesh.totals.written, 100u);
   for (const McVertex& v : mesh.vertices) ASSERT_LT(v.position.x, block.hi.x + 2.0f * h);
-  EXPECT_THROW(surface::ParticleField(ctx(), mc, store, state,
+  EXPECT_THROW(surface::ParticleField(ctx(), gpuBlock.mc, gpuBlock.store, gpuBlock.state,
                                       [&] {
                                         surface::FieldSettings bad = settings;
                                         bad.clipHi.y = bad.clipLo.y;
@@ -496,26 +468,12 @@ TEST_F(MarchingCubesTest, NoFluidGivesNoSurface) {
   const float dp = 1.0e-3f;
   Block block = fluidBlock(dp, glm::uvec3(2, 2, 2), 1000.0f);
   for (auto& v : block.velocities) v.w = 1.0f;  // everything boundary
-  const auto n = std::uint32_t(block.positions.size());
-  sim::ParticleStore store(ctx(), n);
-  store.upload(block.positions, block.velocities);
-  gpu::Buffer state(ctx(), n * 16, gpu::MemoryUse::Device, "test state");
-  state.upload(block.state);
-  surface::MarchingCubes mc(ctx(), 16);
-  surface::FieldSettings settings;
-  settings.resolution = 16;
-  settings.h = 1.3f * dp;
-  surface::ParticleField field(ctx(), mc, store, state, settings);
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  field.record(rec, n);
-  mc.record(rec);
-  rec.end();
-  rec.submitAndWait();
-  const auto totals = mc.readTotals();
+  BlockField gpuBlock(ctx(), block, 16, fieldSettings(16, 1.3f * dp, 1000.0f));
+  gpuBlock.run(ctx());
+  const auto totals = gpuBlock.mc.readTotals();
   EXPECT_EQ(totals.triangles, 0u);
   EXPECT_EQ(totals.runs, 0u);
-  EXPECT_EQ(mc.args().readback<std::uint32_t>(16)[8], 0u);
+  EXPECT_EQ(gpuBlock.mc.args().readback<std::uint32_t>(16)[8], 0u);
 }
 
 }  // namespace
