@@ -55,9 +55,12 @@ void Swapchain::create(VkExtent2D wanted) {
   vkGetPhysicalDeviceSurfaceFormatsKHR(phys, surface, &count, nullptr);
   std::vector<VkSurfaceFormatKHR> formats(count);
   vkGetPhysicalDeviceSurfaceFormatsKHR(phys, surface, &count, formats.data());
-  // A UNORM format the blit can write (the offscreen image is linear RGBA8 UNORM).
+  // A format the blit can write: UNORM first (the offscreen image holds display values, so
+  // they pass unchanged); an sRGB-only surface still works (the blit encodes, colours look
+  // lighter).
   VkSurfaceFormatKHR chosen{VK_FORMAT_UNDEFINED, VK_COLOR_SPACE_SRGB_NONLINEAR_KHR};
-  for (VkFormat want : {VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM}) {
+  for (VkFormat want : {VK_FORMAT_B8G8R8A8_UNORM, VK_FORMAT_R8G8B8A8_UNORM, VK_FORMAT_B8G8R8A8_SRGB,
+                        VK_FORMAT_R8G8B8A8_SRGB}) {
     for (const auto& f : formats) {
       VkFormatProperties props;
       vkGetPhysicalDeviceFormatProperties(phys, f.format, &props);
@@ -67,7 +70,9 @@ void Swapchain::create(VkExtent2D wanted) {
       }
     }
   }
-  if (chosen.format == VK_FORMAT_UNDEFINED) throw gpu::GpuError("the window surface has no blit-writable RGBA8 format");
+  if (chosen.format == VK_FORMAT_UNDEFINED) {
+    throw gpu::GpuError("the window surface offers no 8-bit RGBA/BGRA format that a blit can write");
+  }
   format_ = chosen.format;
 
   vkGetPhysicalDeviceSurfacePresentModesKHR(phys, surface, &count, nullptr);
