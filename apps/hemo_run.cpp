@@ -207,7 +207,8 @@ int main(int argc, char** argv) {
         camera = hemo::render::Camera::framing(lo, hi, float(pngWidth) / float(pngHeight), direction);
         frame.fluid = false;  // the surface shows the blood
         frame.wall = true;
-        frame.cutaway = sim.wallParticles() > 0;
+        frame.boundary = true;  // the tank or walls, cut open on the camera's side
+        frame.cutaway = true;
         frame.particleRadius = 0.5f * scene.sph.spacing;
       }
       frameRec->begin();

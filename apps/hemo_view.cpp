@@ -172,7 +172,8 @@ int main(int argc, char** argv) {
     state.yaw = std::atan2(toEye.y, toEye.x);
     state.pitch = std::asin(toEye.z / state.distance);
     state.frame.fluid = false;
-    state.frame.cutaway = vessel;
+    state.frame.boundary = true;
+    state.frame.cutaway = true;
     state.frame.particleRadius = 0.5f * scene.sph.spacing;
     state.frame.speedScale = std::max(scene.expectedMaxSpeed, 1e-3f);
 

@@ -10,8 +10,8 @@
 #define HEMO_RENDER_BINDING_COUNT 3
 // push (128 bytes): mat4 viewProj; vec4 right (w radius m); vec4 up (w speed scale m/s);
 //                   uvec4 show (fluid, wall, boundary, float bits of the strain scale);
-//                   vec4 cut (wall particles with
-//                   dot(cut.xyz, x) > cut.w are hidden)
+//                   vec4 cut (wall and boundary particles with dot(cut.xyz, x) > cut.w are
+//                   hidden)
 
 // render/surface.vert + .frag: vertex attributes from the marching-cubes vertex buffer
 // (stride 32: vec4 position at 0, vec4 normal at 16).

@@ -5,7 +5,8 @@
 // orange-red when stretched) and marked purple as their springs break (wall/point_shade.comp);
 // rigid boundary particles grey. Kinds not
 // shown (and non-finite positions) are moved beyond the far plane and clipped. A cutaway
-// plane hides the wall particles in front of it, so the blood inside a vessel shows.
+// plane hides the wall and boundary particles in front of it, so the blood inside a vessel
+// or a tank shows.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/render.h"
 #include "interface/sph.h"
@@ -19,7 +20,7 @@ layout(push_constant) uniform Push {
   vec4 up;     // xyz: camera up (unit); w: speed (m/s) at the top of the colour scale
   uvec4 show;  // x: fluid, y: wall, z: boundary; w: float bits of the strain at the red end
                // of the wall's scale (0: no wall shade buffer, plain wall colour)
-  vec4 cut;    // wall particles with dot(cut.xyz, x) > cut.w are hidden (cut.xyz = 0: none)
+  vec4 cut;    // wall and boundary particles with dot(cut.xyz, x) > cut.w are hidden (cut.xyz = 0: none)
 } pc;
 
 layout(location = 0) out vec2 corner;
@@ -44,7 +45,7 @@ void main() {
   const vec4 p = positions[gl_InstanceIndex];
   const vec4 v = velocities[gl_InstanceIndex];
   const uint kind = uint(v.w);
-  const bool cutAway = kind == HEMO_KIND_WALL && dot(pc.cut.xyz, p.xyz) > pc.cut.w;
+  const bool cutAway = kind != HEMO_KIND_FLUID && dot(pc.cut.xyz, p.xyz) > pc.cut.w;
   const bool shown = !cutAway && (kind == HEMO_KIND_FLUID ? pc.show.x != 0u
                                   : (kind == HEMO_KIND_WALL ? pc.show.y != 0u : pc.show.z != 0u));
   corner = kCorners[gl_VertexIndex];

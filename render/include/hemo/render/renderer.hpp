@@ -40,7 +40,8 @@ struct FrameOptions {
   bool fluid = true;      // fluid particles
   bool wall = true;       // vessel wall particles
   bool boundary = false;  // rigid boundary particles (tank walls)
-  bool cutaway = false;   // hide the wall particles between the camera and the target's plane
+  bool cutaway = false;   // hide the wall and boundary particles between the camera and the
+                          // plane through the target facing it
   float particleRadius = 0.0f;  // m (0: nothing drawn for particles)
   float speedScale = 1.0f;      // m/s at the red end of the fluid's colour scale
   float strainScale = 0.1f;     // spring strain at the red end of the wall's colour scale
