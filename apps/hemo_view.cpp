@@ -2,7 +2,8 @@
 // Runs a scene live in a window: the simulation advances K steps per frame (one submit, one
 // wait per frame), then the blood surface is extracted and everything is drawn offscreen and
 // presented. Mouse: drag to orbit, wheel to zoom. Keys: Space pause, N one frame's steps while
-// paused, S surface, P fluid particles, W wall, B rigid boundary, C cutaway, Esc/Q quit.
+// paused, S surface, P fluid particles, W wall, L springs as lines, B rigid boundary,
+// C cutaway, Esc/Q quit.
 // --frames N quits after N presented frames (CI runs it under Xvfb) and prints a summary.
 // Exit codes as hemo-run: 0 ok, 1 bad input, 2 the simulation failed, 3 no display/device.
 #include "cli.hpp"
@@ -32,7 +33,7 @@ const char* kUsage =
     "  --steps-per-frame K simulation steps between frames (default 8)\n"
     "  --frames N          quit after N presented frames (default: run until closed)\n"
     "mouse: drag to orbit, wheel to zoom; keys: Space pause, N step, S surface, P particles,\n"
-    "W wall, B boundary, C cutaway, Esc/Q quit\n";
+    "W wall, L springs, B boundary, C cutaway, Esc/Q quit\n";
 
 struct ViewState {
   bool paused = false;
@@ -56,6 +57,7 @@ void onKey(GLFWwindow* window, int key, int, int action, int) {
     case GLFW_KEY_W: s->frame.wall = !s->frame.wall; break;
     case GLFW_KEY_B: s->frame.boundary = !s->frame.boundary; break;
     case GLFW_KEY_C: s->frame.cutaway = !s->frame.cutaway; break;
+    case GLFW_KEY_L: s->frame.springs = !s->frame.springs; break;
     case GLFW_KEY_ESCAPE:
     case GLFW_KEY_Q: s->quit = true; break;
     default: break;
@@ -155,6 +157,12 @@ int main(int argc, char** argv) {
     hemo::render::OffscreenRenderer renderer(ctx, width, height);
     hemo::render::Swapchain swapchain(ctx, {width, height});
     hemo::gpu::CommandRecorder rec(ctx);
+    // The wall's springs (drawn as lines when toggled on with L).
+    hemo::render::SpringView springView;
+    if (const auto* wall = sim.solver().wall()) {
+      springView = {&sim.store().live().positions, &sim.solver().grid().slotOfId(), &wall->springs(), sim.springs(),
+                    sim.solver().grid().spec().period};
+    }
 
     // Orbit camera around the particles' box, starting where hemo-run's frames look from.
     glm::vec3 lo(3e38f), hi(-3e38f);
@@ -205,7 +213,7 @@ int main(int argc, char** argv) {
       renderer.record(rec, camera, state.frame,
                       {&sim.store().live().positions, &sim.store().live().velocities, sim.store().count(),
                        sim.wallShade()},
-                      state.surface ? sim.surfaceExtractor() : nullptr);
+                      state.surface ? sim.surfaceExtractor() : nullptr, &springView);
       rec.end();
       rec.submitAndWait();
       if (!swapchain.present(renderer.colorImage(), renderer.extent())) swapchain.recreate({width, height});

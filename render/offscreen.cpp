@@ -23,6 +23,15 @@ struct ParticlePush {
 };
 static_assert(sizeof(ParticlePush) == 128);
 
+struct SpringPush {
+  glm::mat4 viewProj;
+  glm::vec4 period;  // w: strain scale
+  std::uint32_t flags[4];
+};
+static_assert(sizeof(SpringPush) == 96);
+static_assert(HEMO_RENDER_SPRINGS_BINDING_COUNT == HEMO_RENDER_BINDING_COUNT,
+              "particles and springs share one descriptor set layout");
+
 struct SurfacePush {
   glm::mat4 viewProj;
   glm::vec4 eye, light, color;
@@ -101,6 +110,8 @@ OffscreenRenderer::~OffscreenRenderer() {
   if (particlePipeline_) vkDestroyPipeline(d, particlePipeline_, nullptr);
   if (surfacePipeline_) vkDestroyPipeline(d, surfacePipeline_, nullptr);
   if (particlePipelineLayout_) vkDestroyPipelineLayout(d, particlePipelineLayout_, nullptr);
+  if (springPipeline_) vkDestroyPipeline(d, springPipeline_, nullptr);
+  if (springPipelineLayout_) vkDestroyPipelineLayout(d, springPipelineLayout_, nullptr);
   if (surfacePipelineLayout_) vkDestroyPipelineLayout(d, surfacePipelineLayout_, nullptr);
   if (pool_) vkDestroyDescriptorPool(d, pool_, nullptr);
   if (particleLayout_) vkDestroyDescriptorSetLayout(d, particleLayout_, nullptr);
@@ -257,6 +268,10 @@ void OffscreenRenderer::createPipelines() {
   pl.pushConstantRangeCount = 1;
   pl.pPushConstantRanges = &particleRange;
   gpu::check(vkCreatePipelineLayout(d, &pl, nullptr, &particlePipelineLayout_), "vkCreatePipelineLayout");
+  VkPushConstantRange springRange{VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(SpringPush)};
+  VkPipelineLayoutCreateInfo spl = pl;
+  spl.pPushConstantRanges = &springRange;
+  gpu::check(vkCreatePipelineLayout(d, &spl, nullptr, &springPipelineLayout_), "vkCreatePipelineLayout");
   VkPushConstantRange surfaceRange{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(SurfacePush)};
   VkPipelineLayoutCreateInfo sl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   sl.pushConstantRangeCount = 1;
@@ -292,7 +307,9 @@ void OffscreenRenderer::createPipelines() {
   blend.pAttachments = &blendAttachment;
 
   const auto build = [&](VkShaderModule vert, VkShaderModule frag, const VkPipelineVertexInputStateCreateInfo& input,
-                         VkPipelineLayout layoutHandle, VkPipeline& out) {
+                         VkPipelineLayout layoutHandle, VkPipeline& out,
+                         VkPrimitiveTopology topology = VK_PRIMITIVE_TOPOLOGY_TRIANGLE_LIST) {
+    assembly.topology = topology;
     VkPipelineShaderStageCreateInfo stages[2]{};
     stages[0] = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
     stages[0].stage = VK_SHADER_STAGE_VERTEX_BIT;
@@ -320,6 +337,8 @@ void OffscreenRenderer::createPipelines() {
   VkPipelineVertexInputStateCreateInfo noInput{VK_STRUCTURE_TYPE_PIPELINE_VERTEX_INPUT_STATE_CREATE_INFO};
   build(module("render/particles.vert"), module("render/particles.frag"), noInput, particlePipelineLayout_,
         particlePipeline_);
+  build(module("render/springs.vert"), module("render/springs.frag"), noInput, springPipelineLayout_, springPipeline_,
+        VK_PRIMITIVE_TOPOLOGY_LINE_LIST);
 
   VkVertexInputBindingDescription binding{0, HEMO_RENDER_SURFACE_STRIDE, VK_VERTEX_INPUT_RATE_VERTEX};
   VkVertexInputAttributeDescription attributes[2] = {{0, 0, VK_FORMAT_R32G32B32A32_SFLOAT, 0},
@@ -333,13 +352,12 @@ void OffscreenRenderer::createPipelines() {
         surfacePipeline_);
 }
 
-VkDescriptorSet OffscreenRenderer::particleSet(const ParticleView& view) {
-  const gpu::Buffer& shade = view.wallShade ? *view.wallShade : noShade_;
-  const auto key = std::make_tuple(view.positions->handle(), view.velocities->handle(), shade.handle());
-  if (auto it = particleSets_.find(key); it != particleSets_.end()) return it->second;
-  if (particleSets_.size() >= kMaxParticleSets) {
-    throw std::invalid_argument("the renderer draws at most " + std::to_string(kMaxParticleSets) +
-                                " different particle stores");
+VkDescriptorSet OffscreenRenderer::storageSet(const gpu::Buffer& b0, const gpu::Buffer& b1, const gpu::Buffer& b2) {
+  const auto key = std::make_tuple(b0.handle(), b1.handle(), b2.handle());
+  if (auto it = storageSets_.find(key); it != storageSets_.end()) return it->second;
+  if (storageSets_.size() >= kMaxParticleSets) {
+    throw std::invalid_argument("the renderer draws from at most " + std::to_string(kMaxParticleSets) +
+                                " different sets of buffers");
   }
   VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
   alloc.descriptorPool = pool_;
@@ -347,33 +365,43 @@ VkDescriptorSet OffscreenRenderer::particleSet(const ParticleView& view) {
   alloc.pSetLayouts = &particleLayout_;
   VkDescriptorSet set = VK_NULL_HANDLE;
   gpu::check(vkAllocateDescriptorSets(context_->device(), &alloc, &set), "vkAllocateDescriptorSets");
-  VkDescriptorBufferInfo infos[3] = {{view.positions->handle(), 0, VK_WHOLE_SIZE},
-                                     {view.velocities->handle(), 0, VK_WHOLE_SIZE},
-                                     {shade.handle(), 0, VK_WHOLE_SIZE}};
-  const std::uint32_t slots[3] = {HEMO_RENDER_BINDING_POSITIONS, HEMO_RENDER_BINDING_VELOCITIES,
-                                  HEMO_RENDER_BINDING_WALL_SHADE};
+  VkDescriptorBufferInfo infos[3] = {{b0.handle(), 0, VK_WHOLE_SIZE}, {b1.handle(), 0, VK_WHOLE_SIZE},
+                                     {b2.handle(), 0, VK_WHOLE_SIZE}};
   VkWriteDescriptorSet writes[3]{};
   for (std::uint32_t b = 0; b < 3; ++b) {
     writes[b] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     writes[b].dstSet = set;
-    writes[b].dstBinding = slots[b];
+    writes[b].dstBinding = b;
     writes[b].descriptorCount = 1;
     writes[b].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
     writes[b].pBufferInfo = &infos[b];
   }
   vkUpdateDescriptorSets(context_->device(), 3, writes, 0, nullptr);
-  particleSets_.emplace(key, set);
+  storageSets_.emplace(key, set);
   return set;
 }
 
 void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, const FrameOptions& options,
-                               const ParticleView& particles, const surface::MarchingCubes* surface) {
+                               const ParticleView& particles, const surface::MarchingCubes* surface,
+                               const SpringView* springs) {
   const bool drawParticles = particles.count > 0 && options.particleRadius > 0.0f &&
                              (options.fluid || options.wall || options.boundary);
   if (drawParticles && (!particles.positions || !particles.velocities)) {
     throw std::invalid_argument("particle view without buffers");
   }
-  const VkDescriptorSet set = drawParticles ? particleSet(particles) : VK_NULL_HANDLE;
+  static_assert(HEMO_RENDER_BINDING_POSITIONS == 0 && HEMO_RENDER_BINDING_VELOCITIES == 1 &&
+                HEMO_RENDER_BINDING_WALL_SHADE == 2 && HEMO_RENDER_SPRINGS_BINDING_POSITIONS == 0 &&
+                HEMO_RENDER_SPRINGS_BINDING_SLOT_OF_ID == 1 && HEMO_RENDER_SPRINGS_BINDING_SPRINGS == 2);
+  const VkDescriptorSet set =
+      drawParticles ? storageSet(*particles.positions, *particles.velocities,
+                                 particles.wallShade ? *particles.wallShade : noShade_)
+                    : VK_NULL_HANDLE;
+  const bool drawSprings = options.springs && springs && springs->count > 0;
+  if (drawSprings && (!springs->positions || !springs->slotOfId || !springs->springs)) {
+    throw std::invalid_argument("spring view without buffers");
+  }
+  const VkDescriptorSet springSet =
+      drawSprings ? storageSet(*springs->positions, *springs->slotOfId, *springs->springs) : VK_NULL_HANDLE;
   rec.computeToGraphics();
   VkCommandBuffer cmd = rec.handle();
   VkClearValue clears[2]{};
@@ -410,6 +438,16 @@ void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, 
     vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, particlePipelineLayout_, 0, 1, &set, 0, nullptr);
     vkCmdPushConstants(cmd, particlePipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
     vkCmdDraw(cmd, 6, particles.count, 0, 0);
+  }
+  if (drawSprings) {
+    SpringPush push{};
+    push.viewProj = viewProj;
+    push.period = glm::vec4(springs->period, std::max(options.strainScale, 1e-9f));
+    push.flags[0] = options.brokenSprings;
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, springPipeline_);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, springPipelineLayout_, 0, 1, &springSet, 0, nullptr);
+    vkCmdPushConstants(cmd, springPipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT, 0, sizeof(push), &push);
+    vkCmdDraw(cmd, 2 * springs->count, 1, 0, 0);
   }
   if (surface) {
     SurfacePush push{};

@@ -18,4 +18,12 @@
 #define HEMO_RENDER_SURFACE_STRIDE 32
 // push (112 bytes): mat4 viewProj; vec4 eye; vec4 light; vec4 color
 
+// render/springs.vert + .frag: the wall's springs as lines (two vertices per spring).
+#define HEMO_RENDER_SPRINGS_BINDING_POSITIONS 0
+#define HEMO_RENDER_SPRINGS_BINDING_SLOT_OF_ID 1
+#define HEMO_RENDER_SPRINGS_BINDING_SPRINGS 2  // Spring records (interface/wall.h)
+#define HEMO_RENDER_SPRINGS_BINDING_COUNT 3
+// push (96 bytes): mat4 viewProj; vec4 period (xyz m, w strain scale); uvec4 flags (x: draw
+//                  broken springs)
+
 #endif

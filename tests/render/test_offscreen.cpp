@@ -3,6 +3,7 @@
 #include "gpu_test.hpp"
 #include "hemo/render/renderer.hpp"
 #include "hemo/sim/particles.hpp"
+#include "hemo/sim/wall.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -168,6 +169,66 @@ TEST_F(RenderTest, ParticlesAreDrawnInTheirKindsColours) {
   EXPECT_EQ((head[20] << 24 | head[21] << 16 | head[22] << 8 | head[23]), int(H));
   std::filesystem::remove(path);
   EXPECT_THROW(render::writePng(path, W, H, std::vector<std::uint8_t>(7)), std::invalid_argument);
+}
+
+// Springs as lines: at rest length tan, stretched past the strain scale red, broken purple
+// (or left out on request).
+TEST_F(RenderTest, SpringsAreDrawnByStrainAndBrokenOnesMarked) {
+  const float L = 2e-3f;
+  const std::vector<glm::vec4> positions = {{-L, 0.0f, 1.5e-3f, 1.0f}, {L, 0.0f, 1.5e-3f, 1.0f},
+                                            {-L, 0.0f, 0.0f, 1.0f},    {L, 0.0f, 0.0f, 1.0f},
+                                            {-L, 0.0f, -1.5e-3f, 1.0f}, {L, 0.0f, -1.5e-3f, 1.0f}};
+  const std::vector<glm::vec4> velocities(6, glm::vec4(0.0f, 0.0f, 0.0f, 2.0f));
+  sim::ParticleStore store(ctx(), 6);
+  store.upload(positions, velocities);
+  gpu::Buffer slotOfId(ctx(), 6 * 4, gpu::MemoryUse::Device, "test slot of id");
+  slotOfId.upload(std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5});
+  // At rest; stretched by 20% (rest 2L / 1.2); broken.
+  const std::vector<sim::GpuSpring> springs = {{0, 1, 2 * L, 1.0f, 0.0f, 1.0f, 0u, 0u},
+                                               {2, 3, 2 * L / 1.2f, 1.0f, 0.0f, 1.0f, 0u, 0u},
+                                               {4, 5, 2 * L, 1.0f, 0.0f, 1.0f, 1u, 0u}};
+  gpu::Buffer springBuffer(ctx(), springs.size() * sizeof(sim::GpuSpring), gpu::MemoryUse::Device, "test springs");
+  springBuffer.upload(springs);
+  const std::uint32_t W = 240, H = 180;
+  render::OffscreenRenderer renderer(ctx(), W, H);
+  const render::Camera camera = render::Camera::framing(glm::vec3(-L, -1e-3f, -2e-3f), glm::vec3(L, 1e-3f, 2e-3f),
+                                                        float(W) / H, glm::vec3(0.0f, -1.0f, 0.0f));
+  render::FrameOptions options;
+  options.springs = true;
+  options.strainScale = 0.1f;
+  const render::SpringView view{&store.live().positions, &slotOfId, &springBuffer, 3, glm::vec3(0.0f)};
+  gpu::CommandRecorder rec(ctx());
+  std::vector<std::uint8_t> rgba;
+  const auto draw = [&] {
+    rec.begin();
+    renderer.record(rec, camera, options, {}, nullptr, &view);
+    rec.end();
+    rec.submitAndWait();
+    rgba = renderer.readPixels();
+  };
+  const Rgb background{int(std::lround(options.background.r * 255.0f)), int(std::lround(options.background.g * 255.0f)),
+                       int(std::lround(options.background.b * 255.0f))};
+  // The line's colour near the projected middle of spring k (background if nothing is drawn).
+  const auto lineAt = [&](int k) {
+    const glm::vec2 p = project(camera, 0.5f * glm::vec3(positions[2 * k] + positions[2 * k + 1]), W, H);
+    for (int dy = -2; dy <= 2; ++dy) {
+      const Rgb c = pixel(rgba, W, std::uint32_t(p.x), std::uint32_t(int(p.y) + dy));
+      if (c.r != background.r || c.g != background.g || c.b != background.b) return c;
+    }
+    return background;
+  };
+  draw();
+  const Rgb rest = lineAt(0), stretched = lineAt(1), broken = lineAt(2);
+  EXPECT_GT(rest.r, rest.g);
+  EXPECT_GT(rest.g, rest.b + 20) << "at rest: tan";
+  EXPECT_GT(stretched.r, stretched.g + 100) << "stretched past the scale: red";
+  EXPECT_GT(broken.b, broken.g + 40) << "broken: purple";
+  options.brokenSprings = false;
+  draw();
+  const Rgb hidden = lineAt(2);
+  EXPECT_EQ(hidden.r, background.r) << "broken springs left out on request";
+  EXPECT_EQ(hidden.b, background.b);
+  EXPECT_NE(lineAt(0).r, background.r) << "the others still drawn";
 }
 
 }  // namespace

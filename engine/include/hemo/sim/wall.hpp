@@ -99,6 +99,7 @@ class MassSpring {
   // shade(); what the renderer colours the wall by.
   void recordShade(gpu::CommandRecorder& rec, std::uint32_t n);
   const gpu::Buffer& shade() const { return shade_; }
+  const gpu::Buffer& springs() const { return springs_; }  // GpuSpring records, broken flags live
 
  private:
   const ParticleStore* particles_;

@@ -1,7 +1,8 @@
 #pragma once
 // Drawing from the engine's GPU buffers on the same device: particles as shaded discs (fluid
-// coloured by speed, wall particles, optionally the rigid boundary) and the marching-cubes
-// surface, lit, with depth. The renderer only reads engine buffers (positions, velocities,
+// coloured by speed, wall particles by strain, optionally the rigid boundary), the wall's
+// springs as lines coloured by strain (broken ones purple), and the marching-cubes surface,
+// lit, with depth. The renderer only reads engine buffers (positions, velocities,
 // the extractor's vertices and indirect draw arguments) and owns the one compute-to-graphics
 // barrier. OffscreenRenderer draws into an image and copies it to host memory for PNG files
 // and tests; nothing here needs a window.
@@ -45,6 +46,8 @@ struct FrameOptions {
   float particleRadius = 0.0f;  // m (0: nothing drawn for particles)
   float speedScale = 1.0f;      // m/s at the red end of the fluid's colour scale
   float strainScale = 0.1f;     // spring strain at the red end of the wall's colour scale
+  bool springs = false;         // the wall's springs as lines (with a SpringView)
+  bool brokenSprings = true;    // broken springs drawn purple (else left out)
   glm::vec4 background{0.95f, 0.95f, 0.96f, 1.0f};
   glm::vec3 surfaceColor{0.62f, 0.05f, 0.06f};
   glm::vec3 lightDirection{0.3f, -0.5f, 0.8f};  // towards the light
@@ -59,6 +62,15 @@ struct ParticleView {
   const gpu::Buffer* wallShade = nullptr;
 };
 
+// The wall's springs to draw as lines (sim::MassSpring::springs(), the grid's id -> slot map).
+struct SpringView {
+  const gpu::Buffer* positions = nullptr;  // vec4 per slot
+  const gpu::Buffer* slotOfId = nullptr;   // uint per particle id
+  const gpu::Buffer* springs = nullptr;    // sim::GpuSpring records
+  std::uint32_t count = 0;
+  glm::vec3 period{0.0f};                  // m on periodic axes, 0 elsewhere
+};
+
 class OffscreenRenderer {
  public:
   OffscreenRenderer(gpu::Context& context, std::uint32_t width, std::uint32_t height);
@@ -70,7 +82,8 @@ class OffscreenRenderer {
   // compute-to-graphics barrier, clear, particles, the surface (drawn with the extractor's
   // indirect arguments; nullptr: no surface), and the copy of the image to host memory.
   void record(gpu::CommandRecorder& rec, const Camera& camera, const FrameOptions& options,
-              const ParticleView& particles, const surface::MarchingCubes* surface);
+              const ParticleView& particles, const surface::MarchingCubes* surface,
+              const SpringView* springs = nullptr);
   // RGBA8 pixels of the last recorded frame (after its submission completed), top row first.
   std::vector<std::uint8_t> readPixels() const;
   // The rendered image (TRANSFER_SRC_OPTIMAL after a frame), for presenting (Swapchain).
@@ -81,7 +94,9 @@ class OffscreenRenderer {
 
  private:
   VkShaderModule module(const char* name);
-  VkDescriptorSet particleSet(const ParticleView& view);
+  // A descriptor set of three storage buffers at bindings 0-2 (particles and springs share
+  // the layout), made once per distinct triple.
+  VkDescriptorSet storageSet(const gpu::Buffer& b0, const gpu::Buffer& b1, const gpu::Buffer& b2);
   void createTargets();
   void createPipelines();
 
@@ -97,8 +112,10 @@ class OffscreenRenderer {
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   VkPipelineLayout particlePipelineLayout_ = VK_NULL_HANDLE, surfacePipelineLayout_ = VK_NULL_HANDLE;
   VkPipeline particlePipeline_ = VK_NULL_HANDLE, surfacePipeline_ = VK_NULL_HANDLE;
+  VkPipelineLayout springPipelineLayout_ = VK_NULL_HANDLE;
+  VkPipeline springPipeline_ = VK_NULL_HANDLE;
   std::vector<VkShaderModule> modules_;
-  std::map<std::tuple<VkBuffer, VkBuffer, VkBuffer>, VkDescriptorSet> particleSets_;
+  std::map<std::tuple<VkBuffer, VkBuffer, VkBuffer>, VkDescriptorSet> storageSets_;
   gpu::Buffer pixels_;
   gpu::Buffer noShade_;  // bound when a view has no wall shade (never read then)
 };
