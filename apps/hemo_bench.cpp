@@ -397,14 +397,8 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
     double stepMs = 0.0;
     for (const auto& [stage, ms] : sim.profileStep(5)) stepMs += ms;
     hemo::render::OffscreenRenderer renderer(ctx, 960, 540);
-    glm::vec3 lo(3e38f), hi(-3e38f);
-    for (const glm::vec4& q : sim.store().readPositions()) {
-      if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) {
-        lo = glm::min(lo, glm::vec3(q));
-        hi = glm::max(hi, glm::vec3(q));
-      }
-    }
-    const hemo::render::Camera camera = hemo::render::Camera::framing(lo, hi, 960.0f / 540.0f);
+    const hemo::render::Camera camera =
+        hemo::render::defaultCamera(sim.store().readPositions(), 960.0f / 540.0f, sim.wallParticles() > 0);
     hemo::render::FrameOptions frame;
     frame.particleRadius = 0.5f * scene.sph.spacing;
     const hemo::render::ParticleView view{&sim.store().live().positions, &sim.store().live().velocities,

@@ -194,17 +194,8 @@ int main(int argc, char** argv) {
       if (!renderer) {
         renderer = std::make_unique<hemo::render::OffscreenRenderer>(ctx, pngWidth, pngHeight);
         frameRec = std::make_unique<hemo::gpu::CommandRecorder>(ctx);
-        glm::vec3 lo(3e38f), hi(-3e38f);
-        for (const glm::vec4& q : sim.store().readPositions()) {
-          if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) {
-            lo = glm::min(lo, glm::vec3(q));
-            hi = glm::max(hi, glm::vec3(q));
-          }
-        }
-        // Vessels run along +x: look across the axis (from -y, a little above), so the cutaway
-        // opens the whole length of the vessel.
-        const glm::vec3 direction = sim.wallParticles() > 0 ? glm::vec3(0.0f, -1.0f, 0.45f) : glm::vec3(0.45f, -1.0f, 0.4f);
-        camera = hemo::render::Camera::framing(lo, hi, float(pngWidth) / float(pngHeight), direction);
+        camera = hemo::render::defaultCamera(sim.store().readPositions(), float(pngWidth) / float(pngHeight),
+                                             sim.wallParticles() > 0);
         frame.fluid = false;  // the surface shows the blood
         frame.wall = true;
         frame.boundary = true;  // the tank or walls, cut open on the camera's side

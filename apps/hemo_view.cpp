@@ -165,16 +165,8 @@ int main(int argc, char** argv) {
     }
 
     // Orbit camera around the particles' box, starting where hemo-run's frames look from.
-    glm::vec3 lo(3e38f), hi(-3e38f);
-    for (const glm::vec4& q : sim.store().readPositions()) {
-      if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) {
-        lo = glm::min(lo, glm::vec3(q));
-        hi = glm::max(hi, glm::vec3(q));
-      }
-    }
-    const bool vessel = sim.wallParticles() > 0;
-    const glm::vec3 start = vessel ? glm::vec3(0.0f, -1.0f, 0.45f) : glm::vec3(0.45f, -1.0f, 0.4f);
-    const hemo::render::Camera framed = hemo::render::Camera::framing(lo, hi, float(width) / float(height), start);
+    const hemo::render::Camera framed =
+        hemo::render::defaultCamera(sim.store().readPositions(), float(width) / float(height), sim.wallParticles() > 0);
     const glm::vec3 toEye = framed.eye - framed.target;
     state.distance = glm::length(toEye);
     state.yaw = std::atan2(toEye.y, toEye.x);
@@ -206,7 +198,7 @@ int main(int argc, char** argv) {
                                                               std::cos(state.pitch) * std::sin(state.yaw),
                                                               std::sin(state.pitch));
       camera.nearPlane = std::max(state.distance * 0.02f, 1e-6f);
-      camera.farPlane = state.distance * 4.0f + glm::length(hi - lo);
+      camera.farPlane = state.distance * 4.0f + 4.0f * glm::length(framed.eye - framed.target);
       rec.begin();
       if (state.surface) sim.recordSurface(rec);
       sim.recordWallShade(rec);

@@ -82,6 +82,18 @@ Camera Camera::framing(glm::vec3 lo, glm::vec3 hi, float aspect, glm::vec3 direc
   return c;
 }
 
+Camera defaultCamera(const std::vector<glm::vec4>& positions, float aspect, bool vessel) {
+  glm::vec3 lo(3e38f), hi(-3e38f);
+  for (const glm::vec4& q : positions) {
+    if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z)) {
+      lo = glm::min(lo, glm::vec3(q));
+      hi = glm::max(hi, glm::vec3(q));
+    }
+  }
+  if (lo.x > hi.x) lo = hi = glm::vec3(0.0f);  // nothing finite: look at the origin
+  return Camera::framing(lo, hi, aspect, vessel ? glm::vec3(0.0f, -1.0f, 0.45f) : glm::vec3(0.45f, -1.0f, 0.4f));
+}
+
 glm::mat4 Camera::view() const { return glm::lookAtRH(eye, target, up); }
 
 glm::mat4 Camera::projection(float aspect) const {

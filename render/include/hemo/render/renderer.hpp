@@ -37,6 +37,11 @@ struct Camera {
   glm::mat4 projection(float aspect) const;
 };
 
+// The camera hemo's frames and viewer start from: framing every finite particle; looking
+// across the vessel's axis (+x) from -y and a little above when `vessel` (so a cutaway opens
+// the vessel's whole length), else from an oblique corner.
+Camera defaultCamera(const std::vector<glm::vec4>& positions, float aspect, bool vessel);
+
 struct FrameOptions {
   bool fluid = true;      // fluid particles
   bool wall = true;       // vessel wall particles
