@@ -64,13 +64,19 @@ void CommandRecorder::wait() {
   check(r, "vkWaitForFences");
 }
 
-void CommandRecorder::bind(const ComputePipeline& pipeline, const DescriptorSet& set, const void* push,
-                           std::uint32_t pushBytes) {
+namespace {
+void checkPushBytes(const ComputePipeline& pipeline, std::uint32_t pushBytes) {
   if (pushBytes != pipeline.pushConstantBytes()) {
     throw std::invalid_argument("push constants for '" + pipeline.name() + "' are " +
                                 std::to_string(pushBytes) + " bytes; the pipeline expects " +
                                 std::to_string(pipeline.pushConstantBytes()));
   }
+}
+}  // namespace
+
+void CommandRecorder::bind(const ComputePipeline& pipeline, const DescriptorSet& set, const void* push,
+                           std::uint32_t pushBytes) {
+  checkPushBytes(pipeline, pushBytes);
   // Rebind only what changed (lavapipe pays for every bind when the command buffer runs).
   if (pipeline.handle() != boundPipeline_) {
     vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, pipeline.handle());
@@ -89,12 +95,10 @@ void CommandRecorder::bind(const ComputePipeline& pipeline, const DescriptorSet&
 
 void CommandRecorder::dispatch(const ComputePipeline& pipeline, const DescriptorSet& set,
                                const void* push, std::uint32_t pushBytes, Groups groups) {
-  if (pushBytes != pipeline.pushConstantBytes()) {
-    throw std::invalid_argument("push constants for '" + pipeline.name() + "' are " +
-                                std::to_string(pushBytes) + " bytes; the pipeline expects " +
-                                std::to_string(pipeline.pushConstantBytes()));
+  if (groups.total() == 0) {
+    checkPushBytes(pipeline, pushBytes);  // a wrong size is an error even when nothing runs
+    return;
   }
-  if (groups.total() == 0) return;
   bind(pipeline, set, push, pushBytes);
   if (gate_) {
     vkCmdDispatchIndirect(cmd_, gate_->args_.handle(), gate_->claim(groups));
