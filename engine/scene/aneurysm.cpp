@@ -1,5 +1,7 @@
 #include "hemo/scene/aneurysm.hpp"
 
+#include "hemo/scene/bifurcation.hpp"
+
 #include "interface/sph.h"
 
 #include <glm/geometric.hpp>
@@ -219,6 +221,7 @@ bool outsideVessel(const AneurysmSpec& a, glm::vec3 point, float margin) {
   const TubeSpec& t = a.tube;
   const glm::dvec3 p(point);
   const double wall = double(t.layers) * t.spacing + margin;
+  if (a.branchLength > 0.0f) return bifurcationDistance(bifurcationGeometry(a), p, double(t.radius) + wall) > 0.0;
   if (!t.periodic && (p.x < t.x0 || p.x > double(t.x0) + t.length)) return true;
   if (axisDistance(t, p) <= innerRadiusAt(a, p.x) + wall) return false;
   return a.sacRadius <= 0.0f || glm::length(p - centreOf(a)) > a.sacRadius + wall;

@@ -24,6 +24,10 @@ struct AneurysmSpec {
   // sac's scales.
   float bulgeRadius = 0.0f;        // m
   float bulgeLength = 0.0f;        // m
+  // A bifurcation instead (hemo/scene/bifurcation.hpp; branchLength > 0): two branches at
+  // +-branchAngle to the axis that bend back and merge again halfway along a periodic tube.
+  float branchAngle = 0.0f;        // rad
+  float branchLength = 0.0f;       // m, each leg
 };
 
 // The inner radius (m) of the vessel at axial position x: the tube's, or on a fusiform
@@ -50,7 +54,8 @@ double sacCentreOffset(double tubeRadius, double sacRadius, double neckWidth);
 AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& spec);
 
 // Whether `p` lies outside the vessel's outer wall surface (by more than `margin` m), in the
-// built geometry: fluid there has left the vessel. A spec with sacRadius 0 is a plain tube.
+// built geometry: fluid there has left the vessel. A spec with sacRadius 0 is a plain tube
+// (or a fusiform aneurysm, or a bifurcation when branchLength > 0).
 bool outsideVessel(const AneurysmSpec& spec, glm::vec3 p, float margin);
 
 // The lumen pressure (Pa) at which the sac's most stretched spring reaches its maximum force

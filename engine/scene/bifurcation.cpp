@@ -1,0 +1,300 @@
+#include "hemo/scene/bifurcation.hpp"
+
+#include "interface/sph.h"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+
+namespace hemo::scene {
+
+namespace {
+
+constexpr double kLinkRadius = 1.5;      // spacings: springs join wall points nearer than this
+constexpr double kMergeRadius = 0.6;     // spacings: a wall point this near a kept one of its layer is dropped
+constexpr double kFillRadius = 0.7;      // spacings: the seams are filled until no point of a layer's surface is farther from its points
+constexpr double kFluidClearance = 0.8;  // spacings: no fluid this near a wall point or a kept fluid point
+constexpr double kGolden = std::numbers::pi * (3.0 - 2.2360679774997896964);  // Fibonacci sphere's turn
+
+// Distance from p to the segment's axis (clamped to its ends: the capsule's distance), over
+// the periodic images along x.
+double capsuleDistance(const BifurcationGeometry::Segment& s, glm::dvec3 p, double period) {
+  const glm::dvec3 d = s.b - s.a;
+  const double len2 = glm::dot(d, d);
+  double best = std::numeric_limits<double>::infinity();
+  for (int k = -1; k <= 1; ++k) {
+    const glm::dvec3 q = p + glm::dvec3(k * period, 0.0, 0.0);
+    const double t = std::clamp(glm::dot(q - s.a, d) / len2, 0.0, 1.0);
+    best = std::min(best, glm::length(q - (s.a + t * d)));
+  }
+  return best;
+}
+
+// Two unit vectors across a segment's direction (the first is +z: every leg lies in the x-y plane).
+void crossBasis(glm::dvec3 d, glm::dvec3& e1, glm::dvec3& e2) {
+  e1 = glm::dvec3(0.0, 0.0, 1.0);
+  e2 = glm::normalize(glm::cross(d, e1));
+}
+
+// Points binned in cubes of `cell` (periodic along x with the given period) for the
+// neighbourhood queries of the builder (all within one cell).
+class Bins {
+ public:
+  Bins(double x0, double period, double cell) : x0_(x0), period_(period), cell_(cell) {
+    nx_ = std::max<long>(1, static_cast<long>(std::floor(period / cell)));
+    cellX_ = period / nx_;
+  }
+  void add(glm::dvec3 p, std::uint32_t id) {
+    points_.push_back(p);
+    ids_.push_back(id);
+    bins_[key(ix(p.x), long(std::floor(p.y / cell_)), long(std::floor(p.z / cell_)))].push_back(std::uint32_t(points_.size() - 1));
+  }
+  glm::dvec3 separation(glm::dvec3 p, glm::dvec3 q) const {
+    glm::dvec3 d = q - p;
+    d.x -= period_ * std::round(d.x / period_);
+    return d;
+  }
+  // Calls f(id, separation) for every binned point nearer than `radius` (<= cell) to p.
+  template <class F>
+  void near(glm::dvec3 p, double radius, F&& f) const {
+    const long cx = ix(p.x), cy = long(std::floor(p.y / cell_)), cz = long(std::floor(p.z / cell_));
+    long xs[3];
+    int nxs = 0;
+    for (long o = -1; o <= 1; ++o) {
+      const long x = ((cx + o) % nx_ + nx_) % nx_;
+      if (std::find(xs, xs + nxs, x) == xs + nxs) xs[nxs++] = x;
+    }
+    for (int a = 0; a < nxs; ++a)
+      for (long y = cy - 1; y <= cy + 1; ++y)
+        for (long z = cz - 1; z <= cz + 1; ++z) {
+          const auto it = bins_.find(key(xs[a], y, z));
+          if (it == bins_.end()) continue;
+          for (std::uint32_t k : it->second) {
+            const glm::dvec3 d = separation(p, points_[k]);
+            if (glm::length(d) < radius) f(ids_[k], d);
+          }
+        }
+  }
+
+ private:
+  long ix(double x) const {
+    const long i = static_cast<long>(std::floor((x - x0_) / cellX_));
+    return ((i % nx_) + nx_) % nx_;
+  }
+  static std::int64_t key(long x, long y, long z) {
+    return (std::int64_t(x) * 2000003 + std::int64_t(y)) * 2000003 + std::int64_t(z);
+  }
+  double x0_, period_, cell_, cellX_;
+  long nx_;
+  std::vector<glm::dvec3> points_;
+  std::vector<std::uint32_t> ids_;
+  std::unordered_map<std::int64_t, std::vector<std::uint32_t>> bins_;
+};
+
+}  // namespace
+
+BifurcationGeometry bifurcationGeometry(const AneurysmSpec& a) {
+  const TubeSpec& t = a.tube;
+  if (!t.periodic) {
+    throw std::invalid_argument("bifurcation: the tube must be periodic along x (the merged flow returns through the seam)");
+  }
+  const double theta = a.branchAngle, len = a.branchLength, dp = t.spacing, L = t.length;
+  if (!std::isfinite(theta) || !(theta > 0.0) || theta > 80.0 * std::numbers::pi / 180.0 + 1e-9) {
+    throw std::invalid_argument("bifurcation: the branch angle must be in (0, 80] degrees");
+  }
+  const double outer = double(t.radius) + t.layers * dp;
+  if (!std::isfinite(len) || 2.0 * len * std::sin(theta) < 2.0 * outer + dp) {
+    throw std::invalid_argument("bifurcation: the branches must be long enough to part at the bends: 2 L sin(angle) >= 2 (R + layers dp) + dp = " +
+                                std::to_string(2.0 * outer + dp) + " m (it is " + std::to_string(2.0 * len * std::sin(theta)) + " m)");
+  }
+  const double span = 2.0 * len * std::cos(theta);
+  if (L - span < 4.0 * dp) {
+    throw std::invalid_argument("bifurcation: the tube must be longer than the loop (2 L cos(angle) = " + std::to_string(span) +
+                                " m) by at least four spacings");
+  }
+  BifurcationGeometry g;
+  g.period = L;
+  const glm::dvec3 split(double(t.x0) + 0.5 * (L - span), t.centreYZ.x, t.centreYZ.y);
+  const glm::dvec3 merge = split + glm::dvec3(span, 0.0, 0.0);
+  const glm::dvec3 up = split + len * glm::dvec3(std::cos(theta), std::sin(theta), 0.0);
+  const glm::dvec3 down = split + len * glm::dvec3(std::cos(theta), -std::sin(theta), 0.0);
+  g.segments = {{merge, split + glm::dvec3(L, 0.0, 0.0)}, {split, up}, {up, merge}, {split, down}, {down, merge}};
+  g.joints = {split, up, merge, down};
+  return g;
+}
+
+double bifurcationDistance(const BifurcationGeometry& g, glm::dvec3 p, double radius) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const auto& s : g.segments) best = std::min(best, capsuleDistance(s, p, g.period));
+  return best - radius;
+}
+
+BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
+  buildTube(a.tube);  // checks the tube's own parameters
+  const TubeSpec& t = a.tube;
+  BifurcationBuild b;
+  b.geometry = bifurcationGeometry(a);
+  const BifurcationGeometry& g = b.geometry;
+  const double dp = t.spacing, L = t.length, x0 = t.x0, R = t.radius;
+  auto wrap = [&](glm::dvec3 p) {
+    p.x -= L * std::floor((p.x - x0) / L);
+    return p;
+  };
+  auto inside = [&](glm::dvec3 p, double r) { return bifurcationDistance(g, p, r) < -1e-6 * dp; };
+
+  // Wall candidates per layer: the legs' rings, then the joints' spheres.
+  std::vector<glm::dvec3> pos, inward;
+  Bins wallBins(x0, L, kLinkRadius * dp);
+  for (std::uint32_t l = 0; l < t.layers; ++l) {
+    const double r = R + (l + 0.5) * dp;
+    Bins layerBins(x0, L, kLinkRadius * dp);
+    double merge = kMergeRadius;
+    auto offer = [&](glm::dvec3 p, glm::dvec3 in, std::uint8_t element) {
+      if (inside(p, r)) return;
+      p = wrap(p);
+      bool crowded = false;
+      layerBins.near(p, merge * dp, [&](std::uint32_t, glm::dvec3) { crowded = true; });
+      if (crowded) return;
+      const auto id = std::uint32_t(pos.size());
+      layerBins.add(p, id);
+      wallBins.add(p, id);
+      pos.push_back(p);
+      inward.push_back(in);
+      b.element.push_back(element);
+      b.layer.push_back(std::uint8_t(l));
+    };
+    for (std::size_t e = 0; e < g.segments.size(); ++e) {
+      const auto& s = g.segments[e];
+      const double len = glm::length(s.b - s.a);
+      const glm::dvec3 d = (s.b - s.a) / len;
+      glm::dvec3 e1, e2;
+      crossBasis(d, e1, e2);
+      const auto rings = std::max(1L, std::lround(len / dp));
+      const auto around = std::max(8L, std::lround(2.0 * std::numbers::pi * r / dp));
+      for (long i = 0; i < rings; ++i)
+        for (long k = 0; k < around; ++k) {
+          const double phi = 2.0 * std::numbers::pi * (k + 0.5 * (i % 2)) / around;
+          const glm::dvec3 radial = std::cos(phi) * e1 + std::sin(phi) * e2;
+          offer(s.a + (i + 0.5) * len / rings * d + r * radial, -radial, std::uint8_t(e));
+        }
+    }
+    const auto count = std::max(8L, std::lround(4.0 * std::numbers::pi * r * r / (dp * dp)));
+    for (std::size_t j = 0; j < g.joints.size(); ++j)
+      for (long k = 0; k < count; ++k) {
+        const double z = 1.0 - (2.0 * k + 1.0) / count, rho = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = kGolden * k;
+        const glm::dvec3 dir(rho * std::cos(phi), rho * std::sin(phi), z);
+        offer(g.joints[j] + r * dir, -dir, std::uint8_t(g.segments.size() + j));
+      }
+    // Seams: where two elements cut each other, each loses its points inside the other and
+    // the last kept rows can be a spacing apart across the seam. Samples of the layer's
+    // surface every quarter spacing that are farther than kFillRadius dp from every kept
+    // point become wall points too (greedily, in sample order).
+    merge = kFillRadius;
+    for (std::size_t e = 0; e < g.segments.size(); ++e) {
+      const auto& s = g.segments[e];
+      const double len = glm::length(s.b - s.a);
+      const glm::dvec3 d = (s.b - s.a) / len;
+      glm::dvec3 e1, e2;
+      crossBasis(d, e1, e2);
+      const auto steps = std::max(1L, std::lround(4.0 * len / dp));
+      const auto around = std::max(32L, std::lround(8.0 * std::numbers::pi * r / dp));
+      for (long i = 0; i <= steps; ++i)
+        for (long k = 0; k < around; ++k) {
+          const double phi = 2.0 * std::numbers::pi * k / around;
+          const glm::dvec3 radial = std::cos(phi) * e1 + std::sin(phi) * e2;
+          offer(s.a + (double(i) * len / steps) * d + r * radial, -radial, std::uint8_t(e));
+        }
+    }
+  }
+  b.wall = static_cast<std::uint32_t>(pos.size());
+
+  // Springs between every pair of wall points nearer than kLinkRadius dp (in id order).
+  sim::SpringNetwork& net = b.network;
+  std::vector<std::vector<std::uint32_t>> adjacent(b.wall);
+  for (std::uint32_t i = 0; i < b.wall; ++i) {
+    std::vector<std::pair<std::uint32_t, double>> near;
+    wallBins.near(pos[i], kLinkRadius * dp, [&](std::uint32_t j, glm::dvec3 d) {
+      if (j > i) near.emplace_back(j, glm::length(d));
+    });
+    std::sort(near.begin(), near.end());
+    for (const auto& [j, length] : near) {
+      net.springs.push_back({i, j, float(length), t.stiffness, t.damping, t.maxForce});
+      adjacent[i].push_back(j);
+      adjacent[j].push_back(i);
+    }
+  }
+  // Frames: the pair of same-layer spring neighbours whose cross product best follows the
+  // inward normal.
+  net.points.resize(b.wall);
+  for (std::uint32_t i = 0; i < b.wall; ++i) {
+    sim::WallPoint& w = net.points[i];
+    w.mass = t.pointMass;
+    w.anchored = false;
+    double best = 0.5;  // at least sin(30 deg) along the normal, else keep the built normal
+    for (std::uint32_t pa : adjacent[i])
+      for (std::uint32_t pb : adjacent[i]) {
+        if (pa == pb || b.layer[pa] != b.layer[i] || b.layer[pb] != b.layer[i]) continue;
+        const glm::dvec3 ea = wallBins.separation(pos[i], pos[pa]), eb = wallBins.separation(pos[i], pos[pb]);
+        const double score = glm::dot(glm::cross(ea, eb), inward[i]) / (glm::length(ea) * glm::length(eb));
+        if (score > best) best = score, w.frameA = pa, w.frameB = pb;
+      }
+  }
+
+  // Fluid: rings per slice along every leg, then shells about every joint.
+  ParticleSet& set = b.particles;
+  for (std::uint32_t i = 0; i < b.wall; ++i) set.add(glm::vec3(pos[i]), t.fluidMass, float(HEMO_KIND_WALL), glm::vec3(inward[i]));
+  Bins fluidBins(x0, L, kLinkRadius * dp);
+  std::uint32_t fluid = 0;
+  auto offerFluid = [&](glm::dvec3 p) {
+    p = wrap(p);
+    bool crowded = false;
+    auto hit = [&](std::uint32_t, glm::dvec3) { crowded = true; };
+    wallBins.near(p, kFluidClearance * dp, hit);
+    if (!crowded) fluidBins.near(p, kFluidClearance * dp, hit);
+    if (crowded) return;
+    fluidBins.add(p, fluid++);
+    set.add(glm::vec3(p), t.fluidMass, float(HEMO_KIND_FLUID));
+  };
+  const auto K = std::max(1L, std::lround(R / dp));
+  const double dr = R / K;
+  for (const auto& s : g.segments) {
+    const double len = glm::length(s.b - s.a);
+    const glm::dvec3 d = (s.b - s.a) / len;
+    glm::dvec3 e1, e2;
+    crossBasis(d, e1, e2);
+    const auto slices = std::max(1L, std::lround(len / dp));
+    for (long j = 0; j < slices; ++j)
+      for (long k = 0; k < K; ++k) {
+        const double r = (k + 0.5) * dr;
+        const auto count = std::max(1L, std::lround(2.0 * std::numbers::pi * r / dr));
+        for (long m = 0; m < count; ++m) {
+          const double phi = 2.0 * std::numbers::pi * (m + 0.5 * (j % 2)) / count;
+          offerFluid(s.a + (j + 0.5) * len / slices * d + r * (std::cos(phi) * e1 + std::sin(phi) * e2));
+        }
+      }
+  }
+  for (const glm::dvec3& c : g.joints)
+    for (long k = 0; k < K; ++k) {
+      const double S = (k + 0.5) * dr;
+      const auto count = std::max(1L, std::lround(4.0 * std::numbers::pi * S * S / (dr * dr)));
+      for (long m = 0; m < count; ++m) {
+        const double z = 1.0 - (2.0 * m + 1.0) / count, rho = std::sqrt(std::max(0.0, 1.0 - z * z));
+        const double phi = kGolden * m + k;
+        offerFluid(c + S * glm::dvec3(rho * std::cos(phi), rho * std::sin(phi), z));
+      }
+    }
+  set.fluid = fluid;
+  set.boundary = 0;
+  set.numberIds();
+  net.validate();
+  return b;
+}
+
+}  // namespace hemo::scene
