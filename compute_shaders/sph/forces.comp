@@ -112,7 +112,11 @@ void main() {
       const vec3 nrm = normals[j].xyz;
       const float x = dot(d, nrm);
       const float y = length(d - x * nrm);
-      if (x < cutoff && y < wallSpacing && pj.w > 0.0) {  // detached wall particles (no SPH mass) do not repel
+      // In front of the wall particle's plane up to D, and behind it by less than dp - D: a
+      // particle farther behind is within D of the next layer, which takes over; fluid on the
+      // far side of a thin part of the wall (the blade between a bifurcation's branches) is not
+      // pushed through it. Detached wall particles (no SPH mass) do not repel.
+      if (x < cutoff && x > cutoff - wallSpacing && y < wallSpacing && pj.w > 0.0) {
         const float w = 1.0 - y / wallSpacing;
         // r = x / 2h, kept >= 1e-3 so a particle at (or behind) the wall plane is pushed out
         // with a large but finite force.

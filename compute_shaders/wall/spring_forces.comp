@@ -66,7 +66,8 @@ vec3 hemo_fluid_reaction(uint w) {
     a += (xw.w * twoMu * invRhoFW * dot(d, gradW) / (r2 + etaSq)) * (velocities[f].xyz - vw);
     const float x = dot(d, nrm);
     const float y = length(d - x * nrm);
-    if (x < cutoff && y < wallSpacing && xw.w > 0.0) {  // detached particles (no SPH mass) do not repel
+    // The fluid pass's condition (sph/forces.comp): within D in front, less than dp - D behind.
+    if (x < cutoff && x > cutoff - wallSpacing && y < wallSpacing && xw.w > 0.0) {
       const float q = max(x / (2.0 * pp.h), 1.0e-3);
       a += nrm * (psi * (1.0 - q) / sqrt(q) * (1.0 - y / wallSpacing)) * accel[f].w;
     }

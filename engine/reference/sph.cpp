@@ -172,7 +172,9 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
         const double x = glm::dot(d, pj.normal);
         const double y = glm::length(d - x * pj.normal);
         glm::dvec3 push(0.0);
-        if (x < m.repulsionCutoff && y < m.wallSpacing && pj.mass > 0.0) {
+        // Within D in front of the wall particle's plane, less than dp - D behind it (farther
+        // behind, the next layer takes over; fluid beyond a thin wall is not pushed through).
+        if (x < m.repulsionCutoff && x > m.repulsionCutoff - m.wallSpacing && y < m.wallSpacing && pj.mass > 0.0) {
           const double w = 1.0 - y / m.wallSpacing;
           const double q = std::max(x / (2.0 * m.h), 1.0e-3);
           push = pj.normal * (m.psi * (1.0 - q) / std::sqrt(q) * w);
