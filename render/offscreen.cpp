@@ -91,7 +91,13 @@ Camera defaultCamera(const std::vector<glm::vec4>& positions, float aspect, bool
     }
   }
   if (lo.x > hi.x) lo = hi = glm::vec3(0.0f);  // nothing finite: look at the origin
-  return Camera::framing(lo, hi, aspect, vessel ? glm::vec3(0.0f, -1.0f, 0.45f) : glm::vec3(0.45f, -1.0f, 0.4f));
+  glm::vec3 from(0.45f, -1.0f, 0.4f);
+  if (vessel) {
+    // Across the axis from the side, or from above when the vessel spreads wider across y
+    // than it stands in z (a bifurcation's branches would hide each other from the side).
+    from = hi.y - lo.y > 1.3f * (hi.z - lo.z) ? glm::vec3(0.0f, -0.35f, 1.0f) : glm::vec3(0.0f, -1.0f, 0.45f);
+  }
+  return Camera::framing(lo, hi, aspect, from);
 }
 
 glm::mat4 Camera::view() const { return glm::lookAtRH(eye, target, up); }

@@ -20,6 +20,10 @@ constexpr double kLinkRadius = 1.5;      // spacings: springs join wall points n
 constexpr double kMergeRadius = 0.6;     // spacings: a wall point this near a kept one of its layer is dropped
 constexpr double kFillRadius = 0.7;      // spacings: the seams are filled until no point of a layer's surface is farther from its points
 constexpr double kFluidClearance = 0.8;  // spacings: no fluid this near a wall point or a kept fluid point
+// The element an element's mirror image across the x-z plane through the axis belongs to
+// (segments: parent, split -> +bend, +bend -> merge, split -> -bend, -bend -> merge; then
+// the joints split, +bend, merge, -bend).
+constexpr std::uint8_t kMirrorElement[9] = {0, 3, 4, 1, 2, 5, 8, 7, 6};
 constexpr double kGolden = std::numbers::pi * (3.0 - 2.2360679774997896964);  // Fibonacci sphere's turn
 
 // Distance from p to the segment's axis (clamped to its ends: the capsule's distance), over
@@ -109,7 +113,7 @@ BifurcationGeometry bifurcationGeometry(const AneurysmSpec& a) {
     throw std::invalid_argument("bifurcation: the branch angle must be in (0, 80] degrees");
   }
   const double outer = double(t.radius) + t.layers * dp;
-  if (!std::isfinite(len) || 2.0 * len * std::sin(theta) < 2.0 * outer + dp) {
+  if (!std::isfinite(len) || 2.0 * len * std::sin(theta) < (2.0 * outer + dp) * (1.0 - 1e-6)) {
     throw std::invalid_argument("bifurcation: the branches must be long enough to part at the bends: 2 L sin(angle) >= 2 (R + layers dp) + dp = " +
                                 std::to_string(2.0 * outer + dp) + " m (it is " + std::to_string(2.0 * len * std::sin(theta)) + " m)");
   }
@@ -147,20 +151,17 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
     return p;
   };
   auto inside = [&](glm::dvec3 p, double r) { return bifurcationDistance(g, p, r) < -1e-6 * dp; };
+  const double cy = t.centreYZ.x;
+  auto mirror = [&](glm::dvec3 p) { return glm::dvec3(p.x, 2.0 * cy - p.y, p.z); };
 
   // Wall candidates per layer: the legs' rings, then the joints' spheres.
   std::vector<glm::dvec3> pos, inward;
+  std::vector<std::uint32_t> mirrorOf;  // each wall point's mirror image (itself on the plane)
   Bins wallBins(x0, L, kLinkRadius * dp);
   for (std::uint32_t l = 0; l < t.layers; ++l) {
     const double r = R + (l + 0.5) * dp;
     Bins layerBins(x0, L, kLinkRadius * dp);
-    double merge = kMergeRadius;
-    auto offer = [&](glm::dvec3 p, glm::dvec3 in, std::uint8_t element) {
-      if (inside(p, r)) return;
-      p = wrap(p);
-      bool crowded = false;
-      layerBins.near(p, merge * dp, [&](std::uint32_t, glm::dvec3) { crowded = true; });
-      if (crowded) return;
+    auto keep = [&](glm::dvec3 p, glm::dvec3 in, std::uint8_t element) {
       const auto id = std::uint32_t(pos.size());
       layerBins.add(p, id);
       wallBins.add(p, id);
@@ -169,7 +170,61 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
       b.element.push_back(element);
       b.layer.push_back(std::uint8_t(l));
     };
-    for (std::size_t e = 0; e < g.segments.size(); ++e) {
+    // The wall is mirror-symmetric across the x-z plane through the axis (an asymmetric
+    // sampling started the loop with a circulation that sent three times as much flow through
+    // one branch as through the other for the whole run: a loop's circulation decays only on
+    // the viscous time R^2 / nu, about a second). Candidates come from the upper half (the
+    // parent, the upper legs, the split, the upper bend, the merge); one that is accepted is
+    // kept with its mirror image. A candidate nearer the plane than half the merge radius
+    // would crowd its own image: it moves onto the plane, along z on its element's surface,
+    // and is kept alone.
+    double merge = kMergeRadius;
+    auto offer = [&](glm::dvec3 p, glm::dvec3 in, std::uint8_t element) {
+      const bool single = std::abs(p.y - cy) < 0.5 * merge * dp;
+      if (single) {
+        // On the plane y = cy: (x - c.x)^2 + (z - c.z)^2 + ... = r^2 for the element's axis
+        // (a segment in the x-y plane) or centre (a joint).
+        double reach2;
+        glm::dvec3 centre;
+        if (element < 5) {
+          const auto& seg = g.segments[element];
+          const glm::dvec3 d = glm::normalize(seg.b - seg.a);
+          const glm::dvec3 q(p.x - seg.a.x, cy - seg.a.y, 0.0);
+          reach2 = r * r - (q.x * q.x + q.y * q.y) + std::pow(q.x * d.x + q.y * d.y, 2.0);
+          centre = seg.a;
+        } else {
+          centre = g.joints[element - 5];
+          reach2 = r * r - std::pow(p.x - centre.x, 2.0) - std::pow(cy - centre.y, 2.0);
+        }
+        if (!(reach2 >= 0.0)) return;
+        p = glm::dvec3(p.x, cy, centre.z + std::copysign(std::sqrt(reach2), p.z - centre.z));
+        if (element < 5) {
+          const auto& seg = g.segments[element];
+          const glm::dvec3 d = glm::normalize(seg.b - seg.a), q = p - seg.a;
+          in = -glm::normalize(q - glm::dot(q, d) * d);
+        } else {
+          in = -glm::normalize(p - centre);
+        }
+      }
+      if (inside(p, r)) return;
+      p = wrap(p);
+      bool crowded = false;
+      layerBins.near(p, merge * dp, [&](std::uint32_t, glm::dvec3) { crowded = true; });
+      if (crowded) return;
+      const auto id = std::uint32_t(pos.size());
+      if (single) {
+        in.y = 0.0;  // on the plane: a mirror-invariant normal
+        in = glm::normalize(in);
+        keep(p, in, element);
+        mirrorOf.push_back(id);
+      } else {
+        keep(p, in, element);
+        keep(mirror(p), glm::dvec3(in.x, -in.y, in.z), kMirrorElement[element]);
+        mirrorOf.push_back(id + 1);
+        mirrorOf.push_back(id);
+      }
+    };
+    for (std::size_t e = 0; e < 3; ++e) {
       const auto& s = g.segments[e];
       const double len = glm::length(s.b - s.a);
       const glm::dvec3 d = (s.b - s.a) / len;
@@ -185,7 +240,7 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
         }
     }
     const auto count = std::max(8L, std::lround(4.0 * std::numbers::pi * r * r / (dp * dp)));
-    for (std::size_t j = 0; j < g.joints.size(); ++j)
+    for (std::size_t j = 0; j < 3; ++j)
       for (long k = 0; k < count; ++k) {
         const double z = 1.0 - (2.0 * k + 1.0) / count, rho = std::sqrt(std::max(0.0, 1.0 - z * z));
         const double phi = kGolden * k;
@@ -197,7 +252,7 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
     // surface every quarter spacing that are farther than kFillRadius dp from every kept
     // point become wall points too (greedily, in sample order).
     merge = kFillRadius;
-    for (std::size_t e = 0; e < g.segments.size(); ++e) {
+    for (std::size_t e = 0; e < 3; ++e) {
       const auto& s = g.segments[e];
       const double len = glm::length(s.b - s.a);
       const glm::dvec3 d = (s.b - s.a) / len;
@@ -231,20 +286,33 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
     }
   }
   // Frames: the pair of same-layer spring neighbours whose cross product best follows the
-  // inward normal.
+  // inward normal, chosen for the first point of each mirror pair; its image takes the images
+  // of the pair in the other order (a reflection turns the cross product's sense), so the
+  // normals the GPU computes from the frames stay mirror images. A point on the plane takes a
+  // neighbour and its image (their cross product lies in the plane).
   net.points.resize(b.wall);
   for (std::uint32_t i = 0; i < b.wall; ++i) {
     sim::WallPoint& w = net.points[i];
     w.mass = t.pointMass;
     w.anchored = false;
-    double best = 0.5;  // at least sin(30 deg) along the normal, else keep the built normal
+    if (mirrorOf[i] < i) continue;  // the image of a point already framed
+    const bool onPlane = mirrorOf[i] == i;
+    // At least sin(30 deg) along the normal (else the point keeps its built normal); on the
+    // plane, where only mirror pairs qualify, any pair on the inward side.
+    double best = onPlane ? 0.0 : 0.5;
     for (std::uint32_t pa : adjacent[i])
       for (std::uint32_t pb : adjacent[i]) {
         if (pa == pb || b.layer[pa] != b.layer[i] || b.layer[pb] != b.layer[i]) continue;
+        if (onPlane && pb != mirrorOf[pa]) continue;
         const glm::dvec3 ea = wallBins.separation(pos[i], pos[pa]), eb = wallBins.separation(pos[i], pos[pb]);
         const double score = glm::dot(glm::cross(ea, eb), inward[i]) / (glm::length(ea) * glm::length(eb));
         if (score > best) best = score, w.frameA = pa, w.frameB = pb;
       }
+    if (!onPlane && w.frameA != sim::WallPoint::kNoFrame) {
+      sim::WallPoint& image = net.points[mirrorOf[i]];
+      image.frameA = mirrorOf[w.frameB];
+      image.frameB = mirrorOf[w.frameA];
+    }
   }
 
   // Fluid: rings per slice along every leg, then shells about every joint.
@@ -252,36 +320,67 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
   for (std::uint32_t i = 0; i < b.wall; ++i) set.add(glm::vec3(pos[i]), t.fluidMass, float(HEMO_KIND_WALL), glm::vec3(inward[i]));
   Bins fluidBins(x0, L, kLinkRadius * dp);
   std::uint32_t fluid = 0;
+  // Mirror-symmetric as the wall: candidates from the upper half, each kept with its image,
+  // those nearer the plane than half the clearance moved onto it and kept alone.
   auto offerFluid = [&](glm::dvec3 p) {
+    const bool single = std::abs(p.y - cy) < 0.5 * kFluidClearance * dp;
+    if (single) p.y = cy;
+    if (!(bifurcationDistance(g, p, R) < 0.0)) return;
     p = wrap(p);
     bool crowded = false;
     auto hit = [&](std::uint32_t, glm::dvec3) { crowded = true; };
     wallBins.near(p, kFluidClearance * dp, hit);
     if (!crowded) fluidBins.near(p, kFluidClearance * dp, hit);
     if (crowded) return;
-    fluidBins.add(p, fluid++);
-    set.add(glm::vec3(p), t.fluidMass, float(HEMO_KIND_FLUID));
+    for (const glm::dvec3& q : {p, mirror(p)}) {
+      fluidBins.add(q, fluid++);
+      set.add(glm::vec3(q), t.fluidMass, float(HEMO_KIND_FLUID));
+      if (single) break;
+    }
   };
+  // Each leg fills its own part of the lumen (slices overlapping at the joints started the
+  // fluid 14% dense there, and the bends' outer wedges 25% thin): the parts meet at the miter
+  // planes of the joints (normal d_in + d_out) and, for the upper legs, at the mirror plane.
+  // Its slices run on past the leg's ends into the wedges, clipped by the miters and the lumen.
+  const glm::dvec3 xAxis(1.0, 0.0, 0.0), yAxis(0.0, 1.0, 0.0);
+  const glm::dvec3 up = glm::normalize(g.segments[1].b - g.segments[1].a), down = glm::normalize(g.segments[2].b - g.segments[2].a);
+  const glm::dvec3 splitMiter = glm::normalize(xAxis + up), mergeMiter = glm::normalize(down + xAxis);
+  struct Cut {
+    glm::dvec3 at, normal;  // keeps dot(p - at, normal) >= 0
+  };
+  const glm::dvec3 centre(0.0, cy, 0.0);
+  const std::vector<Cut> cuts[3] = {
+      {{g.joints[2], mergeMiter}, {g.joints[0] + L * xAxis, -splitMiter}},
+      {{g.joints[0], splitMiter}, {g.joints[1], -xAxis}, {centre, yAxis}},
+      {{g.joints[1], xAxis}, {g.joints[2], -mergeMiter}, {centre, yAxis}}};
   const auto K = std::max(1L, std::lround(R / dp));
   const double dr = R / K;
-  for (const auto& s : g.segments) {
+  const double overhang = R * std::tan(std::min(double(a.branchAngle), 1.4)) + dp;
+  for (std::size_t e = 0; e < 3; ++e) {
+    const auto& s = g.segments[e];
     const double len = glm::length(s.b - s.a);
     const glm::dvec3 d = (s.b - s.a) / len;
     glm::dvec3 e1, e2;
     crossBasis(d, e1, e2);
     const auto slices = std::max(1L, std::lround(len / dp));
-    for (long j = 0; j < slices; ++j)
+    const long extra = static_cast<long>(std::ceil(overhang / (len / slices)));
+    for (long j = -extra; j < slices + extra; ++j)
       for (long k = 0; k < K; ++k) {
         const double r = (k + 0.5) * dr;
         const auto count = std::max(1L, std::lround(2.0 * std::numbers::pi * r / dr));
         for (long m = 0; m < count; ++m) {
-          const double phi = 2.0 * std::numbers::pi * (m + 0.5 * (j % 2)) / count;
-          offerFluid(s.a + (j + 0.5) * len / slices * d + r * (std::cos(phi) * e1 + std::sin(phi) * e2));
+          const double phi = 2.0 * std::numbers::pi * (m + 0.5 * ((j + extra) % 2)) / count;
+          const glm::dvec3 p = s.a + (j + 0.5) * len / slices * d + r * (std::cos(phi) * e1 + std::sin(phi) * e2);
+          bool mine = true;
+          for (const Cut& c : cuts[e]) mine = mine && glm::dot(p - c.at, c.normal) >= (c.at == centre ? -0.5 * kFluidClearance * dp : 0.0);
+          if (mine) offerFluid(p);
         }
       }
   }
-  for (const glm::dvec3& c : g.joints)
+  // Whatever gaps are left (the rounded outer side of the bends): shells about the joints.
+  for (std::size_t j = 0; j < 3; ++j)
     for (long k = 0; k < K; ++k) {
+      const glm::dvec3 c = g.joints[j];
       const double S = (k + 0.5) * dr;
       const auto count = std::max(1L, std::lround(4.0 * std::numbers::pi * S * S / (dr * dr)));
       for (long m = 0; m < count; ++m) {

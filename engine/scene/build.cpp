@@ -1,5 +1,6 @@
 #include "hemo/scene/build.hpp"
 
+#include "hemo/scene/bifurcation.hpp"
 #include "hemo/scene/fusiform.hpp"
 
 #include <stdexcept>
@@ -35,7 +36,11 @@ AneurysmSpec vesselSpec(const Vessel& v, const sim::SphSettings& fluid) {
     a.bulgeRadius = v.bulgeRadius;
     a.bulgeLength = v.bulgeLength;
   }
-  if (v.shape != Vessel::Shape::Tube) {
+  if (v.shape == Vessel::Shape::Bifurcation) {
+    a.branchAngle = v.branchAngle;
+    a.branchLength = v.branchLength;
+  }
+  if (v.shape == Vessel::Shape::SaccularAneurysm || v.shape == Vessel::Shape::FusiformAneurysm) {
     a.sacStiffnessScale = v.sacStiffnessScale;
     a.sacStrengthScale = v.sacStrengthScale;
   }
@@ -55,6 +60,11 @@ SceneBuild buildScene(const Scene& s) {
         out.wall = b.wall;
       } else if (s.vessel->shape == Vessel::Shape::FusiformAneurysm) {
         FusiformBuild b = buildFusiformAneurysm(spec);
+        set = std::move(b.particles);
+        out.network = std::move(b.network);
+        out.wall = b.wall;
+      } else if (s.vessel->shape == Vessel::Shape::Bifurcation) {
+        BifurcationBuild b = buildBifurcation(spec);
         set = std::move(b.particles);
         out.network = std::move(b.network);
         out.wall = b.wall;

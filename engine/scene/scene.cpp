@@ -1,6 +1,7 @@
 #include "hemo/scene/scene.hpp"
 
 #include "hemo/scene/aneurysm.hpp"
+#include "hemo/scene/bifurcation.hpp"
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/tube.hpp"
 
@@ -11,6 +12,7 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <numbers>
 #include <sstream>
 
 namespace hemo::scene {
@@ -81,7 +83,7 @@ const std::vector<Field>& schema() {
        }},
       {"vessel", Kind::Section, "", 0, 0, false, Json::object(), "A vessel wall of wall particles joined by springs, filled with fluid; its axis runs along +x. Omit it for scenes without walls (no spring stage runs).", {},
        {
-           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, tube bulging all round halfway along, or none.", {"none", "tube", "saccular_aneurysm", "fusiform_aneurysm"}},
+           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, tube bulging all round halfway along, a bifurcation (two branches that split off and merge again halfway along a periodic tube), or none.", {"none", "tube", "saccular_aneurysm", "fusiform_aneurysm", "bifurcation"}},
            {"start_m", Kind::Vec3, "m", -1e6, 1e6, false, Json::array({0.0, 0.0, 0.0}), "Start of the axis. With a periodic x axis the tube spans the domain: start x = domain min x."},
            {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length along +x (with a periodic x axis: the domain's period)."},
            {"radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Inner radius; the wall's layers lie at radius + (l + 1/2) dp."},
@@ -99,6 +101,8 @@ const std::vector<Field>& schema() {
            {"neck_width_m", Kind::Number, "m", 0, 1e3, false, 0.0, "saccular_aneurysm: width of the opening between tube and sac."},
            {"bulge_radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "fusiform_aneurysm: inner radius at the bulge's middle (r(x) = R + (Rb - R) cos^2(pi (x - xc) / Lb))."},
            {"bulge_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "fusiform_aneurysm: axial length Lb of the bulge, centred halfway along the tube."},
+           {"branch_angle_deg", Kind::Number, "deg", 0, 80, true, 30.0, "bifurcation: angle of each branch to the parent's axis, in the x-y plane (the branches leave at +-angle and come back at -+angle)."},
+           {"branch_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "bifurcation: length of each leg (split to bend, bend to merge); the loop spans 2 L cos(angle) along x, centred on the tube, and its bends lie L sin(angle) off the axis."},
            {"sac_stiffness_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "Aneurysms: the sac's or bulge's springs' stiffness / the tube's."},
            {"sac_strength_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "Aneurysms: the sac's or bulge's springs' maximum force / the tube's."},
            {"time_step_factor", Kind::Number, "1", 0, 1, true, 0.1, "The wall's time-step limit: dt <= factor sqrt(m / sum k) at every wall point. Symplectic Euler is stable up to 1 (a spring network's highest frequency is at most sqrt(2 sum k / m)); RK2 midpoint amplifies an undamped spring by about 1 + (omega dt)^4 / 8 per step and relies on the springs' damping, so keep it small there."},
@@ -343,14 +347,15 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   auto given = [&](const char* key) { return raw.contains(key); };
   if (shape == "none") {
     for (auto it = raw.begin(); it != raw.end(); ++it) {
-      if (it.key() != "shape") c.fail("vessel." + it.key(), "is set but vessel.shape is not (\"tube\", \"saccular_aneurysm\" or \"fusiform_aneurysm\")");
+      if (it.key() != "shape") c.fail("vessel." + it.key(), "is set but vessel.shape is not (\"tube\", \"saccular_aneurysm\", \"fusiform_aneurysm\" or \"bifurcation\")");
     }
     return;
   }
   Vessel w;
   w.shape = shape == "tube"                ? Vessel::Shape::Tube
             : shape == "saccular_aneurysm" ? Vessel::Shape::SaccularAneurysm
-                                           : Vessel::Shape::FusiformAneurysm;
+            : shape == "fusiform_aneurysm" ? Vessel::Shape::FusiformAneurysm
+                                           : Vessel::Shape::Bifurcation;
   w.start = vec3(v["start_m"]);
   w.length = v["length_m"].get<float>();
   w.radius = v["radius_m"].get<float>();
@@ -366,6 +371,8 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   w.sacStrengthScale = v["sac_strength_scale"].get<float>();
   w.bulgeRadius = v["bulge_radius_m"].get<float>();
   w.bulgeLength = v["bulge_length_m"].get<float>();
+  w.branchAngle = float(v["branch_angle_deg"].get<double>() * std::numbers::pi / 180.0);
+  w.branchLength = v["branch_length_m"].get<float>();
   w.timeStepFactor = v["time_step_factor"].get<float>();
   for (const char* key : {"length_m", "radius_m", "point_mass_kg"}) {
     if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
@@ -389,7 +396,12 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
     if (given(key) && !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "must be positive");
   }
   if (!(w.poissonRatio < 0.5f)) c.fail("vessel.poisson_ratio", "must be below 0.5 (an incompressible membrane has no finite hoop stiffness here)");
-  if (w.shape == Vessel::Shape::Tube) {
+  if (w.shape != Vessel::Shape::Bifurcation) {
+    for (const char* key : {"branch_angle_deg", "branch_length_m"}) {
+      if (given(key)) c.fail(std::string("vessel.") + key, "only applies to a bifurcation (vessel.shape \"bifurcation\")");
+    }
+  }
+  if (w.shape == Vessel::Shape::Tube || w.shape == Vessel::Shape::Bifurcation) {
     for (const char* key : {"sac_radius_m", "neck_width_m", "sac_stiffness_scale", "sac_strength_scale", "bulge_radius_m", "bulge_length_m"}) {
       if (given(key)) c.fail(std::string("vessel.") + key, "only applies to an aneurysm (vessel.shape \"saccular_aneurysm\" or \"fusiform_aneurysm\")");
     }
@@ -426,6 +438,20 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
     if (hw >= w.radius || hw >= w.sacRadius) c.fail("vessel.neck_width_m", "must be narrower than the tube's and the sac's diameters");
     top = float(sacCentreOffset(w.radius, w.sacRadius, w.neckWidth)) + w.sacRadius + room;
     halfWidth = std::max(halfWidth, w.sacRadius + room);
+  }
+  if (w.shape == Vessel::Shape::Bifurcation) {
+    if (!given("branch_length_m") || !(w.branchLength > 0.0f)) c.fail("vessel.branch_length_m", "is required (and positive) for a bifurcation");
+    if (!w.periodic) c.fail("domain.periodic", "a bifurcation needs a periodic x axis (the merged flow returns through the seam)");
+    try {
+      const BifurcationGeometry g = bifurcationGeometry(vesselSpec(w, s.sph));
+      halfWidth = float(g.joints[1].y - w.start.y) + w.radius + room;
+      if (w.inflow && float(g.joints[0].x) - w.radius < w.inflow->zoneEnd) {
+        c.fail("vessel.inflow.zone_length_m", "the inflow zone (to x = " + fmt(w.inflow->zoneEnd) + " m) must end a radius before the split at x = " +
+                                                  fmt(g.joints[0].x) + " m (lengthen the tube or shorten the branches)");
+      }
+    } catch (const std::invalid_argument& e) {
+      c.fail("vessel", e.what());
+    }
   }
   const Box need{glm::vec3(w.start.x, w.start.y - halfWidth, w.start.z - w.radius - room),
                  glm::vec3(w.start.x + w.length, w.start.y + halfWidth, w.start.z + top)};

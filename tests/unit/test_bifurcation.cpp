@@ -2,6 +2,7 @@
 #include "hemo/scene/bifurcation.hpp"
 #include "hemo/scene/build.hpp"
 #include "artery_spec.hpp"
+#include "scene_errors.hpp"
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <nlohmann/json.hpp>
 
 namespace hemo::scene {
 namespace {
@@ -84,11 +86,37 @@ TEST(Bifurcation, WallCoversTheUnionWithoutHoles) {
     const auto& w = b.network.points[i];
     ASSERT_NE(w.frameA, sim::WallPoint::kNoFrame) << "point " << i << " has no frame";
     const glm::dvec3 n = glm::normalize(glm::cross(sep(p, glm::dvec3(x[w.frameA])), sep(p, glm::dvec3(x[w.frameB]))));
-    const double along = glm::dot(n, inwardNormal(g, p, r, 1e-3 * dp));
-    EXPECT_GT(along, 0.5) << "point " << i << " (element " << int(b.element[i]) << ")";
+    // The frame's normal within 60 degrees of the point's inward normal (its element's), and
+    // that within 60 degrees of the union's (which, on a seam, is one side's).
+    const glm::dvec3 built(b.particles.normals[i]);
+    const double along = glm::dot(n, built);
+    EXPECT_GT(along, 0.5) << "point " << i << " (element " << int(b.element[i]) << ", y " << p.y / dp << " dp)";
+    EXPECT_GT(glm::dot(built, inwardNormal(g, p, r, 1e-3 * dp)), 0.49) << "point " << i;
     steepFrames += along < 0.9;
   }
   for (int e = 0; e < 5; ++e) EXPECT_GT(perElement[e], 100) << "element " << e;
+  // Mirror symmetry across y = 0: every particle's image is a particle of its kind (exactly),
+  // and a wall point's frame normal is the image of its image's.
+  auto frameNormal = [&](std::uint32_t i) {
+    const glm::dvec3 p(x[i]);
+    const auto& w = b.network.points[i];
+    return glm::normalize(glm::cross(sep(p, glm::dvec3(x[w.frameA])), sep(p, glm::dvec3(x[w.frameB]))));
+  };
+  for (std::uint32_t i = 0; i < b.particles.size(); ++i) {
+    const glm::dvec3 image(x[i].x, -x[i].y, x[i].z);
+    const bool wall = i < b.wall;
+    double nearest = 1e9;
+    std::uint32_t at = i;
+    for (std::uint32_t j = wall ? 0 : b.wall; j < (wall ? b.wall : b.particles.size()); ++j) {
+      const double dist = glm::length(sep(image, glm::dvec3(x[j])));
+      if (dist < nearest) nearest = dist, at = j;
+    }
+    ASSERT_LT(nearest, 1e-6 * dp) << (wall ? "wall" : "fluid") << " particle " << i << " has no mirror image";
+    if (wall) {
+      const glm::dvec3 n = frameNormal(i), m = frameNormal(at);
+      EXPECT_LT(glm::length(glm::dvec3(n.x, -n.y, n.z) - m), 1e-5) << "frames of point " << i << " and its image " << at;
+    }
+  }
   // The spheres at the bends cover the wedges on their outer sides (at the split and the
   // merge the legs cover the parent's end, and the spheres add nothing).
   EXPECT_GT(perElement[6], 20) << "no cover for the +bend's wedge";
@@ -162,6 +190,53 @@ TEST(Bifurcation, BadSpecsAreRejected) {
   a = spec();
   a.branchLength = 20 * a.tube.spacing;
   rejects(a, "longer than the loop");
+}
+
+TEST(Bifurcation, SceneFilesAreCheckedAndBuild) {
+  nlohmann::json j = nlohmann::json::parse(R"({
+    "scene": "b",
+    "particles": { "spacing_m": 3.5e-4 },
+    "fluid": { "expected_max_speed_m_s": 0.5, "background_pressure_Pa": 800.0 },
+    "vessel": { "shape": "bifurcation", "length_m": 0.01435, "radius_m": 0.0014, "branch_angle_deg": 30.0,
+                "branch_length_m": 0.005, "point_mass_kg": 5e-6, "stiffness_N_m": 5.0,
+                "inflow": { "profile": "parabolic", "mean_speed_m_s": 0.3, "zone_length_m": 0.0014 } },
+    "forces": { "gravity_m_s2": [0, 0, 0] },
+    "domain": { "min_m": [0.0, -0.005, -0.003], "max_m": [0.01435, 0.005, 0.003], "periodic": ["x"] }
+  })");
+  const Scene s = parseScene(j.dump(), "b.json");
+  ASSERT_TRUE(s.vessel);
+  EXPECT_EQ(s.vessel->shape, Vessel::Shape::Bifurcation);
+  EXPECT_NEAR(s.vessel->branchAngle, std::numbers::pi / 6.0, 1e-6);
+  const SceneBuild b = buildScene(s);
+  EXPECT_EQ(b.particles.size(), countSceneParticles(s));
+  EXPECT_GT(b.wall, 3000u);
+  EXPECT_EQ(countEscaped(s, b.particles.positions, b.particles.velocities), 0u);
+
+  nlohmann::json missing = j;
+  missing["vessel"].erase("branch_length_m");
+  expectError(missing, {"vessel.branch_length_m", "required"});
+  nlohmann::json foreign = j;
+  foreign["vessel"]["sac_radius_m"] = 0.002;
+  expectError(foreign, {"vessel.sac_radius_m", "only applies to an aneurysm"});
+  nlohmann::json tube = j;
+  tube["vessel"]["shape"] = "tube";
+  expectError(tube, {"vessel.branch_angle_deg", "only applies to a bifurcation"});
+  nlohmann::json steep = j;
+  steep["vessel"]["branch_angle_deg"] = 85.0;
+  expectError(steep, {"vessel.branch_angle_deg"});
+  nlohmann::json closed = j;
+  closed["domain"].erase("periodic");
+  closed["vessel"].erase("inflow");
+  expectError(closed, {"domain.periodic", "bifurcation needs a periodic x axis"});
+  nlohmann::json longZone = j;
+  longZone["vessel"]["inflow"]["zone_length_m"] = 0.003;
+  expectError(longZone, {"vessel.inflow.zone_length_m", "before the split"});
+  nlohmann::json narrow = j;
+  narrow["domain"]["max_m"][1] = 0.004;
+  expectError(narrow, {"vessel", "outside the domain"});
+  nlohmann::json shortLoop = j;
+  shortLoop["vessel"]["branch_length_m"] = 0.004;
+  expectError(shortLoop, {"vessel", "part at the bends"});
 }
 
 }  // namespace

@@ -42,9 +42,11 @@ struct Tank {
 
 // A vessel built of wall particles and springs, its axis along +x from `start`; filled with
 // fluid. Shapes: a straight tube, a tube with a saccular aneurysm (a spherical sac on its
-// +z side, halfway along), or with a fusiform aneurysm (a bulge all round, halfway along). Periodic along x when the domain is (the tube then spans it).
+// +z side, halfway along), with a fusiform aneurysm (a bulge all round, halfway along), or a
+// bifurcation (two branches that split off at +-angle in the x-y plane and merge again, halfway
+// along a periodic tube). Periodic along x when the domain is (the tube then spans it).
 struct Vessel {
-  enum class Shape { Tube, SaccularAneurysm, FusiformAneurysm };
+  enum class Shape { Tube, SaccularAneurysm, FusiformAneurysm, Bifurcation };
   Shape shape = Shape::Tube;
   glm::vec3 start{0.0f};       // m, where the axis starts
   float length = 0.0f;         // m
@@ -62,6 +64,8 @@ struct Vessel {
   float sacStrengthScale = 1.0f;
   float bulgeRadius = 0.0f;    // m (fusiform aneurysm): inner radius at the bulge's middle
   float bulgeLength = 0.0f;    // m: axial length of the bulge
+  float branchAngle = 0.0f;    // rad (bifurcation): each branch's angle to the parent's axis
+  float branchLength = 0.0f;   // m: each leg, split -> bend and bend -> merge
   float timeStepFactor = 0.1f;  // the wall's dt <= factor sqrt(m / sum k) (sim::SpringNetwork)
   // Tissue properties, when the scene gives them instead of stiffness / max force (0: not
   // given); the loader maps them onto the springs with scene::springsFromTissue.

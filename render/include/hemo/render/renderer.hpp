@@ -39,7 +39,8 @@ struct Camera {
 
 // The camera hemo's frames and viewer start from: framing every finite particle; looking
 // across the vessel's axis (+x) from -y and a little above when `vessel` (so a cutaway opens
-// the vessel's whole length), else from an oblique corner.
+// the vessel's whole length; from above, a little to -y, when the particles spread wider in y
+// than in z, as a bifurcation's branches do), else from an oblique corner.
 Camera defaultCamera(const std::vector<glm::vec4>& positions, float aspect, bool vessel);
 
 struct FrameOptions {
