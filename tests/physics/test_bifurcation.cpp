@@ -17,7 +17,7 @@ namespace {
 class BifurcationTest : public GpuTest {};
 
 // R = 3 dp (dp 0.5 mm), branches 11 dp long at 30 degrees, a periodic tube 32 dp long with a
-// 3 dp driven zone: 1,600 fluid and 2,900 wall particles.
+// 3 dp driven zone: 1,394 fluid and 2,356 wall particles.
 nlohmann::json loopScene() {
   return nlohmann::json::parse(R"({
     "scene": "bifurcation_test",

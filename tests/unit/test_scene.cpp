@@ -6,6 +6,8 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include <fstream>
 #include <nlohmann/json.hpp>
 
@@ -172,10 +174,14 @@ TEST(Scene, MissingFileIsAClearError) {
 }
 
 TEST(Scene, ShippedScenesLoad) {
-  for (const char* name : {"dam_break.json", "hydrostatic.json", "poiseuille.json", "aneurysm.json"}) {
-    const Scene s = loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/" + name);
-    EXPECT_TRUE(!s.blocks.empty() || s.vessel) << name;
+  int scenes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(HEMO_SOURCE_DIR) + "/scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    const Scene s = loadScene(entry.path());
+    EXPECT_TRUE(!s.blocks.empty() || s.vessel) << entry.path();
+    ++scenes;
   }
+  EXPECT_GE(scenes, 7);
 }
 
 TEST(Scene, SchemaDocsAreUpToDate) {
