@@ -40,10 +40,20 @@ double capsuleDistance(const BifurcationGeometry::Segment& s, glm::dvec3 p, doub
   return best;
 }
 
-// Two unit vectors across a segment's direction (the first is +z: every leg lies in the x-y plane).
-void crossBasis(glm::dvec3 d, glm::dvec3& e1, glm::dvec3& e2) {
-  e1 = glm::dvec3(0.0, 0.0, 1.0);
-  e2 = glm::normalize(glm::cross(d, e1));
+// A segment's start, length, unit direction and two unit vectors across it (the first +z:
+// every leg lies in the x-y plane).
+struct LegFrame {
+  glm::dvec3 a, d, e1, e2;
+  double length;
+};
+LegFrame legFrame(const BifurcationGeometry::Segment& s) {
+  LegFrame f;
+  f.a = s.a;
+  f.length = glm::length(s.b - s.a);
+  f.d = (s.b - s.a) / f.length;
+  f.e1 = glm::dvec3(0.0, 0.0, 1.0);
+  f.e2 = glm::normalize(glm::cross(f.d, f.e1));
+  return f;
 }
 
 // Points binned in cubes of `cell` (periodic along x with the given period) for the
@@ -225,18 +235,16 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
       }
     };
     for (std::size_t e = 0; e < 3; ++e) {
-      const auto& s = g.segments[e];
-      const double len = glm::length(s.b - s.a);
-      const glm::dvec3 d = (s.b - s.a) / len;
-      glm::dvec3 e1, e2;
-      crossBasis(d, e1, e2);
+      const LegFrame f = legFrame(g.segments[e]);
+      const glm::dvec3 a0 = f.a, d = f.d, e1 = f.e1, e2 = f.e2;
+      const double len = f.length;
       const auto rings = std::max(1L, std::lround(len / dp));
       const auto around = std::max(8L, std::lround(2.0 * std::numbers::pi * r / dp));
       for (long i = 0; i < rings; ++i)
         for (long k = 0; k < around; ++k) {
           const double phi = 2.0 * std::numbers::pi * (k + 0.5 * (i % 2)) / around;
           const glm::dvec3 radial = std::cos(phi) * e1 + std::sin(phi) * e2;
-          offer(s.a + (i + 0.5) * len / rings * d + r * radial, -radial, std::uint8_t(e));
+          offer(a0 + (i + 0.5) * len / rings * d + r * radial, -radial, std::uint8_t(e));
         }
     }
     const auto count = std::max(8L, std::lround(4.0 * std::numbers::pi * r * r / (dp * dp)));
@@ -253,18 +261,16 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
     // point become wall points too (greedily, in sample order).
     merge = kFillRadius;
     for (std::size_t e = 0; e < 3; ++e) {
-      const auto& s = g.segments[e];
-      const double len = glm::length(s.b - s.a);
-      const glm::dvec3 d = (s.b - s.a) / len;
-      glm::dvec3 e1, e2;
-      crossBasis(d, e1, e2);
+      const LegFrame f = legFrame(g.segments[e]);
+      const glm::dvec3 a0 = f.a, d = f.d, e1 = f.e1, e2 = f.e2;
+      const double len = f.length;
       const auto steps = std::max(1L, std::lround(4.0 * len / dp));
       const auto around = std::max(32L, std::lround(8.0 * std::numbers::pi * r / dp));
       for (long i = 0; i <= steps; ++i)
         for (long k = 0; k < around; ++k) {
           const double phi = 2.0 * std::numbers::pi * k / around;
           const glm::dvec3 radial = std::cos(phi) * e1 + std::sin(phi) * e2;
-          offer(s.a + (double(i) * len / steps) * d + r * radial, -radial, std::uint8_t(e));
+          offer(a0 + (double(i) * len / steps) * d + r * radial, -radial, std::uint8_t(e));
         }
     }
   }
@@ -357,11 +363,9 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
   const double dr = R / K;
   const double overhang = R * std::tan(std::min(double(a.branchAngle), 1.4)) + dp;
   for (std::size_t e = 0; e < 3; ++e) {
-    const auto& s = g.segments[e];
-    const double len = glm::length(s.b - s.a);
-    const glm::dvec3 d = (s.b - s.a) / len;
-    glm::dvec3 e1, e2;
-    crossBasis(d, e1, e2);
+    const LegFrame f = legFrame(g.segments[e]);
+    const glm::dvec3 a0 = f.a, d = f.d, e1 = f.e1, e2 = f.e2;
+    const double len = f.length;
     const auto slices = std::max(1L, std::lround(len / dp));
     const long extra = static_cast<long>(std::ceil(overhang / (len / slices)));
     for (long j = -extra; j < slices + extra; ++j)
@@ -370,7 +374,7 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
         const auto count = std::max(1L, std::lround(2.0 * std::numbers::pi * r / dr));
         for (long m = 0; m < count; ++m) {
           const double phi = 2.0 * std::numbers::pi * (m + 0.5 * ((j + extra) % 2)) / count;
-          const glm::dvec3 p = s.a + (j + 0.5) * len / slices * d + r * (std::cos(phi) * e1 + std::sin(phi) * e2);
+          const glm::dvec3 p = a0 + (j + 0.5) * len / slices * d + r * (std::cos(phi) * e1 + std::sin(phi) * e2);
           bool mine = true;
           for (const Cut& c : cuts[e]) mine = mine && glm::dot(p - c.at, c.normal) >= (c.at == centre ? -0.5 * kFluidClearance * dp : 0.0);
           if (mine) offerFluid(p);

@@ -631,26 +631,37 @@ class LaplaceTest : public WallTest {
     std::uint32_t broken;
   };
   // Builds the tube; the lumen pressure rises linearly to `target` x P* over `ramp` s.
-  double build(double target, float ramp) {
+  // Blood-like fluid at dp = 1 mm with a slow sound speed (c0 = 2 m/s), periodic along x.
+  static sim::SphSettings fluid() {
     sim::SphSettings s = wallSettings(glm::vec3(0.0f));
     s.spacing = 0.001f;
     s.soundSpeed = 2.0f;
     s.viscosity = 3.5e-3f;
     s.restDensity = 1060.0f;
     s.periodic = {true, false, false};
-    t_.length = 10 * s.spacing;
-    t_.radius = 5 * s.spacing;
-    t_.spacing = s.spacing;
-    t_.layers = 2;
-    t_.pointMass = 1e-3f;
-    t_.stiffness = 100.0f;
-    t_.damping = 0.02f;
-    t_.periodic = true;
-    t_.fluidMass = s.particleMass();
-    // Hoop springs break at 5% strain.
-    const double around = std::round(2.0 * std::numbers::pi * t_.radius / s.spacing);
-    const double hoop = 2.0 * (t_.radius + 0.5 * s.spacing) * std::sin(std::numbers::pi / around);
-    t_.maxForce = float(t_.stiffness * 0.05 * hoop);
+    return s;
+  }
+  // A periodic two-layer tube of that fluid, `length` and `radius` in spacings, with heavy
+  // points and stiff springs whose hoop springs break at 5% strain.
+  static scene::TubeSpec tube(const sim::SphSettings& s, int length, int radius) {
+    scene::TubeSpec t;
+    t.length = float(length) * s.spacing;
+    t.radius = float(radius) * s.spacing;
+    t.spacing = s.spacing;
+    t.layers = 2;
+    t.pointMass = 1e-3f;
+    t.stiffness = 100.0f;
+    t.damping = 0.02f;
+    t.periodic = true;
+    t.fluidMass = s.particleMass();
+    const double around = std::round(2.0 * std::numbers::pi * t.radius / s.spacing);
+    const double hoop = 2.0 * (t.radius + 0.5 * s.spacing) * std::sin(std::numbers::pi / around);
+    t.maxForce = float(t.stiffness * 0.05 * hoop);
+    return t;
+  }
+  double build(double target, float ramp) {
+    sim::SphSettings s = fluid();
+    t_ = tube(s, 10, 5);
     tube_ = scene::buildTube(t_);
     const double pStar = scene::hoopRupturePressure(t_, tube_);
     s.backgroundPressure = float(target * pStar);
@@ -737,25 +748,10 @@ TEST_F(LaplaceTest, TubeHoldsBelowTheHoopLimit) {
 // (scene::staticResponse, which has no closed form here) within 20%, where the static solution
 // puts the most loaded spring (at the bulge's ends, where the profile turns concave).
 TEST_F(LaplaceTest, FusiformRupturesAtTheStaticEstimate) {
-  sim::SphSettings s = wallSettings(glm::vec3(0.0f));
-  s.spacing = 0.001f;
-  s.soundSpeed = 2.0f;
-  s.viscosity = 3.5e-3f;
-  s.restDensity = 1060.0f;
-  s.periodic = {true, false, false};
+  sim::SphSettings s = fluid();
   scene::AneurysmSpec a;
-  scene::TubeSpec& t = a.tube;
-  t.length = 20 * s.spacing;
-  t.radius = 4 * s.spacing;
-  t.spacing = s.spacing;
-  t.layers = 2;
-  t.pointMass = 1e-3f;
-  t.stiffness = 100.0f;
-  t.damping = 0.02f;
-  t.periodic = true;
-  t.fluidMass = s.particleMass();
-  const double around = std::round(2.0 * std::numbers::pi * t.radius / s.spacing);
-  t.maxForce = float(t.stiffness * 0.05 * 2.0 * (t.radius + 0.5 * s.spacing) * std::sin(std::numbers::pi / around));
+  a.tube = tube(s, 20, 4);
+  const scene::TubeSpec& t = a.tube;
   a.bulgeRadius = 6 * s.spacing;
   a.bulgeLength = 10 * s.spacing;
   const scene::FusiformBuild b = scene::buildFusiformAneurysm(a);
