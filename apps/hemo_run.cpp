@@ -7,6 +7,7 @@
 #include "hemo/io/output.hpp"
 #include "hemo/render/renderer.hpp"
 #include "hemo/scene/scene.hpp"
+#include "hemo/scene/build.hpp"
 #include "hemo/sim/simulation.hpp"
 
 #include <nlohmann/json.hpp>
@@ -133,6 +134,13 @@ int main(int argc, char** argv) {
     hemo::sim::Simulation sim(ctx, scene);
     std::fprintf(stderr, "hemo-run: %s on %s: %u fluid + %u boundary + %u wall particles, %u springs\n", scene.name.c_str(),
                  ctx.info().name.c_str(), sim.fluidParticles(), sim.boundaryParticles(), sim.wallParticles(), sim.springs());
+    const std::optional<hemo::scene::RuptureEstimate> rupture = hemo::scene::ruptureEstimate(scene);
+    if (rupture) {
+      std::fprintf(stderr,
+                   "hemo-run: the wall fails at a lumen (fluid) pressure of about %.0f Pa reached slowly (%s); the scene's background "
+                   "pressure is %.0f Pa, which the fluid's own pressure lags while the wall stretches\n",
+                   rupture->pressure, rupture->method.c_str(), double(scene.sph.backgroundPressure));
+    }
     const bool tty = isatty(2);
     double lastPrint = -1.0;
     options.onBatch = [&](const hemo::sim::Progress& p) {
@@ -270,6 +278,7 @@ int main(int argc, char** argv) {
                {"wall_time_s", wall},
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},
                {"finite", finite}};
+    if (rupture) summary["rupture_pressure_estimate_Pa"] = rupture->pressure;
     if (profileSteps > 0) summary["stage_ms"] = stageMs;
     if (pngFiles > 0) summary["png_files"] = pngFiles;
     if (surfaceFiles > 0) {

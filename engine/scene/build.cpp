@@ -2,6 +2,7 @@
 
 #include "hemo/scene/bifurcation.hpp"
 #include "hemo/scene/fusiform.hpp"
+#include "hemo/scene/statics.hpp"
 
 #include <stdexcept>
 
@@ -114,5 +115,48 @@ std::uint32_t countEscaped(const Scene& s, const std::vector<glm::vec4>& positio
   }
   return escaped;
 }
+
+namespace {
+std::optional<RuptureEstimate> ruptureEstimateOf(const Scene& s);
+}  // namespace
+
+std::optional<RuptureEstimate> ruptureEstimate(const Scene& s) {
+  const std::optional<RuptureEstimate> e = ruptureEstimateOf(s);
+  // Springs left at their default strength (1e30 N) do not break at any pressure that means anything.
+  if (e && !(e->pressure < 1e15)) return std::nullopt;
+  return e;
+}
+
+namespace {
+std::optional<RuptureEstimate> ruptureEstimateOf(const Scene& s) {
+  if (!s.vessel || s.vessel->shape == Vessel::Shape::Bifurcation) return std::nullopt;
+  constexpr std::uint32_t kMaxPoints = 60000;
+  const AneurysmSpec spec = vesselSpec(s);
+  auto staticOf = [&](const ParticleSet& set, const sim::SpringNetwork& net, std::uint32_t wall, const AneurysmSpec& a) {
+    return staticResponse(net, set.positions, a.tube.periodic ? double(a.tube.length) : 0.0,
+                          lumenLoads(a, set.positions, set.normals, wall))
+        .rupturePressure;
+  };
+  try {
+    if (s.vessel->shape == Vessel::Shape::SaccularAneurysm) {
+      const AneurysmBuild b = buildSaccularAneurysm(spec);
+      if (b.wall > kMaxPoints) return std::nullopt;
+      const TubeBuild tube = buildTube(spec.tube);
+      const double sac = sacRupturePressure(b), parent = staticOf(tube.particles, tube.network, tube.wall, AneurysmSpec{spec.tube});
+      return sac <= parent ? RuptureEstimate{sac, "the sac widening uniformly"} : RuptureEstimate{parent, "static, the parent tube"};
+    }
+    if (s.vessel->shape == Vessel::Shape::FusiformAneurysm) {
+      const FusiformBuild b = buildFusiformAneurysm(spec);
+      if (b.wall > kMaxPoints) return std::nullopt;
+      return RuptureEstimate{staticOf(b.particles, b.network, b.wall, spec), "static, the whole wall"};
+    }
+    const TubeBuild b = buildTube(spec.tube);
+    if (b.wall > kMaxPoints) return std::nullopt;
+    return RuptureEstimate{staticOf(b.particles, b.network, b.wall, spec), "static, the whole wall"};
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;  // no spring stretches, or the solve did not converge
+  }
+}
+}  // namespace
 
 }  // namespace hemo::scene

@@ -1,4 +1,5 @@
 // The static response of a wall's spring network to lumen pressure (hemo/scene/statics.hpp).
+#include "hemo/scene/build.hpp"
 #include "hemo/scene/fusiform.hpp"
 #include "hemo/scene/statics.hpp"
 #include "artery_spec.hpp"
@@ -9,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <string>
 
 namespace hemo::scene {
 namespace {
@@ -71,6 +73,26 @@ TEST(Statics, FusiformBulgeFailsFirst) {
   EXPECT_LT(r.rupturePressure, 0.9 * tubeP);
   EXPECT_GT(r.rupturePressure, 0.1 * tubeP);
   EXPECT_TRUE(b.inBulge[first.a] || b.inBulge[first.b]) << "the first spring to fail is not on the bulge";
+}
+
+// What hemo-run reports for the shipped scenes.
+TEST(Statics, ShippedScenesHaveRuptureEstimates) {
+  auto load = [](const char* name) { return loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/" + name); };
+  const auto aneurysm = ruptureEstimate(load("aneurysm.json"));
+  ASSERT_TRUE(aneurysm);
+  EXPECT_EQ(aneurysm->method, "the sac widening uniformly");
+  const AneurysmBuild sac = buildSaccularAneurysm(vesselSpec(load("aneurysm.json")));
+  EXPECT_NEAR(aneurysm->pressure, sacRupturePressure(sac), 1e-9);
+  const auto fusiform = ruptureEstimate(load("fusiform.json"));
+  ASSERT_TRUE(fusiform);
+  EXPECT_EQ(fusiform->method, "static, the whole wall");
+  EXPECT_GT(fusiform->pressure, 100.0);
+  EXPECT_LT(fusiform->pressure, 300.0);
+  EXPECT_FALSE(ruptureEstimate(load("bifurcation.json"))) << "no estimate for a bifurcation";
+  EXPECT_FALSE(ruptureEstimate(load("pulsatile_tube.json"))) << "unbreakable springs";
+  EXPECT_FALSE(ruptureEstimate(load("dam_break.json"))) << "no wall";
+  std::printf("rupture estimates: aneurysm %.1f Pa (%s), fusiform %.1f Pa (%s)\n", aneurysm->pressure, aneurysm->method.c_str(),
+              fusiform->pressure, fusiform->method.c_str());
 }
 
 TEST(Statics, BadInputsAreRejected) {

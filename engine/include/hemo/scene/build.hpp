@@ -5,6 +5,7 @@
 #include "hemo/scene/aneurysm.hpp"
 
 #include <optional>
+#include <string>
 
 namespace hemo::scene {
 
@@ -25,5 +26,19 @@ std::uint64_t countSceneParticles(const Scene& scene);
 // by more than a spacing. `positions` and `velocities` as in ParticleSet (w: mass, kind).
 std::uint32_t countEscaped(const Scene& scene, const std::vector<glm::vec4>& positions,
                            const std::vector<glm::vec4>& velocities);
+
+// The lumen pressure (Pa) at which the scene's wall would first fail under a pressure applied
+// slowly, from the built spring layout, and how it was found: a tube or a fusiform aneurysm by
+// the static response of the whole network (hemo/scene/statics.hpp); a saccular aneurysm by the
+// lower of the sac's uniform-widening estimate (sacRupturePressure) and its parent tube's static
+// estimate. None for scenes without a vessel, for bifurcations, for walls of more than 60,000
+// points (the solve would take minutes), for unbreakable springs (an estimate above 1e15 Pa)
+// or when the solve does not converge. The dynamic
+// first break comes somewhat lower (0.82-0.96 of it in the tests: the wall overshoots).
+struct RuptureEstimate {
+  double pressure = 0.0;  // Pa
+  std::string method;
+};
+std::optional<RuptureEstimate> ruptureEstimate(const Scene& scene);
 
 }  // namespace hemo::scene
