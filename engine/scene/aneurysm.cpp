@@ -3,6 +3,7 @@
 #include "hemo/scene/bifurcation.hpp"
 
 #include "interface/sph.h"
+#include "wall_links.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -121,11 +122,7 @@ AneurysmBuild buildSaccularAneurysm(const AneurysmSpec& a) {
   // Springs: the tube's between kept points, then each sac point to its near wall points.
   sim::SpringNetwork& net = b.network;
   std::vector<std::vector<std::uint32_t>> adjacent(b.wall);
-  auto add = [&](const sim::Spring& s) {
-    net.springs.push_back(s);
-    adjacent[s.a].push_back(s.b);
-    adjacent[s.b].push_back(s.a);
-  };
+  auto add = [&](const sim::Spring& s) { linkSpring(net, adjacent, s); };
   for (const sim::Spring& s : tube.network.springs) {
     if (remap[s.a] == kDropped || remap[s.b] == kDropped) continue;
     add({remap[s.a], remap[s.b], s.restLength, s.stiffness, s.damping, s.maxForce});

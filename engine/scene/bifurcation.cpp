@@ -1,6 +1,7 @@
 #include "hemo/scene/bifurcation.hpp"
 
 #include "interface/sph.h"
+#include "wall_links.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -286,9 +287,7 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
     });
     std::sort(near.begin(), near.end());
     for (const auto& [j, length] : near) {
-      net.springs.push_back({i, j, float(length), t.stiffness, t.damping, t.maxForce});
-      adjacent[i].push_back(j);
-      adjacent[j].push_back(i);
+      linkSpring(net, adjacent, {i, j, float(length), t.stiffness, t.damping, t.maxForce});
     }
   }
   // Frames: the pair of same-layer spring neighbours whose cross product best follows the

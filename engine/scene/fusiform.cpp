@@ -1,6 +1,7 @@
 #include "hemo/scene/fusiform.hpp"
 
 #include "interface/sph.h"
+#include "wall_links.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -105,9 +106,7 @@ FusiformBuild buildFusiformAneurysm(const AneurysmSpec& a) {
       const double length = glm::length(separation(pos[i], pos[j]));
       if (length >= kLinkRadius * dp) continue;
       const bool bulge = b.inBulge[i] || b.inBulge[j];
-      net.springs.push_back({i, j, float(length), bulge ? bulgeK : t.stiffness, t.damping, bulge ? bulgeF : t.maxForce});
-      adjacent[i].push_back(j);
-      adjacent[j].push_back(i);
+      linkSpring(net, adjacent, {i, j, float(length), bulge ? bulgeK : t.stiffness, t.damping, bulge ? bulgeF : t.maxForce});
     }
   net.points.resize(b.wall);
   for (std::uint32_t i = 0; i < b.wall; ++i) {
