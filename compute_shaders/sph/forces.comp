@@ -21,6 +21,7 @@
 #include "common/index.glsl"
 #include "common/kernel.glsl"
 #include "common/sph_params.glsl"
+#include "common/repulsion.glsl"
 
 layout(std430, binding = HEMO_FORCES_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
@@ -108,20 +109,13 @@ void main() {
       // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
       a += pj.w * ((spsI + hemo_sps_tensor(j, rhoJ)) * gradW);
     }
-    if (!fluidJ) {
+    if (!fluidJ && pj.w > 0.0) {  // detached wall particles (no SPH mass) do not repel
       const vec3 nrm = normals[j].xyz;
       const float x = dot(d, nrm);
-      const float y = length(d - x * nrm);
-      // In front of the wall particle's plane up to D, and behind it by less than dp - D: a
-      // particle farther behind is within D of the next layer, which takes over; fluid on the
-      // far side of a thin part of the wall (the blade between a bifurcation's branches) is not
-      // pushed through it. Detached wall particles (no SPH mass) do not repel.
-      if (x < cutoff && x > cutoff - wallSpacing && y < wallSpacing && pj.w > 0.0) {
-        const float w = 1.0 - y / wallSpacing;
-        // r = x / 2h, kept >= 1e-3 so a particle at (or behind) the wall plane is pushed out
-        // with a large but finite force.
-        const float q = max(x / (2.0 * h), 1.0e-3);
-        repulsion += nrm * (psi * (1.0 - q) / sqrt(q) * w);
+      float w;
+      const float push = hemo_repulsion(x, length(d - x * nrm), h, psi, cutoff, wallSpacing, w);
+      if (w > 0.0) {
+        repulsion += nrm * push;
         repulsionWeight += w;
       }
     }

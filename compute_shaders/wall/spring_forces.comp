@@ -12,6 +12,7 @@
 #include "wall/spring.glsl"
 #include "common/kernel.glsl"
 #include "common/sph_params.glsl"
+#include "common/repulsion.glsl"
 
 layout(std430, binding = HEMO_SPRINGF_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
@@ -64,12 +65,13 @@ vec3 hemo_fluid_reaction(uint w) {
     const float invRhoFW = 1.0 / (sf.x * sw.x);
     vec3 a = -(xw.w * (pOverRho2F + pOverRho2W)) * gradW;
     a += (xw.w * twoMu * invRhoFW * dot(d, gradW) / (r2 + etaSq)) * (velocities[f].xyz - vw);
-    const float x = dot(d, nrm);
-    const float y = length(d - x * nrm);
-    // The fluid pass's condition (sph/forces.comp): within D in front, less than dp - D behind.
-    if (x < cutoff && x > cutoff - wallSpacing && y < wallSpacing && xw.w > 0.0) {
-      const float q = max(x / (2.0 * pp.h), 1.0e-3);
-      a += nrm * (psi * (1.0 - q) / sqrt(q) * (1.0 - y / wallSpacing)) * accel[f].w;
+    if (xw.w > 0.0) {  // detached particles (no SPH mass) do not repel
+      const float x = dot(d, nrm);
+      float w;
+      const float push = hemo_repulsion(x, length(d - x * nrm), pp.h, psi, cutoff, wallSpacing, w);
+      if (w > 0.0) {
+        a += nrm * push * accel[f].w;
+      }
     }
     force -= xf.w * a;
   }
