@@ -188,9 +188,8 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
     // parent, the upper legs, the split, the upper bend, the merge); one that is accepted is
     // kept with its mirror image. A candidate nearer the plane than half the merge radius
     // would crowd its own image: it moves onto the plane, along z on its element's surface,
-    // and is kept alone.
-    double merge = kMergeRadius;
-    auto offer = [&](glm::dvec3 p, glm::dvec3 in, std::uint8_t element) {
+    // and is kept alone. `merge` (spacings): no two points of a layer nearer than this.
+    auto offer = [&](glm::dvec3 p, glm::dvec3 in, std::uint8_t element, double merge) {
       const bool single = std::abs(p.y - cy) < 0.5 * merge * dp;
       if (single) {
         // On the plane y = cy: (x - c.x)^2 + (z - c.z)^2 + ... = r^2 for the element's axis
@@ -237,15 +236,13 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
     };
     for (std::size_t e = 0; e < 3; ++e) {
       const LegFrame f = legFrame(g.segments[e]);
-      const glm::dvec3 a0 = f.a, d = f.d, e1 = f.e1, e2 = f.e2;
-      const double len = f.length;
-      const auto rings = std::max(1L, std::lround(len / dp));
+      const auto rings = std::max(1L, std::lround(f.length / dp));
       const auto around = std::max(8L, std::lround(2.0 * std::numbers::pi * r / dp));
       for (long i = 0; i < rings; ++i)
         for (long k = 0; k < around; ++k) {
           const double phi = 2.0 * std::numbers::pi * (k + 0.5 * (i % 2)) / around;
-          const glm::dvec3 radial = std::cos(phi) * e1 + std::sin(phi) * e2;
-          offer(a0 + (i + 0.5) * len / rings * d + r * radial, -radial, std::uint8_t(e));
+          const glm::dvec3 radial = std::cos(phi) * f.e1 + std::sin(phi) * f.e2;
+          offer(f.a + (i + 0.5) * f.length / rings * f.d + r * radial, -radial, std::uint8_t(e), kMergeRadius);
         }
     }
     const auto count = std::max(8L, std::lround(4.0 * std::numbers::pi * r * r / (dp * dp)));
@@ -254,24 +251,21 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
         const double z = 1.0 - (2.0 * k + 1.0) / count, rho = std::sqrt(std::max(0.0, 1.0 - z * z));
         const double phi = kGolden * k;
         const glm::dvec3 dir(rho * std::cos(phi), rho * std::sin(phi), z);
-        offer(g.joints[j] + r * dir, -dir, std::uint8_t(g.segments.size() + j));
+        offer(g.joints[j] + r * dir, -dir, std::uint8_t(g.segments.size() + j), kMergeRadius);
       }
     // Seams: where two elements cut each other, each loses its points inside the other and
     // the last kept rows can be a spacing apart across the seam. Samples of the layer's
     // surface every quarter spacing that are farther than kFillRadius dp from every kept
     // point become wall points too (greedily, in sample order).
-    merge = kFillRadius;
     for (std::size_t e = 0; e < 3; ++e) {
       const LegFrame f = legFrame(g.segments[e]);
-      const glm::dvec3 a0 = f.a, d = f.d, e1 = f.e1, e2 = f.e2;
-      const double len = f.length;
-      const auto steps = std::max(1L, std::lround(4.0 * len / dp));
+      const auto steps = std::max(1L, std::lround(4.0 * f.length / dp));
       const auto around = std::max(32L, std::lround(8.0 * std::numbers::pi * r / dp));
       for (long i = 0; i <= steps; ++i)
         for (long k = 0; k < around; ++k) {
           const double phi = 2.0 * std::numbers::pi * k / around;
-          const glm::dvec3 radial = std::cos(phi) * e1 + std::sin(phi) * e2;
-          offer(a0 + (double(i) * len / steps) * d + r * radial, -radial, std::uint8_t(e));
+          const glm::dvec3 radial = std::cos(phi) * f.e1 + std::sin(phi) * f.e2;
+          offer(f.a + (double(i) * f.length / steps) * f.d + r * radial, -radial, std::uint8_t(e), kFillRadius);
         }
     }
   }
@@ -351,31 +345,30 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
   const glm::dvec3 up = glm::normalize(g.segments[1].b - g.segments[1].a), down = glm::normalize(g.segments[2].b - g.segments[2].a);
   const glm::dvec3 splitMiter = glm::normalize(xAxis + up), mergeMiter = glm::normalize(down + xAxis);
   struct Cut {
-    glm::dvec3 at, normal;  // keeps dot(p - at, normal) >= 0
+    glm::dvec3 at, normal;  // keeps dot(p - at, normal) >= -slack
+    double slack = 0.0;     // m: the mirror plane's lets in what offerFluid moves onto it
   };
-  const glm::dvec3 centre(0.0, cy, 0.0);
+  const Cut mirrorPlane{glm::dvec3(0.0, cy, 0.0), yAxis, 0.5 * kFluidClearance * dp};
   const std::vector<Cut> cuts[3] = {
       {{g.joints[2], mergeMiter}, {g.joints[0] + L * xAxis, -splitMiter}},
-      {{g.joints[0], splitMiter}, {g.joints[1], -xAxis}, {centre, yAxis}},
-      {{g.joints[1], xAxis}, {g.joints[2], -mergeMiter}, {centre, yAxis}}};
+      {{g.joints[0], splitMiter}, {g.joints[1], -xAxis}, mirrorPlane},
+      {{g.joints[1], xAxis}, {g.joints[2], -mergeMiter}, mirrorPlane}};
   const auto K = std::max(1L, std::lround(R / dp));
   const double dr = R / K;
   const double overhang = R * std::tan(std::min(double(a.branchAngle), 1.4)) + dp;
   for (std::size_t e = 0; e < 3; ++e) {
     const LegFrame f = legFrame(g.segments[e]);
-    const glm::dvec3 a0 = f.a, d = f.d, e1 = f.e1, e2 = f.e2;
-    const double len = f.length;
-    const auto slices = std::max(1L, std::lround(len / dp));
-    const long extra = static_cast<long>(std::ceil(overhang / (len / slices)));
+    const auto slices = std::max(1L, std::lround(f.length / dp));
+    const long extra = static_cast<long>(std::ceil(overhang / (f.length / slices)));
     for (long j = -extra; j < slices + extra; ++j)
       for (long k = 0; k < K; ++k) {
         const double r = (k + 0.5) * dr;
         const auto count = std::max(1L, std::lround(2.0 * std::numbers::pi * r / dr));
         for (long m = 0; m < count; ++m) {
           const double phi = 2.0 * std::numbers::pi * (m + 0.5 * ((j + extra) % 2)) / count;
-          const glm::dvec3 p = a0 + (j + 0.5) * len / slices * d + r * (std::cos(phi) * e1 + std::sin(phi) * e2);
+          const glm::dvec3 p = f.a + (j + 0.5) * f.length / slices * f.d + r * (std::cos(phi) * f.e1 + std::sin(phi) * f.e2);
           bool mine = true;
-          for (const Cut& c : cuts[e]) mine = mine && glm::dot(p - c.at, c.normal) >= (c.at == centre ? -0.5 * kFluidClearance * dp : 0.0);
+          for (const Cut& c : cuts[e]) mine = mine && glm::dot(p - c.at, c.normal) >= -c.slack;
           if (mine) offerFluid(p);
         }
       }

@@ -117,17 +117,6 @@ std::uint32_t countEscaped(const Scene& s, const std::vector<glm::vec4>& positio
 }
 
 namespace {
-std::optional<RuptureEstimate> ruptureEstimateOf(const Scene& s);
-}  // namespace
-
-std::optional<RuptureEstimate> ruptureEstimate(const Scene& s) {
-  const std::optional<RuptureEstimate> e = ruptureEstimateOf(s);
-  // Springs left at their default strength (1e30 N) do not break at any pressure that means anything.
-  if (e && !(e->pressure < 1e15)) return std::nullopt;
-  return e;
-}
-
-namespace {
 std::optional<RuptureEstimate> ruptureEstimateOf(const Scene& s) {
   if (!s.vessel || s.vessel->shape == Vessel::Shape::Bifurcation) return std::nullopt;
   constexpr std::uint32_t kMaxPoints = 60000;
@@ -158,5 +147,12 @@ std::optional<RuptureEstimate> ruptureEstimateOf(const Scene& s) {
   }
 }
 }  // namespace
+
+std::optional<RuptureEstimate> ruptureEstimate(const Scene& s) {
+  const std::optional<RuptureEstimate> e = ruptureEstimateOf(s);
+  // Springs left at their default strength (1e30 N) do not break at any pressure that means anything.
+  if (e && !(e->pressure < 1e15)) return std::nullopt;
+  return e;
+}
 
 }  // namespace hemo::scene
