@@ -39,6 +39,15 @@ int hemo_grid_step(int c, int delta, uint dim, uint periodic) {
   return (k < 0 || k >= int(dim)) ? -1 : k;
 }
 
+// The same for delta in -2..2 (grids of at least 5 cells on periodic axes).
+int hemo_grid_step2(int c, int delta, uint dim, uint periodic) {
+  int k = c + delta;
+  if (periodic != 0u) {
+    return k < 0 ? k + int(dim) : (k >= int(dim) ? k - int(dim) : k);
+  }
+  return (k < 0 || k >= int(dim)) ? -1 : k;
+}
+
 // The x-cells around cx as contiguous ranges [r.x, r.y]: one, or two where a periodic x
 // axis wraps. Returns the number of ranges.
 int hemo_x_ranges(int cx, HemoGrid g, out ivec2 r0, out ivec2 r1) {

@@ -4,8 +4,8 @@
 // axis wraps; the order only has to be the same every build). The skin lets the
 // list serve the following steps until some particle has moved half of it (the solver's
 // gate decides on the GPU when to rebuild). Fluid particles list all neighbours; boundary
-// particles list only their fluid neighbours (all boundary_pressure.comp needs), and those
-// with no fluid in their 27 cells skip the scan.
+// particles list only their fluid neighbours (all boundary_pressure.comp needs) and skip
+// cells without fluid at the ends of each row.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -22,6 +22,18 @@ layout(std430, binding = HEMO_BUILD_BINDING_STATUS) buffer Status { uint status[
 layout(std430, binding = HEMO_BUILD_BINDING_FLUID_CELLS) readonly buffer FluidCells { uint fluidCells[]; };
 layout(push_constant) uniform Push { HemoGrid grid; } pc;
 
+// Distance in cell units from u to cell k along one axis; on a bounded axis the first and
+// last cells reach to infinity, as particles outside the grid are clamped into them.
+float hemo_cell_gap(int k, float u, uint dim, uint periodic) {
+  float lo = float(k);
+  float hi = float(k + 1);
+  if (periodic == 0u) {
+    lo = k <= 0 ? -3.0e38 : lo;
+    hi = k >= int(dim) - 1 ? 3.0e38 : hi;
+  }
+  return max(0.0, max(lo - u, u - hi));
+}
+
 void main() {
   const uint i = hemo_global_index();
   if (i >= pc.grid.dimsN.w) {
@@ -34,43 +46,66 @@ void main() {
   const HemoPairParams pp = hemo_pair_params();
   const uvec3 dims = pc.grid.dimsN.xyz;
 
+  // The grid's cells are half the list radius R wide (sph.cpp), so every neighbour lies in
+  // the 5 x 5 rows (dz, dy in -2..2) around the particle's cell, each within 2 cells in x.
+  // A row is skipped when its nearest point is R or more away in (y, z), and its x-cells are
+  // trimmed to those within the remaining reach sqrt(R^2 - gy^2 - gz^2): about half the
+  // candidates of the 27 cells of R that the same list needed before.
   bool outside;
   const ivec3 c = hemo_cell_coords(xi, pc.grid, outside);
-  ivec2 xr[2];
-  const int ranges = hemo_x_ranges(c.x, pc.grid, xr[0], xr[1]);
-  // The nine rows (dz, dy) around the cell: bit (dz + 1) * 3 + (dy + 1) set when the row is
-  // on the grid and worth scanning. A boundary particle needs only its fluid neighbours, so
-  // it scans only rows that hold fluid, and none at all when no row does.
-  uint rows = 0u;
-  for (int dz = -1; dz <= 1; ++dz) {
-    const int z = hemo_grid_step(c.z, dz, dims.z, pc.grid.periodic.z);
-    for (int dy = -1; dy <= 1 && z >= 0; ++dy) {
-      const int y = hemo_grid_step(c.y, dy, dims.y, pc.grid.periodic.y);
-      if (y < 0) {
-        continue;
-      }
-      bool wanted = fluidI;
-      for (int s = 0; s < ranges && !wanted; ++s) {
-        for (int x = xr[s].x; x <= xr[s].y; ++x) {
-          wanted = wanted || fluidCells[hemo_cell_linear(ivec3(x, y, z), dims)] != 0u;
-        }
-      }
-      if (wanted) {
-        rows |= 1u << uint((dz + 1) * 3 + (dy + 1));
-      }
-    }
-  }
+  // Position in cell units, in the same period as c on periodic axes.
+  vec3 u = (xi - pc.grid.origin.xyz) * pc.grid.invCell.xyz;
+  const vec3 dimsF = vec3(dims);
+  u = mix(u, u - dimsF * floor(u / dimsF), notEqual(pc.grid.periodic.xyz, uvec3(0u)));
+  const vec3 cellM = 1.0 / pc.grid.invCell.xyz;  // cell size per axis, m
+  const int hiX = int(dims.x) - 1;
+  // Cells are trimmed against a slightly larger radius, so rounding never drops a cell that
+  // holds a neighbour; the distance test below is exact.
+  const float trim2 = list2 * 1.0001;
   uint count = 0u;
-  for (int dz = -1; dz <= 1; ++dz) {
-    const int z = hemo_grid_step(c.z, dz, dims.z, pc.grid.periodic.z);
-    for (int dy = -1; dy <= 1; ++dy) {
-      if ((rows & (1u << uint((dz + 1) * 3 + (dy + 1)))) == 0u) {
+  for (int dz = -2; dz <= 2; ++dz) {
+    const int kz = c.z + dz;
+    const float gz = hemo_cell_gap(kz, u.z, dims.z, pc.grid.periodic.z) * cellM.z;
+    const int z = hemo_grid_step2(c.z, dz, dims.z, pc.grid.periodic.z);
+    if (z < 0 || gz * gz >= trim2) {
+      continue;
+    }
+    for (int dy = -2; dy <= 2; ++dy) {
+      const int ky = c.y + dy;
+      const float gy = hemo_cell_gap(ky, u.y, dims.y, pc.grid.periodic.y) * cellM.y;
+      const float rest2 = trim2 - gy * gy - gz * gz;
+      const int y = hemo_grid_step2(c.y, dy, dims.y, pc.grid.periodic.y);
+      if (y < 0 || rest2 <= 0.0) {
         continue;
       }
-      const int y = hemo_grid_step(c.y, dy, dims.y, pc.grid.periodic.y);
+      const float reach = sqrt(rest2) * pc.grid.invCell.x;
+      int lo = int(floor(u.x - reach));
+      int hi = int(floor(u.x + reach));
+      if (pc.grid.periodic.x == 0u) {  // the edge cells hold the particles clamped into them
+        lo = clamp(lo, 0, hiX);
+        hi = clamp(hi, 0, hiX);
+      }
+      lo = max(lo, c.x - 2);
+      hi = min(hi, c.x + 2);
+      // The x-cells [lo, hi] as up to two contiguous ranges on the grid (the second, empty
+      // unless a periodic x axis wraps, holds the cells past the seam).
+      ivec2 xr[2];
+      xr[0] = ivec2(max(lo, 0), min(hi, hiX));
+      xr[1] = lo < 0 ? ivec2(lo + int(dims.x), hiX) : ivec2(0, hi - int(dims.x));
+      const int ranges = pc.grid.periodic.x != 0u ? 2 : 1;
       for (int s = 0; s < ranges; ++s) {
-        const uint jEnd = cellStart[hemo_cell_linear(ivec3(xr[s].y, y, z), dims) + 1u];
-        for (uint j = cellStart[hemo_cell_linear(ivec3(xr[s].x, y, z), dims)]; j < jEnd; ++j) {
+        int x0 = xr[s].x;
+        int x1 = xr[s].y;
+        if (!fluidI) {
+          // A boundary particle lists only fluid: drop the range's end cells that hold none.
+          while (x0 <= x1 && fluidCells[hemo_cell_linear(ivec3(x0, y, z), dims)] == 0u) ++x0;
+          while (x1 >= x0 && fluidCells[hemo_cell_linear(ivec3(x1, y, z), dims)] == 0u) --x1;
+        }
+        if (x0 > x1) {
+          continue;
+        }
+        const uint jEnd = cellStart[hemo_cell_linear(ivec3(x1, y, z), dims) + 1u];
+        for (uint j = cellStart[hemo_cell_linear(ivec3(x0, y, z), dims)]; j < jEnd; ++j) {
           const vec3 d = hemo_grid_min_image(xi - positions[j].xyz, pc.grid);
           if (j != i && dot(d, d) < list2 && (fluidI || uint(velocities[j].w) == HEMO_KIND_FLUID)) {
             if (count < capacity) {

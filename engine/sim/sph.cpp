@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
+#include <string>
 
 namespace hemo::sim {
 
@@ -129,9 +130,20 @@ SphParams makeParams(const SphSettings& s) {
 }
 
 namespace {
+// Cells of half the list radius: the list build (sph/build_list.comp) scans the 5 x 5 rows
+// around a particle's cell, trimmed to the sphere of the list radius, which tests about half
+// the candidates of the 27 cells of a full radius. Periodic axes need 5 distinct cells.
 GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
   s.validate();
-  return GridSpec::covering(lo, hi, s.listRadius(), s.periodic);
+  const GridSpec spec = GridSpec::covering(lo, hi, 0.5f * s.listRadius(), s.periodic);
+  for (int a = 0; a < 3; ++a) {
+    if (spec.periodic(a) && spec.dims[a] < 5) {
+      throw std::invalid_argument(std::string("periodic axis ") + "xyz"[a] + " of " + std::to_string(spec.period[a]) +
+                                  " m is shorter than 2.5 neighbour-list radii (" +
+                                  std::to_string(2.5f * s.listRadius()) + " m)");
+    }
+  }
+  return spec;
 }
 }  // namespace
 

@@ -512,9 +512,14 @@ TEST_F(WallTest, TubeKeepsItsFluidInside) {
   EXPECT_EQ(status.nonFinite, 0u);
   EXPECT_EQ(status.neighbourOverflow, 0u);
   EXPECT_EQ(solver_->wall()->readBrokenCount(), 0u);
-  // Inside the wall as it is now (the fluid at rest density pushes it out a little): every
-  // fluid particle lies nearer the axis than the local inner layer, the mean radius of the
-  // four inner-layer points nearest to it.
+  // Inside the wall as it is now (the fluid at rest density pushes it out a little): no fluid
+  // particle lies more than 0.1 dp beyond the local inner layer, the mean radius of the four
+  // inner-layer points nearest to it. The layer is a lattice of points a spacing apart and
+  // the repulsion starts only within D of a point, so a particle pressed into a gap between
+  // points can sit a little past that mean radius without crossing: over four random
+  // agitations each, the closest approach was -0.017 to +0.090 dp with cells of the list
+  // radius and -0.004 to +0.183 dp with the present half cells (the particle order, and with
+  // it the rounding, differ). A particle through the wall would be a whole spacing out.
   const auto pos = positionsById();
   const std::uint32_t inner = tube.along * tube.around;  // layer 0 comes first
   double worst = -1e30, widest = 0.0;
@@ -534,7 +539,7 @@ TEST_F(WallTest, TubeKeepsItsFluidInside) {
     widest = std::max(widest, r);
   }
   EXPECT_EQ(fluid, tube.particles.fluid);
-  EXPECT_LT(worst, 0.0) << "a fluid particle is outside the wall's inner layer";
+  EXPECT_LT(worst, 0.1 * s.spacing) << "a fluid particle is outside the wall's inner layer";
   RecordProperty("largest_fluid_radius_over_inner_radius", std::to_string(widest / t.radius));
   std::printf("tube: %.4f s, largest fluid radius %.3f R, closest approach to the inner layer %.3f dp, %u rebuilds\n", time(),
               widest / t.radius, -worst / s.spacing, solver_->readRebuilds());
