@@ -14,11 +14,14 @@
 #include "hemo/sim/simulation.hpp"
 #include "hemo/surface/marching_cubes.hpp"
 
+#include "interface/bench.h"
 #include "interface/scan.h"
 
 #include <nlohmann/json.hpp>
 
 #include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -112,6 +115,61 @@ Json primitives(Context& ctx, int repeat) {
       }
     });
     row("dispatch", 1, ms / k, {{"clock", "gpu"}, {"dispatches_timed", k}});
+  }
+
+  // What an SPH pair loop's memory accesses cost (bench/pair_gather.comp): a periodic cubic
+  // lattice of 22^3 particles in lattice order, each listing the lattice points within
+  // 2.86 spacings (the list radius at h/dp = 1.3 with a skin of 0.1: 122 entries, 10% more
+  // than a disordered fluid's ~100) in the interleaved layout, and loading 0..4 vec4 per
+  // neighbour. The step from one row to the next is the price of one more per-pair gather.
+  {
+    const int side = 22;
+    const auto n = static_cast<std::uint32_t>(side * side * side);
+    std::vector<glm::ivec3> offsets;
+    for (int z = -3; z <= 3; ++z)
+      for (int y = -3; y <= 3; ++y)
+        for (int x = -3; x <= 3; ++x)
+          if ((x || y || z) && x * x + y * y + z * z < 2.86 * 2.86) offsets.emplace_back(x, y, z);
+    const auto entries = static_cast<std::uint32_t>(offsets.size());
+    std::vector<std::uint32_t> list(std::size_t(n) * entries);
+    auto wrap = [&](int v) { return (v % side + side) % side; };
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const glm::ivec3 p(int(i) % side, (int(i) / side) % side, int(i) / (side * side));
+      for (std::uint32_t k = 0; k < entries; ++k) {
+        const glm::ivec3 q = p + offsets[k];
+        list[std::size_t(k) * n + i] = static_cast<std::uint32_t>(wrap(q.x) + side * (wrap(q.y) + side * wrap(q.z)));
+      }
+    }
+    std::vector<glm::vec4> values(n);
+    for (auto& v : values) v = glm::vec4(float(rng() % 1000) * 1e-3f, 0.1f, 0.2f, 1.0f);
+    hemo::gpu::Buffer listBuffer(ctx, list.size() * 4, hemo::gpu::MemoryUse::Device, "pair_gather list");
+    listBuffer.upload(list);
+    std::vector<hemo::gpu::Buffer> data;
+    for (int b = 0; b < 5; ++b) {
+      data.emplace_back(ctx, std::uint64_t(n) * 16, hemo::gpu::MemoryUse::Device, "pair_gather data");
+      data.back().upload(values);
+    }
+    struct Push {
+      std::uint32_t n, entries;
+    };
+    std::vector<std::uint32_t> contiguous(list.size());
+    for (std::uint32_t i = 0; i < n; ++i)
+      for (std::uint32_t k = 0; k < entries; ++k) contiguous[std::size_t(i) * entries + k] = list[std::size_t(k) * n + i];
+    hemo::gpu::Buffer contiguousBuffer(ctx, list.size() * 4, hemo::gpu::MemoryUse::Device, "pair_gather list");
+    contiguousBuffer.upload(contiguous);
+    for (std::uint32_t layout = 0; layout < 2; ++layout)
+    for (std::uint32_t loads = 0; loads <= 4; ++loads) {
+      const auto& probe = ctx.pipelines().get({"bench/pair_gather", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {loads, layout}});
+      const auto set = probe.makeSet({{HEMO_BENCH_BINDING_LIST, layout ? &contiguousBuffer : &listBuffer}, {HEMO_BENCH_BINDING_A, &data[0]},
+                                      {HEMO_BENCH_BINDING_B, &data[1]}, {HEMO_BENCH_BINDING_C, &data[2]},
+                                      {HEMO_BENCH_BINDING_D, &data[3]}, {HEMO_BENCH_BINDING_OUT, &data[4]}});
+      const Push push{n, entries};
+      const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+        rec.dispatch(probe, set, push, probe.groupsFor(n));
+      });
+      row("pair_gather", std::uint64_t(n) * entries, ms,
+          {{"vec4_loads_per_pair", loads}, {"list_layout", layout ? "contiguous" : "interleaved"}, {"particles", n}, {"entries_per_particle", entries}});
+    }
   }
 
   for (std::uint64_t n : {10000ull, 100000ull, 1000000ull, 16000000ull}) {

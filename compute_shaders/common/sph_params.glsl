@@ -30,7 +30,7 @@ struct SphParams {
   vec4 invPeriod;  // xyz: 1 / period, 0 on non-periodic axes
   float backgroundPressure;  // Pa, added to the Tait pressure once ramped up
   float backgroundRamp;      // s, linear ramp of the background pressure from t = 0 (0: none)
-  float reserved0;
+  uint listParticleStride;
   float reserved1;
 };
 
@@ -41,8 +41,8 @@ struct HemoPairParams {
   float h;
   float kernelNorm;
   float support2;    // (2h)^2, m^2
-  uint listStride;   // entry k of particle i's list is at k * listStride + i (interleaved, so
-                     // neighbouring invocations read neighbouring words)
+  uint listStride;   // entry k of particle i's list is at
+  uint listParticleStride;  // i * listParticleStride + k * listStride (interface/sph.h)
   vec3 period;       // m on periodic axes, 0 on the others
   vec3 invPeriod;    // 1 / period, 0 on bounded axes
 };
@@ -50,10 +50,11 @@ struct HemoPairParams {
 // Where the shader has bound `params` (a macro, since the buffer is declared after this file).
 #define hemo_pair_params()                                                                          \
   HemoPairParams(params.h, params.kernelNorm, params.supportRadius * params.supportRadius, params.listStride, \
+                 params.listParticleStride,                                                          \
                  params.period.xyz, params.invPeriod.xyz)
 
 uint hemo_list_slot(uint i, uint k, HemoPairParams pp) {
-  return k * pp.listStride + i;
+  return i * pp.listParticleStride + k * pp.listStride;
 }
 
 // Minimum-image separation (unchanged on non-periodic axes).

@@ -34,16 +34,21 @@
 //   uint  spsEnabled         sub-particle-scale turbulence (Dalrymple & Rogers 2006) on/off
 //   float spsSmagorinsky     (C_s dp)^2 (m^2): eddy viscosity nu_t = (C_s dp)^2 |S|
 //   float spsBlinn           C_I dp^2 (m^2): isotropic part -2/3 C_I dp^2 |S|^2
-//   uint  listStride         particles per neighbour-list entry row: entry k of particle i is
-//                            at k * listStride + i (interleaved, so neighbouring invocations read
-//                            neighbouring words)
+//   uint  listStride         entry k of particle i's neighbour list is at
+//                            i * listParticleStride + k * listStride: interleaved on GPUs
+//                            (listStride = particle capacity, listParticleStride = 1: neighbouring
+//                            invocations read neighbouring words), contiguous on CPU devices
+//                            (listStride = 1, listParticleStride = capacity: each lane streams
+//                            its own list, where the interleaved walk missed the cache on every
+//                            entry; docs/benchmarks.md, pair_gather)
 //   vec4  origin             xyz: domain origin (m), where periodic axes start
 //   vec4  period             xyz: period (m) on periodic axes, 0 on the others
 //   vec4  invPeriod          xyz: 1 / period, 0 on non-periodic axes
 //   float backgroundPressure p_bg (Pa): added to the Tait pressure, p = B((rho/rho0)^7 - 1) + p_bg;
 //                            the transmural (lumen) pressure of a vessel
 //   float backgroundRamp     (s): p_bg rises linearly from 0 at t = 0 to its value at this time
-//   float reserved0, reserved1
+//   uint  listParticleStride see listStride
+//   float reserved1
 
 // sph/mark_fluid_cells.comp: flags (non-zero) every grid cell that holds a fluid particle, so
 // boundary particles with no fluid in their 27 cells skip the list build.

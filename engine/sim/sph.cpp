@@ -176,7 +176,13 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)),
       reachReduce_(context, reach_, std::max(particles.capacity(), 1u)),
       rebuildGate_(context, reachReduce_.result(), 64, "neighbour rebuild") {
-  params_.listStride = std::max(particles.capacity(), 1u);
+  // The list's layout (interface/sph.h): on a CPU device each SIMD lane walks its own list,
+  // and entries next to each other stream from cache; interleaved entries, which coalesce
+  // on a GPU, cost a cache miss per entry there (pair_gather in hemo-bench primitives).
+  const bool contiguous = settings.listLayout == ListLayout::Contiguous ||
+                          (settings.listLayout == ListLayout::Auto && context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU);
+  params_.listStride = contiguous ? 1u : std::max(particles.capacity(), 1u);
+  params_.listParticleStride = contiguous ? settings.neighbourCapacity : 1u;
   const GridSpec& spec = grid_.spec();
   for (int a = 0; a < 3; ++a) {
     params_.origin[a] = spec.origin[a];

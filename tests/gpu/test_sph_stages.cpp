@@ -231,57 +231,74 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
     c.normals.emplace_back(0.0f, 0.0f, 1.0f, 0.0f);
   }
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  Stages st;
-  st.store = std::make_unique<sim::ParticleStore>(ctx(), n);
-  std::vector<std::uint32_t> ids(n);
-  for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
-  st.store->upload(c.pos, c.vel, ids, c.normals);
   s.neighbourCapacity = 1024;
-  st.solver = std::make_unique<sim::SphSolver>(ctx(), *st.store, lo, hi, s);
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  st.solver->recordReset(rec);
-  st.solver->recordNeighbours(rec);
-  rec.end();
-  rec.submitAndWait();
-  ASSERT_EQ(st.solver->readStatus().neighbourOverflow, 0u);
-  const auto slotIds = st.store->readIds();
-  const auto counts = st.solver->neighbourCounts().readback<std::uint32_t>(n);
-  const std::uint32_t stride = st.solver->params().listStride;
-  const auto list = st.solver->neighbourList().readback<std::uint32_t>(std::size_t(stride) * s.neighbourCapacity);
-  std::size_t pairs = 0, seam = 0, mismatches = 0;
-  for (std::uint32_t slot = 0; slot < n; ++slot) {
-    const std::uint32_t i = slotIds[slot];
-    const bool fluidI = c.vel[i].w == float(sim::ParticleKind::Fluid);
-    std::vector<std::uint32_t> got;
-    for (std::uint32_t k = 0; k < counts[slot]; ++k) got.push_back(slotIds[list[std::size_t(k) * stride + slot]]);
-    std::sort(got.begin(), got.end());
-    ASSERT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "particle " << i << " lists a neighbour twice";
-    std::vector<std::uint32_t> want;
-    for (std::uint32_t j = 0; j < n; ++j) {
-      if (j == i || (!fluidI && c.vel[j].w != float(sim::ParticleKind::Fluid))) continue;
-      glm::dvec3 d = glm::dvec3(c.pos[i]) - glm::dvec3(c.pos[j]);
-      d.x -= period * std::round(d.x / period);
-      const double r = glm::length(d);
-      if (std::abs(r - R) < 1e-5 * R) {  // undecided by float rounding: accept either
-        got.erase(std::remove(got.begin(), got.end(), j), got.end());
-        continue;
+  // Both memory layouts of the list (interface/sph.h) must hold the same entries in the
+  // same order.
+  std::vector<std::uint32_t> firstLists;
+  for (const sim::ListLayout layout : {sim::ListLayout::Interleaved, sim::ListLayout::Contiguous}) {
+    s.listLayout = layout;
+    Stages st;
+    st.store = std::make_unique<sim::ParticleStore>(ctx(), n);
+    std::vector<std::uint32_t> ids(n);
+    for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
+    st.store->upload(c.pos, c.vel, ids, c.normals);
+    st.solver = std::make_unique<sim::SphSolver>(ctx(), *st.store, lo, hi, s);
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    st.solver->recordReset(rec);
+    st.solver->recordNeighbours(rec);
+    rec.end();
+    rec.submitAndWait();
+    ASSERT_EQ(st.solver->readStatus().neighbourOverflow, 0u);
+    const auto slotIds = st.store->readIds();
+    const auto counts = st.solver->neighbourCounts().readback<std::uint32_t>(n);
+    const std::uint32_t entryStride = st.solver->params().listStride;
+    const std::uint32_t particleStride = st.solver->params().listParticleStride;
+    ASSERT_EQ(layout == sim::ListLayout::Interleaved ? particleStride : entryStride, 1u);
+    const auto list = st.solver->neighbourList().readback<std::uint32_t>(std::size_t(n) * s.neighbourCapacity);
+    std::vector<std::uint32_t> flat;  // every list in slot order, as ids
+    std::size_t pairs = 0, seam = 0, mismatches = 0;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = slotIds[slot];
+      const bool fluidI = c.vel[i].w == float(sim::ParticleKind::Fluid);
+      std::vector<std::uint32_t> got;
+      for (std::uint32_t k = 0; k < counts[slot]; ++k) {
+        got.push_back(slotIds[list[std::size_t(slot) * particleStride + std::size_t(k) * entryStride]]);
       }
-      if (r < R) {
-        want.push_back(j);
-        seam += std::abs(double(c.pos[i].x) - c.pos[j].x) >= R;
+      flat.insert(flat.end(), got.begin(), got.end());
+      std::sort(got.begin(), got.end());
+      ASSERT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "particle " << i << " lists a neighbour twice";
+      std::vector<std::uint32_t> want;
+      for (std::uint32_t j = 0; j < n; ++j) {
+        if (j == i || (!fluidI && c.vel[j].w != float(sim::ParticleKind::Fluid))) continue;
+        glm::dvec3 d = glm::dvec3(c.pos[i]) - glm::dvec3(c.pos[j]);
+        d.x -= period * std::round(d.x / period);
+        const double r = glm::length(d);
+        if (std::abs(r - R) < 1e-5 * R) {  // undecided by float rounding: accept either
+          got.erase(std::remove(got.begin(), got.end(), j), got.end());
+          continue;
+        }
+        if (r < R) {
+          want.push_back(j);
+          seam += std::abs(double(c.pos[i].x) - c.pos[j].x) >= R;
+        }
+      }
+      pairs += want.size();
+      if (got != want && ++mismatches <= 5) {
+        ADD_FAILURE() << "particle " << i << (fluidI ? " (fluid)" : " (boundary)") << " at (" << c.pos[i].x << ", "
+                      << c.pos[i].y << ", " << c.pos[i].z << ") lists " << got.size() << " neighbours, brute force finds "
+                      << want.size();
       }
     }
-    pairs += want.size();
-    if (got != want && ++mismatches <= 5) {
-      ADD_FAILURE() << "particle " << i << (fluidI ? " (fluid)" : " (boundary)") << " at (" << c.pos[i].x << ", "
-                    << c.pos[i].y << ", " << c.pos[i].z << ") lists " << got.size() << " neighbours, brute force finds "
-                    << want.size();
+    EXPECT_EQ(mismatches, 0u);
+    EXPECT_GT(pairs, 20000u);
+    EXPECT_GT(seam, 1000u) << "the case must have pairs across the periodic seam";
+    if (firstLists.empty()) {
+      firstLists = flat;
+    } else {
+      EXPECT_TRUE(flat == firstLists) << "the two layouts list different neighbours or orders";
     }
   }
-  EXPECT_EQ(mismatches, 0u);
-  EXPECT_GT(pairs, 20000u);
-  EXPECT_GT(seam, 1000u) << "the case must have pairs across the periodic seam";
 }
 
 // recordStep rebuilds the grid and the neighbour list only when the largest reach (distance

@@ -34,6 +34,10 @@ enum class ParticleKind : std::uint32_t { Fluid = 0, Boundary = 1 };
 // Runge-Kutta midpoint rule (two; the reference scheme).
 enum class Integrator { SymplecticEuler, Rk2Midpoint };
 
+// Memory layout of the neighbour list (interface/sph.h, listStride). Auto: contiguous on CPU
+// devices (lavapipe), interleaved on GPUs. Results do not depend on it.
+enum class ListLayout { Auto, Interleaved, Contiguous };
+
 // Physical and numerical settings (SI units).
 struct SphSettings {
   float spacing = 0.0f;             // initial particle spacing dp (m)
@@ -51,6 +55,7 @@ struct SphSettings {
   bool clampNegativePressure = true;
   std::uint32_t neighbourCapacity = 128;
   float listSkin = 0.1f;            // neighbour-list radius = 2h (1 + skin)
+  ListLayout listLayout = ListLayout::Auto;
   float dampingRate = 0.0f;         // settling phase: v <- v / (1 + rate dt) (1/s) ...
   float dampingUntil = 0.0f;        // ... while t < this (s)
   Integrator integrator = Integrator::SymplecticEuler;
@@ -89,9 +94,12 @@ struct SphParams {
   float dampingRate, dampingUntil;
   std::uint32_t spsEnabled;
   float spsSmagorinsky, spsBlinn;
-  std::uint32_t listStride;  // set by the solver: the store's capacity
+  std::uint32_t listStride;  // set by the solver: entry k of particle i's list is at
+                             // i * listParticleStride + k * listStride (interface/sph.h)
   float origin[4], period[4], invPeriod[4];  // set by the solver from its grid
-  float backgroundPressure, backgroundRamp, reserved0, reserved1;
+  float backgroundPressure, backgroundRamp;
+  std::uint32_t listParticleStride;
+  float reserved1;
 };
 static_assert(sizeof(SphParams) == 176);
 
