@@ -119,8 +119,8 @@ Json primitives(Context& ctx, int repeat) {
 
   // What an SPH pair loop's memory accesses cost (bench/pair_gather.comp): a periodic cubic
   // lattice of 22^3 particles in lattice order, each listing the lattice points within
-  // 2.86 spacings (the list radius at h/dp = 1.3 with a skin of 0.1: 122 entries, 10% more
-  // than a disordered fluid's ~100) in the interleaved layout, and loading 0..4 vec4 per
+  // 2.86 spacings (the list radius at h/dp = 1.3 with a skin of 0.1: 92 entries; a disordered
+  // fluid lists ~100) in both layouts (interface/sph.h), and loading 0..4 vec4 per
   // neighbour. The step from one row to the next is the price of one more per-pair gather.
   {
     const int side = 22;
