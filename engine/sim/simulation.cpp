@@ -124,7 +124,7 @@ void Simulation::checkStatus(std::uint64_t batchFirstStep) {
   throw SimulationError(msg.str());
 }
 
-std::vector<std::pair<std::string, double>> Simulation::profileStep(int repeats) {
+std::vector<std::pair<std::string, double>> Simulation::profileStep(int repeats, bool rebuild) {
   std::vector<std::pair<std::string, double>> result;
   if (!context_->timestampsSupported()) return result;
   gpu::TimestampQueries ts(*context_, 32);
@@ -132,6 +132,7 @@ std::vector<std::pair<std::string, double>> Simulation::profileStep(int repeats)
   for (int r = 0; r < repeats; ++r) {
     recorder_->begin();
     ts.reset(*recorder_);
+    if (rebuild) solver_->recordRebuildRequest(*recorder_);
     ts.mark(*recorder_, "start");
     solver_->recordStep(*recorder_, static_cast<std::uint32_t>(steps_), 0, 3.0e38f, &ts);
     recorder_->end();

@@ -288,6 +288,12 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rebuildGate_.recordReset(rec);
 }
 
+void SphSolver::recordRebuildRequest(gpu::CommandRecorder& rec) {
+  rec.computeToTransfer();  // the last step's reduction wrote the reach
+  rec.fill(reachReduce_.result(), 0x7f800000u);  // +inf: the gate opens
+  rec.transferToCompute();
+}
+
 void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
   grid_.record(rec, n, timestamps);

@@ -339,6 +339,14 @@ TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenAParticleCrossesHalfTheSkin) 
   EXPECT_EQ(steps(1), 1u);
   EXPECT_EQ(steps(1), 2u) << "a particle past half the skin forces a rebuild";
   EXPECT_EQ(steps(3), 2u) << "and the new list serves again";
+  // A rebuild request (for profiling a rebuild step) opens the gate for the next step only.
+  rec.begin();
+  solver.recordRebuildRequest(rec);
+  solver.recordStep(rec, step++, 0);
+  solver.recordStep(rec, step++, 1);
+  rec.end();
+  rec.submitAndWait();
+  EXPECT_EQ(solver.readRebuilds(), 3u) << "a requested rebuild happens once";
 }
 
 // With SPS turbulence on, the accelerations (SPS stress from the strain rate, then its

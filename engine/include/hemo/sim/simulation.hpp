@@ -68,8 +68,10 @@ class Simulation {
   // delivered through RunOptions::onStepStats once per batch.
   void enableStepStats(std::uint32_t every = 1);
   // GPU milliseconds of each stage of one step (median of `repeats` steps, run now and
-  // counted like any other step). Empty if the device has no timestamps.
-  std::vector<std::pair<std::string, double>> profileStep(int repeats = 5);
+  // counted like any other step). Empty if the device has no timestamps. Most steps reuse
+  // the neighbour list, and so do the profiled ones unless `rebuild` forces the grid and
+  // list build into each of them (the cost of a rebuild step).
+  std::vector<std::pair<std::string, double>> profileStep(int repeats = 5, bool rebuild = false);
   // The blood surface (hemo/surface/marching_cubes.hpp) on the grid of the scene's `surface`
   // section. The extractor is built on first use: a run nobody looks at never has one.
   // recordSurface records the field and the extraction (after the steps recorded before it);

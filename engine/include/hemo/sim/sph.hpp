@@ -153,6 +153,9 @@ class SphSolver {
 
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);
+  // Makes the next recorded step rebuild the grid and the neighbour list whatever the
+  // particles' reach (as the first step after a reset does): for profiling the rebuild.
+  void recordRebuildRequest(gpu::CommandRecorder& rec);
 
   const SphSettings& settings() const { return settings_; }
   const SphParams& params() const { return params_; }
