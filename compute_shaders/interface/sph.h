@@ -135,10 +135,22 @@
 #define HEMO_INTEGRATE_BINDING_SAVED_VEL 9
 #define HEMO_INTEGRATE_BINDING_STEP_DT 10
 #define HEMO_INTEGRATE_BINDING_POS_AT_BUILD 11
-#define HEMO_INTEGRATE_BINDING_REACH 12
+#define HEMO_INTEGRATE_BINDING_DRIFT_X 12  // float: x displacement since the list build
 #define HEMO_INTEGRATE_BINDING_INFLOW 13  // InflowParams (common/inflow.glsl): the driven inflow zone
 #define HEMO_INTEGRATE_BINDING_STATE 14  // vec4 (rho, p): the inflow zone's mass supply reads rho
 #define HEMO_INTEGRATE_BINDING_COUNT 15
+
+// sph/reach.comp: each slot's reach for the rebuild test, |d - (c, 0, 0)| (+ the midpoint
+// look-ahead), d its displacement since the list build and c the middle of the x
+// displacements' (min, max) range (docs/architecture.md, "the rebuild test").
+#define HEMO_REACH_BINDING_POSITIONS 0
+#define HEMO_REACH_BINDING_VELOCITIES 1
+#define HEMO_REACH_BINDING_POS_AT_BUILD 2
+#define HEMO_REACH_BINDING_PARAMS 3
+#define HEMO_REACH_BINDING_DRIFT_RANGE 4  // vec2 (min, max) of the x displacements
+#define HEMO_REACH_BINDING_REACH 5
+#define HEMO_REACH_BINDING_COUNT 6
+// push constants: uint n; uint midpointLookahead
 
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).

@@ -10,10 +10,8 @@
 // While t < dampingUntil the velocity is damped (a settling phase for validation scenes).
 // Invocation 0 advances the clock (Kahan-compensated float sum) and logs (t, dt).
 // A particle that becomes non-finite records the step in the status buffer.
-// Every slot also gets its reach for the neighbour-list check: how far it has moved since the
-// list was built, plus (when the next step evaluates forces at a midpoint) the farthest the
-// next half step can take it, |v| min(dtMax, C_a h / (c0 + |v|)) / 2. The step's gate
-// rebuilds the list once the largest reach exceeds half the list's skin.
+// Every slot also writes its x displacement since the list was built, from which
+// sph/reach.comp derives the reach of the neighbour-list check.
 // A fluid particle that starts the step in the inflow zone of a vessel moves along the axis at
 // the prescribed velocity instead (hemo/sim/inflow.hpp), in every mode; across the section it
 // moves freely.
@@ -38,7 +36,7 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_POS) buffer SavedPos { vec
 layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec4 savedVel[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) readonly buffer PosAtBuild { vec4 posAtBuild[]; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_REACH) writeonly buffer Reach { float reach[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_DRIFT_X) writeonly buffer DriftX { float driftX[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_INFLOW) readonly buffer Inflow { InflowParams inflow; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STATE) readonly buffer State { vec4 state[]; };
 layout(push_constant) uniform Push {
@@ -48,7 +46,6 @@ layout(push_constant) uniform Push {
   float endTime;
   uint clockIn;
   uint mode;
-  uint midpointLookahead;
 } pc;
 
 // A wall particle whose springs all broke is marked by the wall stage with accel.w < 0 (fluid
@@ -65,13 +62,9 @@ bool hemo_moves(float kind) {
   return uint(kind) == HEMO_KIND_FLUID || uint(kind) == HEMO_KIND_WALL;
 }
 
-void writeReach(uint i, vec3 x, vec3 v) {
-  float r = length(hemo_min_image(x - posAtBuild[i].xyz, hemo_pair_params()));
-  if (pc.midpointLookahead != 0u) {
-    const float speed = length(v);
-    r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / (params.c0 + speed));
-  }
-  reach[i] = r;
+// The x displacement since the list build, for the rebuild test (sph/reach.comp).
+void writeDriftX(uint i, vec3 x) {
+  driftX[i] = hemo_min_image(x - posAtBuild[i].xyz, hemo_pair_params()).x;
 }
 
 // Mean inflow speed u(t) = U w(t) ramp(t) (m/s).
@@ -161,7 +154,7 @@ void main() {
   vec4 v = velocities[i];
   vec4 x = positions[i];
   if (!running || !hemo_moves(v.w)) {
-    writeReach(i, x.xyz, v.xyz);
+    writeDriftX(i, x.xyz);
     return;
   }
   // Where the step started (the inflow zone is judged there).
@@ -215,5 +208,5 @@ void main() {
   velocities[i] = v;
   x.w = hemo_sph_mass(x.w, accel[i].w);
   positions[i] = x;
-  writeReach(i, x.xyz, v.xyz);
+  writeDriftX(i, x.xyz);
 }

@@ -23,9 +23,12 @@ struct ClockedPush {
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
-  std::uint32_t clockIn, mode, midpointLookahead;
+  std::uint32_t clockIn, mode;
 };
-static_assert(sizeof(IntegratePush) == 28);
+static_assert(sizeof(IntegratePush) == 24);
+struct ReachPush {
+  std::uint32_t n, midpointLookahead;
+};
 
 std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
   return std::uint64_t(std::max(particles.capacity(), 1u)) * bytes;
@@ -161,6 +164,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       dtLimit_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "sph dt limits"),
       ncount_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "neighbour counts"),
       nlist_(context, perParticle(particles, 4) * settings.neighbourCapacity, gpu::MemoryUse::Device, "neighbour list"),
+      driftX_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "x displacement since the list build"),
       reach_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "reach since the list build"),
       wallVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "no-slip wall velocities"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
@@ -174,6 +178,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
       tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)),
+      driftReduce_(context, driftX_, std::max(particles.capacity(), 1u)),
       reachReduce_(context, reach_, std::max(particles.capacity(), 1u)),
       rebuildGate_(context, reachReduce_.result(), 64, "neighbour rebuild") {
   // The list's layout (interface/sph.h): on a CPU device each SIMD lane walks its own list,
@@ -199,6 +204,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
+  reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {}});
   const ParticleArrays& a = particles.live();
   markSet_ = markFluid_->makeSet({{HEMO_MARK_BINDING_CELL_START, &grid_.cellStart()},
                                   {HEMO_MARK_BINDING_VELOCITIES, &a.velocities},
@@ -260,9 +266,15 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_SAVED_VEL, &savedVel_},
                                        {HEMO_INTEGRATE_BINDING_STEP_DT, &stepDt_},
                                        {HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild()},
-                                       {HEMO_INTEGRATE_BINDING_REACH, &reach_},
+                                       {HEMO_INTEGRATE_BINDING_DRIFT_X, &driftX_},
                                        {HEMO_INTEGRATE_BINDING_INFLOW, &inflow_},
                                        {HEMO_INTEGRATE_BINDING_STATE, &state_}});
+  reachSet_ = reachPass_->makeSet({{HEMO_REACH_BINDING_POSITIONS, &a.positions},
+                                   {HEMO_REACH_BINDING_VELOCITIES, &a.velocities},
+                                   {HEMO_REACH_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild()},
+                                   {HEMO_REACH_BINDING_PARAMS, &paramsBuffer_},
+                                   {HEMO_REACH_BINDING_DRIFT_RANGE, &driftReduce_.result()},
+                                   {HEMO_REACH_BINDING_REACH, &reach_}});
 }
 
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
@@ -340,12 +352,17 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, n);  // the second stage reuses the step's dt
   const std::uint32_t lookahead = settings_.integrator == Integrator::Rk2Midpoint ? 1u : 0u;
   // At least one workgroup: invocation 0 advances the clock even with no particles.
-  rec.dispatch(*integrate_, integrateSet_, IntegratePush{n, step, logIndex, endTime, clockParity_, mode, lookahead},
+  rec.dispatch(*integrate_, integrateSet_, IntegratePush{n, step, logIndex, endTime, clockParity_, mode},
                integrate_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone
-    reachReduce_.record(rec, n);  // the next step's rebuild decision
+    // The next step's rebuild decision: the reach of every slot relative to the middle of the
+    // x displacements (sph/reach.comp), then its largest value.
+    driftReduce_.record(rec, n);  // ends with its result visible to compute
+    rec.dispatch(*reachPass_, reachSet_, ReachPush{n, lookahead}, reachPass_->groupsFor(n));
+    rec.computeToCompute();
+    reachReduce_.record(rec, n);
   }
 }
 

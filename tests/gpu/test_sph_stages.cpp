@@ -295,7 +295,8 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
 }
 
 // recordStep rebuilds the grid and the neighbour list only when the largest reach (distance
-// moved since the build, GPU-reduced by the integrator) exceeds half the list's skin.
+// moved since the build relative to the middle of the x displacements, GPU-reduced after the
+// integrator) exceeds half the list's skin.
 TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenAParticleCrossesHalfTheSkin) {
   auto rng = rngFor();
   sim::SphSettings s = settings();
@@ -318,20 +319,41 @@ TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenAParticleCrossesHalfTheSkin) 
   };
   EXPECT_EQ(steps(1), 1u) << "the first step builds the list";
   EXPECT_EQ(steps(5), 1u) << "tiny motion keeps the list";
-  // Move one fluid particle by 1.05 x the threshold: the step after the move measures it
-  // (the gate uses the reach of the step before), the one after rebuilds.
-  auto pos = store.readPositions();
+  // The test compares displacements since the build with the middle c of their x range
+  // (sph/reach.comp): it must rebuild once two particles may have closed in by the skin
+  // (twice the threshold), and need not for a drift they share. Each move below is measured
+  // by the step after it (the gate uses the reach of the step before) and acted on by the
+  // one after that.
+  const float threshold = solver.rebuildThreshold();
   const auto vel = store.readVelocities();
   std::uint32_t moved = n;
   for (std::uint32_t i = 0; i < n && moved == n; ++i) {
     if (vel[i].w == 0.0f) moved = i;
   }
   ASSERT_LT(moved, n);
-  pos[moved].x += 1.05f * solver.rebuildThreshold();
-  store.live().positions.upload(pos);
+  auto move = [&](glm::vec3 all, glm::vec3 one) {
+    auto pos = store.readPositions();
+    for (auto& p : pos) p += glm::vec4(all, 0.0f);
+    pos[moved] += glm::vec4(one, 0.0f);
+    store.live().positions.upload(pos);
+  };
+  // Every particle (fluid and boundary) 1.5 thresholds along x: nobody moved relative to
+  // anybody, no rebuild (the bare largest displacement, 1.5, would have rebuilt).
+  move(glm::vec3(1.5f * threshold, 0.0f, 0.0f), glm::vec3(0.0f));
+  EXPECT_EQ(steps(2), 1u) << "a common drift keeps the list";
+  // One particle 1.9 thresholds further: closer to the others by less than the skin (x range
+  // 1.5 .. 3.4 thresholds, reach 0.95): the list still holds.
+  move(glm::vec3(0.0f), glm::vec3(1.9f * threshold, 0.0f, 0.0f));
+  EXPECT_EQ(steps(2), 1u) << "a relative move under the skin keeps the list";
+  // 0.2 further (2.1 thresholds from the rest, past the skin): reach 1.05 > 1, rebuild.
+  move(glm::vec3(0.0f), glm::vec3(0.2f * threshold, 0.0f, 0.0f));
   EXPECT_EQ(steps(1), 1u);
-  EXPECT_EQ(steps(1), 2u) << "a particle past half the skin forces a rebuild";
+  EXPECT_EQ(steps(1), 2u) << "a particle past the skin relative to the others forces a rebuild";
   EXPECT_EQ(steps(3), 2u) << "and the new list serves again";
+  // Across the flow there is no common reference: 1.05 thresholds along y rebuild.
+  move(glm::vec3(0.0f), glm::vec3(0.0f, 1.05f * threshold, 0.0f));
+  EXPECT_EQ(steps(1), 2u);
+  EXPECT_EQ(steps(1), 3u) << "a move across x past half the skin forces a rebuild";
   // A rebuild request (for profiling a rebuild step) opens the gate for the next step only.
   rec.begin();
   solver.recordRebuildRequest(rec);
@@ -339,7 +361,7 @@ TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenAParticleCrossesHalfTheSkin) 
   solver.recordStep(rec, step++, 1);
   rec.end();
   rec.submitAndWait();
-  EXPECT_EQ(solver.readRebuilds(), 3u) << "a requested rebuild happens once";
+  EXPECT_EQ(solver.readRebuilds(), 4u) << "a requested rebuild happens once";
 }
 
 // With SPS turbulence on, the accelerations (SPS stress from the strain rate, then its

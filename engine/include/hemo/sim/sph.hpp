@@ -190,13 +190,13 @@ class SphSolver {
                            std::uint32_t mode);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
-  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, reach_, wallVel_;
+  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, driftX_, reach_, wallVel_;
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer fluidCells_;
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
-  gpu::MinMaxReduce dtReduce_, reachReduce_;
+  gpu::MinMaxReduce dtReduce_, driftReduce_, reachReduce_;
   std::unique_ptr<MassSpring> wall_;
   gpu::DispatchGate rebuildGate_;
   const gpu::ComputePipeline* markFluid_;
@@ -206,7 +206,8 @@ class SphSolver {
   const gpu::ComputePipeline* spsStress_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_;
-  gpu::DescriptorSet markSet_, buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_;
+  const gpu::ComputePipeline* reachPass_;
+  gpu::DescriptorSet markSet_, buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_, reachSet_;
 };
 
 }  // namespace hemo::sim
