@@ -29,19 +29,10 @@ uint hemo_cell_linear(ivec3 c, uvec3 dims) {
   return uint(c.x) + dims.x * (uint(c.y) + dims.y * uint(c.z));
 }
 
-// Coordinate of the neighbour cell c + delta (delta in -1..1) along an axis of `dim` cells:
+// Coordinate of the neighbour cell c + delta (|delta| < dim) along an axis of `dim` cells:
 // wrapped on a periodic axis, -1 when it is off a bounded one.
 int hemo_grid_step(int c, int delta, uint dim, uint periodic) {
   const int k = c + delta;
-  if (periodic != 0u) {
-    return k < 0 ? int(dim) - 1 : (k >= int(dim) ? 0 : k);
-  }
-  return (k < 0 || k >= int(dim)) ? -1 : k;
-}
-
-// The same for delta in -2..2 (grids of at least 5 cells on periodic axes).
-int hemo_grid_step2(int c, int delta, uint dim, uint periodic) {
-  int k = c + delta;
   if (periodic != 0u) {
     return k < 0 ? k + int(dim) : (k >= int(dim) ? k - int(dim) : k);
   }

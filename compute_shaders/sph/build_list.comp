@@ -66,7 +66,7 @@ void main() {
   for (int dz = -2; dz <= 2; ++dz) {
     const int kz = c.z + dz;
     const float gz = hemo_cell_gap(kz, u.z, dims.z, pc.grid.periodic.z) * cellM.z;
-    const int z = hemo_grid_step2(c.z, dz, dims.z, pc.grid.periodic.z);
+    const int z = hemo_grid_step(c.z, dz, dims.z, pc.grid.periodic.z);
     if (z < 0 || gz * gz >= trim2) {
       continue;
     }
@@ -74,7 +74,7 @@ void main() {
       const int ky = c.y + dy;
       const float gy = hemo_cell_gap(ky, u.y, dims.y, pc.grid.periodic.y) * cellM.y;
       const float rest2 = trim2 - gy * gy - gz * gz;
-      const int y = hemo_grid_step2(c.y, dy, dims.y, pc.grid.periodic.y);
+      const int y = hemo_grid_step(c.y, dy, dims.y, pc.grid.periodic.y);
       if (y < 0 || rest2 <= 0.0) {
         continue;
       }
