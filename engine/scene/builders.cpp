@@ -1,5 +1,7 @@
 #include "hemo/scene/builders.hpp"
 
+#include "hemo/reference/sph.hpp"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -37,13 +39,61 @@ void forEachTankParticle(const Tank& t, float dp, F&& f) {
       }
 }
 
+// A body-centred block: cells of edge 2^(1/3) dp (two particles per cell, the cubic
+// lattice's particles per volume), as many per axis as fit best, stretched to fill the box.
+glm::ivec3 bccCells(const Box& b, float dp) { return cellsAlong(b, std::cbrt(2.0f) * dp); }
+
+glm::vec3 bccEdges(const Box& b, float dp) { return (b.max - b.min) / glm::vec3(bccCells(b, dp)); }
+
+// Calls f(position) for every particle of the block, in a fixed order.
+template <class F>
+void forEachBlockParticle(const FluidBlock& b, float dp, F&& f) {
+  if (b.lattice == FluidBlock::Lattice::Cubic) {
+    const glm::ivec3 n = cellsAlong(b.box, dp);
+    for (int k = 0; k < n.z; ++k)
+      for (int j = 0; j < n.y; ++j)
+        for (int i = 0; i < n.x; ++i) f(b.box.min + (glm::vec3(i, j, k) + 0.5f) * dp);
+    return;
+  }
+  // Corner and centre sites a quarter cell in from either side, so each layer of particles
+  // (a half cell apart along every axis) sits in the middle of its half-cell slab of fluid.
+  const glm::ivec3 n = bccCells(b.box, dp);
+  const glm::vec3 a = bccEdges(b.box, dp);
+  for (int k = 0; k < n.z; ++k)
+    for (int j = 0; j < n.y; ++j)
+      for (int i = 0; i < n.x; ++i) {
+        f(b.box.min + (glm::vec3(i, j, k) + 0.25f) * a);
+        f(b.box.min + (glm::vec3(i, j, k) + 0.75f) * a);
+      }
+}
+
+// Mass per particle of a block: rho0 over the kernel sum at a particle of its (infinite)
+// lattice, so the block starts at the rest density (SphSettings::particleMass for cubic).
+float blockMass(const FluidBlock& b, const sim::SphSettings& sph) {
+  if (b.lattice == FluidBlock::Lattice::Cubic) return sph.particleMass();
+  const glm::dvec3 a(bccEdges(b.box, sph.spacing));
+  const double h = sph.h();
+  glm::ivec3 reach;
+  for (int ax = 0; ax < 3; ++ax) reach[ax] = int(std::ceil(2.0 * h / a[ax])) + 1;
+  double sum = 0.0;
+  for (int k = -reach.z; k <= reach.z; ++k)
+    for (int j = -reach.y; j <= reach.y; ++j)
+      for (int i = -reach.x; i <= reach.x; ++i) {
+        const glm::dvec3 corner = glm::dvec3(i, j, k) * a;
+        sum += reference::kernelW(glm::length(corner), h);
+        sum += reference::kernelW(glm::length(corner + 0.5 * a), h);
+      }
+  return float(double(sph.restDensity) / sum);
+}
+
 }  // namespace
 
 std::uint64_t countParticles(const Scene& s) {
   std::uint64_t count = 0;
   for (const auto& b : s.blocks) {
-    const glm::ivec3 n = cellsAlong(b.box, s.sph.spacing);
-    count += std::uint64_t(n.x) * n.y * n.z;
+    const bool bcc = b.lattice == FluidBlock::Lattice::BodyCentred;
+    const glm::ivec3 n = bcc ? bccCells(b.box, s.sph.spacing) : cellsAlong(b.box, s.sph.spacing);
+    count += std::uint64_t(n.x) * n.y * n.z * (bcc ? 2u : 1u);
   }
   for (const auto& t : s.tanks) {
     const glm::ivec3 n = cellsAlong(t.box, s.sph.spacing);
@@ -62,14 +112,12 @@ ParticleSet buildParticles(const Scene& s) {
   const float dp = s.sph.spacing;
   const float mass = s.sph.particleMass();
   for (const auto& b : s.blocks) {
-    const glm::ivec3 n = cellsAlong(b.box, dp);
-    for (int k = 0; k < n.z; ++k)
-      for (int j = 0; j < n.y; ++j)
-        for (int i = 0; i < n.x; ++i) {
-          set.positions.emplace_back(b.box.min + (glm::vec3(i, j, k) + 0.5f) * dp, mass);
-          set.velocities.emplace_back(b.velocity, float(sim::ParticleKind::Fluid));
-          set.normals.emplace_back(0.0f);
-        }
+    const float blockM = blockMass(b, s.sph);
+    forEachBlockParticle(b, dp, [&](const glm::vec3& p) {
+      set.positions.emplace_back(p, blockM);
+      set.velocities.emplace_back(b.velocity, float(sim::ParticleKind::Fluid));
+      set.normals.emplace_back(0.0f);
+    });
   }
   set.fluid = set.size();
   for (const auto& t : s.tanks) {

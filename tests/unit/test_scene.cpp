@@ -1,4 +1,5 @@
 // Scene files: every kind of bad input gets one clear message naming the field.
+#include "hemo/reference/sph.hpp"
 #include "hemo/scene/builders.hpp"
 #include "hemo/scene/scene.hpp"
 #include "scene_errors.hpp"
@@ -204,6 +205,57 @@ TEST(Builders, TankAndBlockCountsMatchTheEstimate) {
     const glm::vec3 n(set.normals[i]);
     EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
   }
+}
+
+// A body-centred block: two particles per cell of edge ~2^(1/3) dp, the cells stretched to a
+// whole number per axis (0.1 / 0.0126 -> 8 cells of 12.5 mm along x and z; 0.06 -> 5 of 12 mm
+// along y), every particle inside the box, a quarter cell from its faces; the kernel sum at
+// a particle whose support lies inside the block gives the rest density exactly (the mass is
+// calibrated on this lattice); the particles per volume are 1 / dp^3 times the stretch (here
+// 1.0667: the y cells are 4.8% short of 12.6 mm).
+TEST(Builders, BodyCentredBlockFillsTheBoxAtTheRestDensity) {
+  Json j = validScene();
+  j["fluid"]["blocks"][0]["max_m"] = Json::array({0.1, 0.06, 0.1});
+  j["fluid"]["blocks"][0]["lattice"] = "bcc";
+  const Scene s = parseScene(j.dump(), "ok.json");
+  ASSERT_EQ(s.blocks[0].lattice, FluidBlock::Lattice::BodyCentred);
+  const ParticleSet set = buildParticles(s);
+  EXPECT_EQ(set.size(), countParticles(s));
+  ASSERT_EQ(set.fluid, 2u * 8u * 5u * 8u);
+  const glm::vec3 box(0.1f, 0.06f, 0.1f), edge(0.0125f, 0.012f, 0.0125f);
+  double nearest = 1e9;
+  std::uint32_t centre = 0;
+  for (std::uint32_t i = 0; i < set.fluid; ++i) {
+    const glm::vec3 p(set.positions[i]);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GE(p[a], 0.25f * edge[a] - 1e-6f) << "particle " << i << " axis " << a;
+      EXPECT_LE(p[a], box[a] - 0.25f * edge[a] + 1e-6f) << "particle " << i << " axis " << a;
+    }
+    if (glm::length(p - 0.5f * box) < glm::length(glm::vec3(set.positions[centre]) - 0.5f * box)) centre = i;
+  }
+  const glm::dvec3 c(glm::vec3(set.positions[centre]));
+  double rho = 0.0;
+  for (std::uint32_t j2 = 0; j2 < set.fluid; ++j2) {
+    const double r = glm::length(glm::dvec3(glm::vec3(set.positions[j2])) - c);
+    if (j2 != centre) nearest = std::min(nearest, r);
+    rho += double(set.positions[j2].w) * reference::kernelW(r, s.sph.h());
+  }
+  for (int a = 0; a < 3; ++a) {
+    ASSERT_TRUE(c[a] - 2.0 * s.sph.h() > 0.0 && c[a] + 2.0 * s.sph.h() < box[a]) << "the support must lie inside";
+  }
+  EXPECT_NEAR(rho, s.sph.restDensity, 1e-4 * s.sph.restDensity);
+  // nearest neighbour: half the cell diagonal
+  EXPECT_NEAR(nearest, 0.5 * glm::length(glm::dvec3(edge)), 1e-6);
+  const double perVolume = set.fluid / double(box.x * box.y * box.z), cubic = 1.0 / std::pow(double(s.sph.spacing), 3.0);
+  EXPECT_NEAR(perVolume / cubic, 2.0 / (edge.x * edge.y * edge.z) / cubic, 1e-4);
+  EXPECT_NEAR(perVolume / cubic, 1.0667, 1e-3);
+  // A cubic block of the same box keeps the dp lattice and the calibrated mass.
+  j["fluid"]["blocks"][0]["lattice"] = "cubic";
+  const ParticleSet cubicSet = buildParticles(parseScene(j.dump(), "ok.json"));
+  EXPECT_EQ(cubicSet.fluid, 10u * 6u * 10u);
+  EXPECT_FLOAT_EQ(cubicSet.positions[0].w, s.sph.particleMass());
+  j["fluid"]["blocks"][0]["lattice"] = "fcc";
+  expectError(j, {"fluid.blocks[0].lattice", "bcc"});
 }
 
 }  // namespace

@@ -27,8 +27,15 @@ struct Box {
 };
 
 struct FluidBlock {
+  // How the block is filled. Cubic: the dp lattice. Body-centred cubic: cells of edge
+  // 2^(1/3) dp (two particles each, so the same number of particles per volume), stretched by
+  // a few per cent per axis so a whole number of cells fills the box. Under pressure the
+  // simple cubic arrangement is not a stable equilibrium of the SPH pressure force (it shears
+  // into another packing; docs/physics.md), the body-centred one is.
+  enum class Lattice { Cubic, BodyCentred };
   Box box;
   glm::vec3 velocity{0.0f};  // m/s
+  Lattice lattice = Lattice::Cubic;
 };
 
 // A rigid container: `layers` layers of boundary particles just outside the box, on every
