@@ -13,10 +13,14 @@
 
 namespace hemo::sim {
 
-double floorLoad(const Snapshot& s, std::uint32_t fluid, double h, float floorZ) {
+namespace {
+// Downward force (N) of the symmetric pressure term on the boundary particles that `pick`
+// selects (by their z).
+template <class Pick>
+double downwardLoad(const Snapshot& s, std::uint32_t fluid, double h, Pick pick) {
   double force = 0.0;
   for (std::size_t b = 0; b < s.positions.size(); ++b) {
-    if (s.velocities[b].w == float(ParticleKind::Fluid) || s.positions[b].z >= floorZ) continue;
+    if (s.velocities[b].w == float(ParticleKind::Fluid) || !pick(s.positions[b].z)) continue;
     for (std::uint32_t f = 0; f < fluid; ++f) {
       const glm::dvec3 d = glm::dvec3(s.positions[b]) - glm::dvec3(s.positions[f]);
       const double r = glm::length(d);
@@ -27,6 +31,15 @@ double floorLoad(const Snapshot& s, std::uint32_t fluid, double h, float floorZ)
     }
   }
   return -force;
+}
+}  // namespace
+
+double floorLoad(const Snapshot& s, std::uint32_t fluid, double h, float floorZ) {
+  return downwardLoad(s, fluid, h, [floorZ](float z) { return z < floorZ; });
+}
+
+double lidLoad(const Snapshot& s, std::uint32_t fluid, double h, float lidZ) {
+  return -downwardLoad(s, fluid, h, [lidZ](float z) { return z > lidZ; });
 }
 
 double surgeFront(const Snapshot& s, std::uint32_t fluid, float maxZ) {

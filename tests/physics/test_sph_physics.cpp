@@ -3,7 +3,6 @@
 #include "gpu_test.hpp"
 #include "hemo/reference/analytic.hpp"
 #include "hemo/reference/published.hpp"
-#include "hemo/reference/sph.hpp"
 #include "hemo/sim/probes.hpp"
 #include "hemo/scene/builders.hpp"
 #include "hemo/scene/scene.hpp"
@@ -105,24 +104,6 @@ double largestDrift(const sim::Snapshot& from, const sim::Snapshot& to, double d
   return worst;
 }
 
-// Upward force (N) of the symmetric pressure term on the boundary particles above z = lidZ
-// (the reaction the lid gives the fluid is its negative), as floorLoad does for the floor.
-double lidLoad(const sim::Snapshot& s, std::uint32_t fluid, double h, float lidZ) {
-  double force = 0.0;
-  for (std::size_t b = fluid; b < s.positions.size(); ++b) {
-    if (s.velocities[b].w == float(sim::ParticleKind::Fluid) || s.positions[b].z <= lidZ) continue;
-    for (std::uint32_t f = 0; f < fluid; ++f) {
-      const glm::dvec3 d = glm::dvec3(s.positions[b]) - glm::dvec3(s.positions[f]);
-      const double r = glm::length(d);
-      if (r >= 2.0 * h || r == 0.0) continue;
-      const glm::dvec2 sb = s.densityPressure[b], sf = s.densityPressure[f];
-      force -= double(s.positions[b].w) * double(s.positions[f].w) * (sb.y / (sb.x * sb.x) + sf.y / (sf.x * sf.x)) *
-               d.z * (reference::kernelDwdr(r, h) / r);
-    }
-  }
-  return force;
-}
-
 // Hydrostatics: a 0.1 m column filled body-centred (576 particles; the simple cubic lattice
 // is unstable under pressure, see BodyCentredLatticeIsAStableEquilibriumUnderPressure), settled
 // with damping until 0.8 s. The pressure on the floor is the vertical force the fluid exerts
@@ -205,7 +186,7 @@ TEST_F(SphPhysicsTest, ClosedHydrostaticColumnStaysPut) {
     opt.until = t;
     sim.run(opt);
     const sim::Snapshot s = sim.snapshot();
-    loadSum += (sim::floorLoad(s, sim.fluidParticles(), h) - lidLoad(s, sim.fluidParticles(), h, float(H))) / area;
+    loadSum += (sim::floorLoad(s, sim.fluidParticles(), h) - sim::lidLoad(s, sim.fluidParticles(), h, float(H))) / area;
     ++samples;
   }
   const sim::Snapshot last = sim.snapshot();

@@ -9,6 +9,10 @@ namespace hemo::sim {
 // -m_b m_f (p_b / rho_b^2 + p_f / rho_f^2) dW/dz. Positive when the fluid pushes down.
 double floorLoad(const Snapshot& snapshot, std::uint32_t fluidParticles, double h, float floorZ = 0.0f);
 
+// The same for a lid: the upward force (N) of the fluid on the boundary particles above
+// z = lidZ. Positive when the fluid pushes up.
+double lidLoad(const Snapshot& snapshot, std::uint32_t fluidParticles, double h, float lidZ);
+
 // Largest x among fluid particles below z = maxZ (the surge front of a dam break).
 double surgeFront(const Snapshot& snapshot, std::uint32_t fluidParticles, float maxZ);
 
