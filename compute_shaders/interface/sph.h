@@ -76,7 +76,8 @@
 #define HEMO_DENSITY_BINDING_NCOUNT 4
 #define HEMO_DENSITY_BINDING_NLIST 5
 #define HEMO_DENSITY_BINDING_CLOCK 6  // the solver's clock (ramped background pressure)
-#define HEMO_DENSITY_BINDING_COUNT 7
+#define HEMO_DENSITY_BINDING_VISCOUS_VEL 7  // written for fluid particles: their velocity and kind
+#define HEMO_DENSITY_BINDING_COUNT 8
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).
@@ -86,7 +87,11 @@
 #define HEMO_BPRESSURE_BINDING_STATE 3
 #define HEMO_BPRESSURE_BINDING_NCOUNT 4
 #define HEMO_BPRESSURE_BINDING_NLIST 5
-#define HEMO_BPRESSURE_BINDING_WALL_VEL 6  // vec4: velocity shown to the viscous term (no-slip)
+// Viscous velocities (all three passes): per particle, vec4(the velocity the viscous term sees,
+// kind): a fluid particle's own velocity (density.comp), a boundary particle's no-slip
+// velocity (boundary_pressure.comp). The force pass gathers neighbours' velocity and kind
+// from this one buffer instead of a velocity load plus a conditional one for walls.
+#define HEMO_BPRESSURE_BINDING_VISCOUS_VEL 6
 #define HEMO_BPRESSURE_BINDING_CLOCK 7
 #define HEMO_BPRESSURE_BINDING_COUNT 8
 
@@ -115,7 +120,7 @@
 #define HEMO_FORCES_BINDING_STATUS 10
 #define HEMO_FORCES_BINDING_TAU_A 11
 #define HEMO_FORCES_BINDING_TAU_B 12
-#define HEMO_FORCES_BINDING_WALL_VEL 13
+#define HEMO_FORCES_BINDING_VISCOUS_VEL 13
 #define HEMO_FORCES_BINDING_COUNT 14
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time

@@ -25,7 +25,7 @@ layout(std430, binding = HEMO_BPRESSURE_BINDING_PARAMS) readonly buffer Params {
 layout(std430, binding = HEMO_BPRESSURE_BINDING_STATE) buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
-layout(std430, binding = HEMO_BPRESSURE_BINDING_WALL_VEL) writeonly buffer WallVel { vec4 wallVel[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
 layout(push_constant) uniform Push {
   uint n;
@@ -64,10 +64,10 @@ void main() {
   }
   if (sumW <= 0.0) {
     state[b] = vec4(params.rho0, hemo_background_pressure(clocks[pc.clockIn].time, params), 0.0, 0.0);
-    wallVel[b] = vec4(vb.xyz, 0.0);
+    viscousVel[b] = vb;
     return;
   }
-  wallVel[b] = vec4(2.0 * vb.xyz - sumV / sumW, 0.0);
+  viscousVel[b] = vec4(2.0 * vb.xyz - sumV / sumW, vb.w);  // w: the kind
   float p = (sumP + dot(params.gravity.xyz, sumRhoR)) / sumW;
   if (params.clampNegativePressure != 0u) {
     p = max(p, 0.0);

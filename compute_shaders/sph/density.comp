@@ -6,6 +6,7 @@
 //   p_i   = B ((rho_i / rho0)^7 - 1) + p_bg,  B = c0^2 rho0 / 7,  optionally clamped at 0
 // with p_bg the (ramped) background pressure of common/tait.glsl.
 // Fluid particles only; boundary particles get theirs from boundary_pressure.comp.
+// Also copies each fluid particle's velocity and kind into the viscous velocities (interface/sph.h).
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -21,6 +22,7 @@ layout(std430, binding = HEMO_DENSITY_BINDING_STATE) writeonly buffer State { ve
 layout(std430, binding = HEMO_DENSITY_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
+layout(std430, binding = HEMO_DENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(push_constant) uniform Push {
   uint n;
   uint clockIn;  // the record this step reads
@@ -28,9 +30,14 @@ layout(push_constant) uniform Push {
 
 void main() {
   const uint i = hemo_global_index();
-  if (i >= pc.n || uint(velocities[i].w) != HEMO_KIND_FLUID) {
+  if (i >= pc.n) {
     return;
   }
+  const vec4 vi = velocities[i];
+  if (uint(vi.w) != HEMO_KIND_FLUID) {
+    return;
+  }
+  viscousVel[i] = vi;  // what the force pass gathers of a fluid neighbour: velocity and kind
   const vec4 pi = positions[i];
   const HemoPairParams pp = hemo_pair_params();
   float rho = pi.w * hemo_kernel_w(0.0, pp.h, pp.kernelNorm);

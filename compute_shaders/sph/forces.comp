@@ -36,7 +36,11 @@ layout(std430, binding = HEMO_FORCES_BINDING_IDS) readonly buffer Ids { uint ids
 layout(std430, binding = HEMO_FORCES_BINDING_STATUS) buffer Status { uint status[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_TAU_A) readonly buffer TauA { vec4 tauA[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_TAU_B) readonly buffer TauB { vec4 tauB[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_WALL_VEL) readonly buffer WallVel { vec4 wallVel[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_VISCOUS_VEL) readonly buffer ViscousVel { vec4 viscousVel[]; };
+// 1 when the scene enables the SPS term. A specialization constant rather than a branch on
+// the parameter block: llvmpipe runs a branch's body under a lane mask even when no lane
+// takes it, and the dead SPS loads cost ~10% of the pass (dam break, docs/benchmarks.md).
+layout(constant_id = 1) const uint kSps = 0u;
 
 // tau / rho^2 as a symmetric matrix, from the SPS stress per density (sps_stress.comp).
 mat3 hemo_sps_tensor(uint j, float rho) {
@@ -80,7 +84,7 @@ void main() {
   const float psi = params.psi;
   const float pOverRho2I = si.y / (si.x * si.x);
 
-  const bool sps = params.spsEnabled != 0u;
+  const bool sps = kSps != 0u;
   const mat3 spsI = sps ? hemo_sps_tensor(i, si.x) : mat3(0.0);
   vec3 a = vec3(0.0);
   vec3 repulsion = vec3(0.0);
@@ -96,15 +100,14 @@ void main() {
     }
     const float r = sqrt(r2);
     const vec3 gradW = d * (hemo_kernel_dwdr(r, h, pp.kernelNorm) / r);
-    const vec4 vj = velocities[j];
+    const vec4 vj = viscousVel[j];  // fluid: own velocity; boundary: no-slip velocity
     const bool fluidJ = uint(vj.w) == HEMO_KIND_FLUID;
     const vec2 sj = state[j].xy;
     const float rhoJ = sj.x;
     const float pOverRho2J = sj.y / (sj.x * sj.x);
     const float invRhoIJ = 1.0 / (si.x * rhoJ);
     a -= (pj.w * (pOverRho2I + pOverRho2J)) * gradW;
-    const vec3 viscousVj = fluidJ ? vj.xyz : wallVel[j].xyz;
-    a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + etaSq)) * (vi.xyz - viscousVj);
+    a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + etaSq)) * (vi.xyz - vj.xyz);
     if (sps && fluidJ) {
       // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
       a += pj.w * ((spsI + hemo_sps_tensor(j, rhoJ)) * gradW);

@@ -166,7 +166,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       nlist_(context, perParticle(particles, 4) * settings.neighbourCapacity, gpu::MemoryUse::Device, "neighbour list"),
       driftX_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "x displacement since the list build"),
       reach_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "reach since the list build"),
-      wallVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "no-slip wall velocities"),
+      viscousVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "viscous velocities"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
@@ -202,7 +202,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {}});
   boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {}});
   spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
-  forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup,
+                        {settings.sps ? 1u : 0u}});  // constant 1: the SPS term compiled in or out
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
   reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {}});
   const ParticleArrays& a = particles.live();
@@ -223,14 +224,15 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_DENSITY_BINDING_STATE, &state_},
                                    {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
                                    {HEMO_DENSITY_BINDING_NLIST, &nlist_},
-                                   {HEMO_DENSITY_BINDING_CLOCK, &clock_}});
+                                   {HEMO_DENSITY_BINDING_CLOCK, &clock_},
+                                   {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_}});
   boundarySet_ = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
                                              {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
                                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
                                              {HEMO_BPRESSURE_BINDING_STATE, &state_},
                                              {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
                                              {HEMO_BPRESSURE_BINDING_NLIST, &nlist_},
-                                             {HEMO_BPRESSURE_BINDING_WALL_VEL, &wallVel_},
+                                             {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
                                              {HEMO_BPRESSURE_BINDING_CLOCK, &clock_}});
   spsSet_ = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
                                  {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
@@ -253,7 +255,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  {HEMO_FORCES_BINDING_STATUS, &status_},
                                  {HEMO_FORCES_BINDING_TAU_A, &tauA_},
                                  {HEMO_FORCES_BINDING_TAU_B, &tauB_},
-                                 {HEMO_FORCES_BINDING_WALL_VEL, &wallVel_}});
+                                 {HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_}});
   integrateSet_ = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                        {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},
@@ -281,7 +283,7 @@ float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - 
 
 void SphSolver::attachWall(const SpringNetwork& network) {
   const FluidBuffers fluid{&grid_.slotOfId(), &accel_,  &dtLimit_, &paramsBuffer_,
-                           &state_,            &ncount_, &nlist_,   &wallVel_};
+                           &state_,            &ncount_, &nlist_,   &viscousVel_};
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }

@@ -144,7 +144,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  {HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts},
                                  {HEMO_SPRINGF_BINDING_NLIST, fluid.neighbourList},
                                  {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
-                                 {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.wallVelocities},
+                                 {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities},
                                  {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
                                  {HEMO_SPRINGF_BINDING_FRAMES, &frames_}});
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},

@@ -190,7 +190,7 @@ class SphSolver {
                            std::uint32_t mode);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
-  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, driftX_, reach_, wallVel_;
+  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, driftX_, reach_, viscousVel_;
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer fluidCells_;

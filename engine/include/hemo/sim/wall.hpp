@@ -72,7 +72,7 @@ struct FluidBuffers {
   const gpu::Buffer* state;
   const gpu::Buffer* neighbourCounts;
   const gpu::Buffer* neighbourList;
-  const gpu::Buffer* wallVelocities;
+  const gpu::Buffer* viscousVelocities;  // a wall particle's entry: the no-slip velocity the fluid saw
 };
 
 class MassSpring {
