@@ -42,6 +42,26 @@ double lidLoad(const Snapshot& s, std::uint32_t fluid, double h, float lidZ) {
   return -downwardLoad(s, fluid, h, [lidZ](float z) { return z > lidZ; });
 }
 
+double largestDisplacement(const Snapshot& from, const Snapshot& to, double belowZ) {
+  if (to.ids.size() != from.ids.size()) {
+    throw std::invalid_argument("largestDisplacement: the snapshots do not hold the same particles");
+  }
+  std::vector<glm::vec3> start(from.ids.size());
+  for (std::size_t i = 0; i < from.ids.size(); ++i) {
+    if (from.ids[i] >= start.size()) throw std::invalid_argument("largestDisplacement: an id out of range");
+    start[from.ids[i]] = glm::vec3(from.positions[i]);
+  }
+  double worst = 0.0;
+  for (std::size_t i = 0; i < to.ids.size(); ++i) {
+    if (to.ids[i] >= start.size()) throw std::invalid_argument("largestDisplacement: an id out of range");
+    const glm::vec3 s = start[to.ids[i]];
+    if (to.velocities[i].w == float(ParticleKind::Fluid) && s.z < belowZ) {
+      worst = std::max(worst, double(glm::length(glm::vec3(to.positions[i]) - s)));
+    }
+  }
+  return worst;
+}
+
 double surgeFront(const Snapshot& s, std::uint32_t fluid, float maxZ) {
   double front = -1e30;
   for (std::uint32_t i = 0; i < fluid; ++i) {

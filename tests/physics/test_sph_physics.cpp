@@ -89,21 +89,6 @@ TEST_F(SphPhysicsTest, BodyCentredLatticeIsAStableEquilibriumUnderPressure) {
   EXPECT_LT(fastest, 0.1) << "m/s";
 }
 
-// Largest displacement (in dp) of the fluid particles between two snapshots, over those that
-// started below z = belowZ.
-double largestDrift(const sim::Snapshot& from, const sim::Snapshot& to, double dp, double belowZ) {
-  std::vector<glm::vec3> start(from.ids.size());
-  for (std::size_t i = 0; i < from.ids.size(); ++i) start[from.ids[i]] = glm::vec3(from.positions[i]);
-  double worst = 0.0;
-  for (std::size_t i = 0; i < to.ids.size(); ++i) {
-    const glm::vec3 s = start[to.ids[i]];
-    if (to.velocities[i].w == float(sim::ParticleKind::Fluid) && s.z < belowZ) {
-      worst = std::max(worst, double(glm::length(glm::vec3(to.positions[i]) - s)) / dp);
-    }
-  }
-  return worst;
-}
-
 // Hydrostatics: a 0.1 m column filled body-centred (576 particles; the simple cubic lattice
 // is unstable under pressure, see BodyCentredLatticeIsAStableEquilibriumUnderPressure), settled
 // with damping until 0.8 s. The pressure on the floor is the vertical force the fluid exerts
@@ -145,11 +130,11 @@ TEST_F(SphPhysicsTest, HydrostaticColumnLoadsTheFloorWithRhoGH) {
     }
   }
   const double load = loadSum / samples, gradient = -slopeSum / samples;
-  const double deepDrift = largestDrift(settled, sim.snapshot(), dp, top - 2.0 * h);
+  const double deepDrift = sim::largestDisplacement(settled, sim.snapshot(), top - 2.0 * h) / dp;
   RecordProperty("floor_pressure_pa", std::to_string(load));
   RecordProperty("deep_drift_dp", std::to_string(deepDrift));
   std::printf("open column: floor %.1f Pa, gradient %.1f Pa/m, drift below the surface layer %.3f dp, of all %.3f dp\n",
-              load, gradient, deepDrift, largestDrift(settled, sim.snapshot(), dp, 1e9));
+              load, gradient, deepDrift, sim::largestDisplacement(settled, sim.snapshot(), 1e9) / dp);
   EXPECT_NEAR(load, rho0 * g * H, 0.02 * rho0 * g * H) << "pressure on the floor " << load << " Pa";
   EXPECT_NEAR(gradient, rho0 * g, 0.05 * rho0 * g) << "pressure gradient " << gradient << " Pa/m";
   EXPECT_EQ(sim.escapedParticles(), 0u);
@@ -190,7 +175,7 @@ TEST_F(SphPhysicsTest, ClosedHydrostaticColumnStaysPut) {
     ++samples;
   }
   const sim::Snapshot last = sim.snapshot();
-  const double drift = largestDrift(settled, last, dp, 1e9), load = loadSum / samples;
+  const double drift = sim::largestDisplacement(settled, last, 1e9) / dp, load = loadSum / samples;
   double fastest = 0.0;
   for (std::size_t i = 0; i < last.ids.size(); ++i) fastest = std::max(fastest, double(glm::length(glm::vec3(last.velocities[i]))));
   RecordProperty("drift_dp", std::to_string(drift));

@@ -13,6 +13,10 @@ double floorLoad(const Snapshot& snapshot, std::uint32_t fluidParticles, double 
 // z = lidZ. Positive when the fluid pushes up.
 double lidLoad(const Snapshot& snapshot, std::uint32_t fluidParticles, double h, float lidZ);
 
+// Largest distance (m) a fluid particle moved between two snapshots of the same run, over the
+// particles that started below z = belowZ (matched by id; no periodic wrapping: for tanks).
+double largestDisplacement(const Snapshot& from, const Snapshot& to, double belowZ = 1e30);
+
 // Largest x among fluid particles below z = maxZ (the surge front of a dam break).
 double surgeFront(const Snapshot& snapshot, std::uint32_t fluidParticles, float maxZ);
 
