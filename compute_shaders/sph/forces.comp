@@ -95,11 +95,11 @@ void main() {
     const vec4 pj = positions[j];
     const vec3 d = hemo_min_image(xi - pj.xyz, pp);
     const float r2 = dot(d, d);
-    if (r2 >= pp.support2 || r2 == 0.0) {
-      continue;  // outside the support (list skin), or coincident: no defined direction
-    }
-    const float r = sqrt(r2);
-    const vec3 gradW = d * (hemo_kernel_dwdr(r, h, pp.kernelNorm) / r);
+    // Outside the support (list skin) or coincident (no defined direction): the pair adds
+    // nothing. A factor rather than a branch (llvmpipe runs both ways under a mask anyway).
+    const float inside = (r2 < pp.support2 && r2 > 0.0) ? 1.0 : 0.0;
+    const float r = sqrt(max(r2, 1.0e-30));
+    const vec3 gradW = d * (inside * hemo_kernel_dwdr(min(r, 2.0 * h), h, pp.kernelNorm) / r);
     const vec4 vj = viscousVel[j];  // fluid: own velocity; boundary: no-slip velocity
     const bool fluidJ = uint(vj.w) == HEMO_KIND_FLUID;
     const vec2 sj = state[j].xy;
@@ -112,7 +112,7 @@ void main() {
       // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
       a += pj.w * ((spsI + hemo_sps_tensor(j, rhoJ)) * gradW);
     }
-    if (!fluidJ && pj.w > 0.0) {  // detached wall particles (no SPH mass) do not repel
+    if (!fluidJ && pj.w > 0.0 && inside > 0.0) {  // detached wall particles (no SPH mass) do not repel
       const vec3 nrm = normals[j].xyz;
       const float x = dot(d, nrm);
       float w;
