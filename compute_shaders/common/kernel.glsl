@@ -1,6 +1,6 @@
 // Wendland C2 kernel in 3D (Wendland 1995; as used for SPH by Dehnen & Aly 2012):
 //   W(r, h) = 21 / (16 pi h^3) (1 - q/2)^4 (2q + 1),  q = r / h,  support r < 2h.
-// kernelNorm = 21 / (16 pi h^3). Both functions expect 0 <= r < 2h.
+// kernelNorm = 21 / (16 pi h^3). hemo_kernel_w expects 0 <= r < 2h.
 float hemo_kernel_w(float r, float h, float kernelNorm) {
   const float q = r / h;
   const float t = 1.0 - 0.5 * q;
@@ -8,9 +8,16 @@ float hemo_kernel_w(float r, float h, float kernelNorm) {
   return kernelNorm * t2 * t2 * (2.0 * q + 1.0);
 }
 
-// dW/dr = kernelNorm * (-5 q (1 - q/2)^3) / h
-float hemo_kernel_dwdr(float r, float h, float kernelNorm) {
-  const float q = r / h;
-  const float t = 1.0 - 0.5 * q;
-  return kernelNorm * (-5.0 * q * t * t * t) / h;
+// dW/dr / r, the factor that turns a separation d (|d| = r) into grad W = d * factor:
+//   kernelNorm * (-5 q (1 - q/2)^3) / (h r) = gradNorm * (1 - q/2)^3,  gradNorm = -5 kernelNorm / h^2.
+// No division by r, so a coincident pair gets grad W = 0; (1 - q/2) is clamped at 0, so any r
+// beyond the support (2h) gets 0 as well. invH = 1 / h.
+float hemo_kernel_grad_norm(float h, float kernelNorm) {
+  const float invH = 1.0 / h;
+  return -5.0 * kernelNorm * invH * invH;
+}
+
+float hemo_kernel_grad_factor(float r, float invH, float gradNorm) {
+  const float t = max(1.0 - 0.5 * r * invH, 0.0);
+  return gradNorm * t * t * t;
 }

@@ -77,6 +77,8 @@ void main() {
   // Parameters read once into registers (see HemoPairParams).
   const HemoPairParams pp = hemo_pair_params();
   const float h = pp.h;
+  const float invH = 1.0 / h;
+  const float gradNorm = hemo_kernel_grad_norm(h, pp.kernelNorm);
   const float twoMu = 2.0 * params.mu;
   const float etaSq = params.etaSq;
   const float cutoff = params.repulsionCutoff;
@@ -95,11 +97,10 @@ void main() {
     const vec4 pj = positions[j];
     const vec3 d = hemo_min_image(xi - pj.xyz, pp);
     const float r2 = dot(d, d);
-    // Outside the support (list skin) or coincident (no defined direction): the pair adds
-    // nothing. A factor rather than a branch (llvmpipe runs both ways under a mask anyway).
-    const float inside = (r2 < pp.support2 && r2 > 0.0) ? 1.0 : 0.0;
-    const float r = sqrt(max(r2, 1.0e-30));
-    const vec3 gradW = d * (inside * hemo_kernel_dwdr(min(r, 2.0 * h), h, pp.kernelNorm) / r);
+    // grad W vanishes beyond the support (the list's skin) and for a coincident pair (no
+    // defined direction), so neither needs a branch: llvmpipe runs both ways of a branch under
+    // a lane mask, and the branch itself cost ~5% of the pass.
+    const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);
     const vec4 vj = viscousVel[j];  // fluid: own velocity; boundary: no-slip velocity
     const bool fluidJ = uint(vj.w) == HEMO_KIND_FLUID;
     const vec2 sj = state[j].xy;
@@ -112,7 +113,7 @@ void main() {
       // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
       a += pj.w * ((spsI + hemo_sps_tensor(j, rhoJ)) * gradW);
     }
-    if (!fluidJ && pj.w > 0.0 && inside > 0.0) {  // detached wall particles (no SPH mass) do not repel
+    if (!fluidJ && pj.w > 0.0 && r2 > 0.0) {  // detached wall particles (no SPH mass) do not repel
       const vec3 nrm = normals[j].xyz;
       const float x = dot(d, nrm);
       float w;

@@ -36,18 +36,16 @@ void main() {
   }
   const vec3 xi = positions[i].xyz;
   const HemoPairParams pp = hemo_pair_params();
+  const float invH = 1.0 / pp.h;
+  const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
   mat3 g = mat3(0.0);  // g[b][a] = d u_a / d x_b (column b)
   const uint count = neighbourCount[i];
   for (uint k = 0u; k < count; ++k) {
     const uint j = neighbourList[hemo_list_slot(i, k, pp)];
     const vec4 pj = positions[j];
     const vec3 d = hemo_min_image(xi - pj.xyz, pp);
-    const float r2 = dot(d, d);
-    if (r2 >= pp.support2 || r2 == 0.0) {
-      continue;
-    }
-    const float r = sqrt(r2);
-    const vec3 gradW = d * (hemo_kernel_dwdr(r, pp.h, pp.kernelNorm) / r);
+    // grad W is 0 beyond the support and for a coincident pair (common/kernel.glsl)
+    const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(dot(d, d)), invH, gradNorm);
     const vec3 du = (velocities[j].xyz - vi.xyz) * (pj.w / state[j].x);
     g += outerProduct(du, gradW);
   }

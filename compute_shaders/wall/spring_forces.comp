@@ -38,6 +38,8 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_VEL) readonly buffer WallVel 
 // the repulsion with f's normalisation 1 / max(sum T, 1) from accel[f].w.
 vec3 hemo_fluid_reaction(uint w) {
   const HemoPairParams pp = hemo_pair_params();
+  const float invH = 1.0 / pp.h;
+  const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
   const float twoMu = 2.0 * params.mu;
   const float etaSq = params.etaSq;
   const float cutoff = params.repulsionCutoff;
@@ -58,8 +60,7 @@ vec3 hemo_fluid_reaction(uint w) {
     if (r2 >= pp.support2 || r2 == 0.0) {
       continue;
     }
-    const float r = sqrt(r2);
-    const vec3 gradW = d * (hemo_kernel_dwdr(r, pp.h, pp.kernelNorm) / r);
+    const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // as sph/forces.comp
     const vec2 sf = state[f].xy;
     const float pOverRho2F = sf.y / (sf.x * sf.x);
     const float invRhoFW = 1.0 / (sf.x * sw.x);
