@@ -130,6 +130,9 @@ MinMaxReduce::MinMaxReduce(Context& context, const Buffer& values, std::uint64_t
     sets_.push_back(reduce_->makeSet({{HEMO_REDUCE_BINDING_VALUES, &values},
                                       {HEMO_REDUCE_BINDING_PARTIALS_IN, &in},
                                       {HEMO_REDUCE_BINDING_PARTIALS_OUT, &partials_.back()}}));
+    finalSets_.push_back(reduce_->makeSet({{HEMO_REDUCE_BINDING_VALUES, &values},
+                                           {HEMO_REDUCE_BINDING_PARTIALS_IN, &in},
+                                           {HEMO_REDUCE_BINDING_PARTIALS_OUT, &result_}}));
     if (blocks <= 1) break;
     len = blocks;
   }
@@ -147,15 +150,15 @@ void MinMaxReduce::record(CommandRecorder& rec, std::uint64_t n) const {
   std::uint64_t len = n;
   std::size_t k = 0;
   for (;; ++k) {
-    rec.dispatch(*reduce_, sets_[k], ReducePush{static_cast<std::uint32_t>(len), k > 0 ? 1u : 0u},
-                 reduce_->groupsFor(len, HEMO_REDUCE_ITEMS));
+    // The last level (one workgroup) writes the result itself: no copy, and no transfer
+    // barriers around one, in every step's three reductions.
+    const bool last = len <= block;
+    rec.dispatch(*reduce_, last ? finalSets_[k] : sets_[k],
+                 ReducePush{static_cast<std::uint32_t>(len), k > 0 ? 1u : 0u}, reduce_->groupsFor(len, HEMO_REDUCE_ITEMS));
     rec.computeToCompute();
-    if (len <= block) break;
+    if (last) break;
     len = ceilDiv(len, block);
   }
-  rec.computeToTransfer();
-  rec.copy(partials_[k], result_, 8);
-  rec.transferToCompute();
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -51,7 +51,8 @@ class MinMaxReduce {
   const ComputePipeline* reduce_;
   std::uint64_t capacity_;
   std::deque<Buffer> partials_;
-  std::vector<DescriptorSet> sets_;
+  std::vector<DescriptorSet> sets_;        // level k: reads level k - 1's partials, writes its own
+  std::vector<DescriptorSet> finalSets_;   // the same, writing the result (the last level of a run)
   Buffer result_;
 };
 
