@@ -31,7 +31,8 @@ struct SphParams {
   float backgroundPressure;  // Pa, added to the Tait pressure once ramped up
   float backgroundRamp;      // s, linear ramp of the background pressure from t = 0 (0: none)
   uint listParticleStride;
-  float reserved1;
+  float deltaSph;  // delta of the continuity density's diffusion term
+  vec4 gravityOnly;  // xyz: gravity without the body force (m/s^2)
 };
 
 // The parameters the neighbour loops use, read once into registers: llvmpipe does not hoist

@@ -48,7 +48,10 @@
 //                            the transmural (lumen) pressure of a vessel
 //   float backgroundRamp     (s): p_bg rises linearly from 0 at t = 0 to its value at this time
 //   uint  listParticleStride see listStride
-//   float reserved1
+//   float deltaSph           delta of the continuity density's diffusion term (delta-SPH); 0 with
+//                            summation density
+//   vec4  gravityOnly        xyz: gravity alone (m/s^2), without the body force: the hydrostatic
+//                            density difference the diffusion term leaves alone
 
 // sph/mark_fluid_cells.comp: flags (non-zero) every grid cell that holds a fluid particle, so
 // boundary particles with no fluid in their 27 cells skip the list build.
@@ -77,7 +80,12 @@
 #define HEMO_DENSITY_BINDING_NLIST 5
 #define HEMO_DENSITY_BINDING_CLOCK 6  // the solver's clock (ramped background pressure)
 #define HEMO_DENSITY_BINDING_VISCOUS_VEL 7  // written for fluid particles: their velocity and kind
-#define HEMO_DENSITY_BINDING_COUNT 8
+// With continuity density (specialization constant 1 of this pass and the integrator), a fluid
+// particle's density is carried in normals[i].w (fluid particles have no normal; the grid's
+// reorder moves it with the particle; 0 reads as rho0, the fill's density). The pass advances
+// it over the last step into state.x, and the integrator stores state.x back in normals[i].w.
+#define HEMO_DENSITY_BINDING_NORMALS 8
+#define HEMO_DENSITY_BINDING_COUNT 9
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).
@@ -143,7 +151,8 @@
 #define HEMO_INTEGRATE_BINDING_DRIFT_X 12  // float: x displacement since the list build
 #define HEMO_INTEGRATE_BINDING_INFLOW 13  // InflowParams (common/inflow.glsl): the driven inflow zone
 #define HEMO_INTEGRATE_BINDING_STATE 14  // vec4 (rho, p): the inflow zone's mass supply reads rho
-#define HEMO_INTEGRATE_BINDING_COUNT 15
+#define HEMO_INTEGRATE_BINDING_NORMALS 15  // w: where a fluid particle carries its density (continuity)
+#define HEMO_INTEGRATE_BINDING_COUNT 16
 
 // sph/reach.comp: each slot's reach for the rebuild test, |d - (c, 0, 0)| (+ the midpoint
 // look-ahead), d its displacement since the list build and c the middle of the x

@@ -7,6 +7,20 @@
 // with p_bg the (ramped) background pressure of common/tait.glsl.
 // Fluid particles only; boundary particles get theirs from boundary_pressure.comp.
 // Also copies each fluid particle's velocity and kind into the viscous velocities (interface/sph.h).
+//
+// With continuity density (kContinuity = 1) the density is not summed: each fluid particle
+// carries its own (normals[i].w, interface/sph.h; the integrator stores this pass's result
+// there), and this pass advances it over the step just taken, with the rate at the positions
+// and velocities that step produced (the partner of symplectic Euler's x1 = x0 + dt v1):
+//   rho_i(t + dt) = rho_i(t) + dt (d rho_i / dt)(x(t + dt), v(t + dt), rho(t))
+//   d rho_i / dt = sum_j m_j (v_i - v_j) . grad W_ij                     (continuity)
+//                + delta h c0 sum_{j fluid} psi_ij (x_ji . grad W_ij) / (r^2 + eta^2) m_j / rho_j
+//   psi_ij = 2 ((rho_j - rho_i) - (rho^H_j - rho^H_i)),
+//   rho^H_j - rho^H_i = rho0 ((1 + rho0 g . x_ji / B)^(1/7) - 1)
+// The second line is the density diffusion of delta-SPH (Molteni & Colagrossi 2009); psi
+// leaves out the hydrostatic density difference (Fourtakas et al. 2019), so a column at rest
+// is not diffused. Boundary neighbours take part in the continuity term with their own
+// velocity (a moving wall compresses the fluid), not in the diffusion.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -23,6 +37,14 @@ layout(std430, binding = HEMO_DENSITY_BINDING_NCOUNT) readonly buffer Counts { u
 layout(std430, binding = HEMO_DENSITY_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
+layout(std430, binding = HEMO_DENSITY_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
+layout(constant_id = 1) const uint kContinuity = 0u;
+
+// A fluid particle's carried density (continuity); 0 (never advanced) reads as rho0.
+float hemo_carried_density(uint i) {
+  const float rho = normals[i].w;
+  return rho > 0.0 ? rho : params.rho0;
+}
 layout(push_constant) uniform Push {
   uint n;
   uint clockIn;  // the record this step reads
@@ -40,14 +62,40 @@ void main() {
   viscousVel[i] = vi;  // what the force pass gathers of a fluid neighbour: velocity and kind
   const vec4 pi = positions[i];
   const HemoPairParams pp = hemo_pair_params();
-  float rho = pi.w * hemo_kernel_w(0.0, pp.h, pp.kernelNorm);
   const uint count = neighbourCount[i];
-  for (uint k = 0u; k < count; ++k) {
-    const vec4 pj = positions[neighbourList[hemo_list_slot(i, k, pp)]];
-    const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);
-    const float r2 = dot(d, d);
-    if (r2 < pp.support2) {
-      rho += pj.w * hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
+  float rho;
+  if (kContinuity != 0u) {
+    rho = hemo_carried_density(i);
+    const float invH = 1.0 / pp.h;
+    const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
+    const float diffusion = params.deltaSph * pp.h * params.c0;
+    const vec3 g = params.gravityOnly.xyz;
+    const float rho0 = params.rho0, hydroScale = params.rho0 / params.taitB, etaSq = params.etaSq;  // registers
+    float continuity = 0.0, diffused = 0.0;
+    for (uint k = 0u; k < count; ++k) {
+      const uint j = neighbourList[hemo_list_slot(i, k, pp)];
+      const vec4 pj = positions[j];
+      const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);  // x_ij
+      const float r2 = dot(d, d);
+      const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // 0 beyond the support
+      const vec4 vj = velocities[j];
+      continuity += pj.w * dot(vi.xyz - vj.xyz, gradW);
+      if (uint(vj.w) == HEMO_KIND_FLUID) {
+        const float rhoJ = hemo_carried_density(j);
+        const float hydro = rho0 * (pow(max(1.0 - hydroScale * dot(g, d), 1.0e-6), 1.0 / 7.0) - 1.0);
+        diffused += 2.0 * ((rhoJ - rho) - hydro) * (-dot(d, gradW)) / (r2 + etaSq) * (pj.w / rhoJ);
+      }
+    }
+    rho += clocks[pc.clockIn].lastDt * (continuity + diffusion * diffused);
+  } else {
+    rho = pi.w * hemo_kernel_w(0.0, pp.h, pp.kernelNorm);
+    for (uint k = 0u; k < count; ++k) {
+      const vec4 pj = positions[neighbourList[hemo_list_slot(i, k, pp)]];
+      const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);
+      const float r2 = dot(d, d);
+      if (r2 < pp.support2) {
+        rho += pj.w * hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
+      }
     }
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);

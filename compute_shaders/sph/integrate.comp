@@ -39,6 +39,10 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) readonly buffer Po
 layout(std430, binding = HEMO_INTEGRATE_BINDING_DRIFT_X) writeonly buffer DriftX { float driftX[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_INFLOW) readonly buffer Inflow { InflowParams inflow; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STATE) readonly buffer State { vec4 state[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_NORMALS) buffer Normals { vec4 normals[]; };
+// 1: fluid particles carry their density in normals[i].w: this step's, as the density pass
+// advanced it (state.x), is stored there for the next (symplectic Euler only).
+layout(constant_id = 1) const uint kContinuity = 0u;
 layout(push_constant) uniform Push {
   uint n;
   uint step;
@@ -122,6 +126,7 @@ void main() {
       const vec4 x = positions[i];
       savedPos[i] = x;
       savedVel[i] = v;
+
       const vec4 a = accel[i];
       vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
       vec3 drift = v.xyz;
@@ -204,6 +209,9 @@ void main() {
   if (any(isnan(x.xyz)) || any(isinf(x.xyz)) || any(isnan(v.xyz)) || any(isinf(v.xyz))) {
     atomicMin(status[HEMO_STATUS_FIRST_BAD_STEP], pc.step);
     atomicAdd(status[HEMO_STATUS_NONFINITE], 1u);
+  }
+  if (kContinuity != 0u && uint(v.w) == HEMO_KIND_FLUID) {
+    normals[i].w = state[i].x;  // non-finite densities show in the forces (blow-up diagnosis)
   }
   velocities[i] = v;
   x.w = hemo_sph_mass(x.w, accel[i].w);

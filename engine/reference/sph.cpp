@@ -33,12 +33,32 @@ glm::dvec3 separation(const SphModel& m, const glm::dvec3& xi, const glm::dvec3&
 std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particles, const SphModel& m) {
   std::vector<glm::dvec2> out(particles.size());
   const double support = 2.0 * m.h;
+  auto carried = [&](const SphParticle& p) { return p.density > 0.0 ? p.density : m.rho0; };
   for (std::size_t i = 0; i < particles.size(); ++i) {
     if (particles[i].kind != 0) continue;
     double rho = 0.0;
-    for (const auto& pj : particles) {
-      const double r = glm::length(separation(m, particles[i].x, pj.x));
-      if (r < support) rho += pj.mass * kernelW(r, m.h);
+    if (m.continuity) {
+      const SphParticle& pi = particles[i];
+      const double rhoI = carried(pi), etaSq = 0.01 * m.h * m.h;
+      double rate = 0.0, diffused = 0.0;
+      for (std::size_t j = 0; j < particles.size(); ++j) {
+        const SphParticle& pj = particles[j];
+        const glm::dvec3 d = separation(m, pi.x, pj.x);  // x_ij
+        const double r = glm::length(d);
+        if (j == i || r >= support || r == 0.0) continue;
+        const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
+        rate += pj.mass * glm::dot(pi.v - pj.v, gradW);
+        if (pj.kind != 0) continue;
+        const double rhoJ = carried(pj);
+        const double hydro = m.rho0 * (std::pow(std::max(1.0 - m.rho0 * glm::dot(m.gravityOnly, d) / m.taitB, 1e-6), 1.0 / 7.0) - 1.0);
+        diffused += 2.0 * ((rhoJ - rhoI) - hydro) * -glm::dot(d, gradW) / (r * r + etaSq) * pj.mass / rhoJ;
+      }
+      rho = rhoI + m.lastDt * (rate + m.deltaSph * m.h * m.c0 * diffused);
+    } else {
+      for (const auto& pj : particles) {
+        const double r = glm::length(separation(m, particles[i].x, pj.x));
+        if (r < support) rho += pj.mass * kernelW(r, m.h);
+      }
     }
     double p = m.taitB * (std::pow(rho / m.rho0, 7.0) - 1.0) + m.backgroundPressure;
     if (m.clampNegativePressure) p = std::max(p, 0.0);

@@ -58,6 +58,8 @@ const std::vector<Field>& schema() {
            {"expected_max_speed_m_s", Kind::Number, "m/s", 0, 1e4, true, nullptr, "Largest flow speed expected; sets c0 unless given."},
            {"clamp_negative_pressure", Kind::Bool, "", 0, 0, false, true, "Clamp Tait pressure at 0 (free surfaces)."},
            {"turbulence", Kind::Choice, "", 0, 0, false, "none", "Sub-particle-scale turbulence model (Dalrymple & Rogers 2006), or none.", {"none", "sps"}},
+           {"density", Kind::Choice, "", 0, 0, false, "summation", "How the density is found: summed over the neighbours (the seed's method), or carried by each particle and advanced by the continuity equation with delta-SPH density diffusion (holds a free surface at rest; not with a vessel inflow).", {"summation", "continuity"}},
+           {"delta_sph", Kind::Number, "-", 0, 1, false, 0.1, "delta of the continuity density's diffusion term (Molteni & Colagrossi 2009, with the hydrostatic correction of Fourtakas et al. 2019)."},
            {"smagorinsky_constant", Kind::Number, "1", 0, 1, false, 0.12, "C_s of the SPS eddy viscosity nu_t = (C_s dp)^2 |S|."},
            {"blinn_constant", Kind::Number, "1", 0, 1, false, 0.0066, "C_I of the SPS isotropic term -2/3 C_I dp^2 |S|^2."},
            {"background_pressure_Pa", Kind::Number, "Pa", 0, 1e8, false, 0.0, "Lumen (background) pressure p_bg added to the Tait pressure of every particle: what pressurises a vessel. Uniform, so it pushes only where the fluid meets a wall or ends."},
@@ -307,6 +309,9 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
     }
     return;
   }
+  if (s.sph.densityMethod == sim::DensityMethod::Continuity) {
+    c.fail("vessel.inflow", "cannot be used with fluid.density \"continuity\" (the inflow zone's mass supply acts on the summed density)");
+  }
   if (!s.sph.periodic[0]) {
     c.fail("vessel.inflow", "needs a periodic x axis (domain.periodic [\"x\"]): the outflow is recycled to the inlet through the periodic seam");
   }
@@ -531,6 +536,12 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.sph.soundSpeed = c0 > 0.0f ? c0 : 10.0f * s.expectedMaxSpeed;
   s.sph.clampNegativePressure = fluid["clamp_negative_pressure"].get<bool>();
   s.sph.sps = fluid["turbulence"].get<std::string>() == "sps";
+  s.sph.densityMethod = fluid["density"].get<std::string>() == "continuity" ? sim::DensityMethod::Continuity
+                                                                            : sim::DensityMethod::Summation;
+  s.sph.deltaSph = fluid["delta_sph"].get<float>();
+  if (s.sph.densityMethod == sim::DensityMethod::Continuity && j["time"]["integrator"].get<std::string>() != "symplectic_euler") {
+    c.fail("fluid.density", "\"continuity\" needs time.integrator \"symplectic_euler\" (its density update is that scheme's partner)");
+  }
   s.sph.smagorinsky = fluid["smagorinsky_constant"].get<float>();
   s.sph.blinn = fluid["blinn_constant"].get<float>();
   s.sph.backgroundPressure = fluid["background_pressure_Pa"].get<float>();

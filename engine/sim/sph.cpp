@@ -65,6 +65,9 @@ void SphSettings::validate() const {
   require(std::isfinite(backgroundPressure), "background pressure must be finite (Pa)");
   require(std::isfinite(backgroundPressureRamp) && backgroundPressureRamp >= 0.0f,
           "background pressure ramp must be >= 0 (s)");
+  require(std::isfinite(deltaSph) && deltaSph >= 0.0f && deltaSph <= 1.0f, "delta-SPH coefficient must be in [0, 1]");
+  require(densityMethod == DensityMethod::Summation || integrator == Integrator::SymplecticEuler,
+          "continuity density needs the symplectic Euler integrator");
 }
 
 float SphSettings::particleMass() const {
@@ -129,6 +132,8 @@ SphParams makeParams(const SphSettings& s) {
   p.spsBlinn = float(double(s.blinn) * s.spacing * s.spacing);
   p.backgroundPressure = s.backgroundPressure;
   p.backgroundRamp = s.backgroundPressureRamp;
+  p.deltaSph = s.densityMethod == DensityMethod::Continuity ? s.deltaSph : 0.0f;
+  for (int a = 0; a < 3; ++a) p.gravityOnly[a] = s.gravity[a];
   return p;
 }
 
@@ -199,12 +204,14 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   auto& cache = context.pipelines();
   markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
-  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {}});
+  // Constant 1 of the density pass and the integrator: continuity density (1) or summation (0).
+  const std::uint32_t continuity = settings.densityMethod == DensityMethod::Continuity ? 1u : 0u;
+  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {continuity}});
   boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {}});
   spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup,
                         {settings.sps ? 1u : 0u}});  // constant 1: the SPS term compiled in or out
-  integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {}});
+  integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity}});
   reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {}});
   const ParticleArrays& a = particles.live();
   markSet_ = markFluid_->makeSet({{HEMO_MARK_BINDING_CELL_START, &grid_.cellStart()},
@@ -225,7 +232,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
                                    {HEMO_DENSITY_BINDING_NLIST, &nlist_},
                                    {HEMO_DENSITY_BINDING_CLOCK, &clock_},
-                                   {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_}});
+                                   {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
+                                   {HEMO_DENSITY_BINDING_NORMALS, &a.normals}});
   boundarySet_ = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
                                              {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
                                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
@@ -270,7 +278,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild()},
                                        {HEMO_INTEGRATE_BINDING_DRIFT_X, &driftX_},
                                        {HEMO_INTEGRATE_BINDING_INFLOW, &inflow_},
-                                       {HEMO_INTEGRATE_BINDING_STATE, &state_}});
+                                       {HEMO_INTEGRATE_BINDING_STATE, &state_},
+                                       {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals}});
   reachSet_ = reachPass_->makeSet({{HEMO_REACH_BINDING_POSITIONS, &a.positions},
                                    {HEMO_REACH_BINDING_VELOCITIES, &a.velocities},
                                    {HEMO_REACH_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild()},

@@ -26,6 +26,9 @@ inline reference::SphModel modelOf(const sim::SphParams& p, double time = 0.0) {
   m.period = {p.period[0], p.period[1], p.period[2]};
   const double ramp = p.backgroundRamp > 0.0f ? std::clamp(time / p.backgroundRamp, 0.0, 1.0) : 1.0;
   m.backgroundPressure = p.backgroundPressure * ramp;
+  m.deltaSph = p.deltaSph;
+  m.c0 = p.c0;
+  m.gravityOnly = {p.gravityOnly[0], p.gravityOnly[1], p.gravityOnly[2]};
   return m;
 }
 

@@ -272,6 +272,9 @@ TEST(VesselScene, BadInflowsAreNamed) {
   };
   expectError(with(R"({ "profile": "parabolic", "mean_speed_m_s": 0.2, "zone_length_m": 0.0003 })"),
               {"vessel.inflow.zone_length_m", "kernel support"});
+  Json continuity = with(R"({ "profile": "parabolic", "mean_speed_m_s": 0.2, "zone_length_m": 0.0014 })");
+  continuity["fluid"]["density"] = "continuity";
+  expectError(continuity, {"vessel.inflow", "fluid.density \"continuity\""});
   expectError(with(R"({ "profile": "parabolic", "mean_speed_m_s": 0.2, "zone_length_m": 0.007 })"),
               {"vessel.inflow.zone_length_m", "half the tube"});
   expectError(with(R"({ "profile": "parabolic", "zone_length_m": 0.0014 })"), {"vessel.inflow.mean_speed_m_s", "non-zero"});

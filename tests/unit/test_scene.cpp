@@ -105,6 +105,20 @@ TEST(Scene, WrongTypesAreNamed) {
   j = validScene();
   j["particles"]["neighbour_capacity"] = 64.5;
   expectError(j, {"particles.neighbour_capacity", "whole number"});
+  j = validScene();
+  j["fluid"]["density"] = "sum";
+  expectError(j, {"fluid.density", "summation", "continuity"});
+  j = validScene();
+  j["fluid"]["density"] = "continuity";
+  j["time"] = Json::object({{"integrator", "rk2_midpoint"}});
+  expectError(j, {"fluid.density", "symplectic_euler"});
+  j = validScene();
+  j["fluid"]["density"] = "continuity";
+  j["fluid"]["delta_sph"] = 2;
+  expectError(j, {"fluid.delta_sph"});
+  j = validScene();
+  j["fluid"]["density"] = "continuity";
+  EXPECT_EQ(parseScene(j.dump(), "ok.json").sph.densityMethod, sim::DensityMethod::Continuity);
 }
 
 TEST(Scene, OutOfRangeValuesAreNamed) {

@@ -15,6 +15,7 @@ struct SphParticle {
   glm::dvec3 normal{0.0};  // boundary particles: unit normal into the fluid
   double mass = 0.0;
   int kind = 0;  // 0 fluid, 1 boundary
+  double density = 0.0;  // the density a fluid particle carries (continuity density); 0 reads as rho0
 };
 
 struct SphModel {
@@ -32,6 +33,13 @@ struct SphModel {
   double spsBlinn = 0.0;         // C_I dp^2
   glm::dvec3 period{0.0};        // m on periodic axes (minimum image), 0 on the others
   double backgroundPressure = 0.0;  // Pa, added to the Tait pressure (already ramped)
+  // Continuity density (sph/density.comp): rho_i = carried + lastDt * d rho_i / dt, with the
+  // delta-SPH diffusion term (coefficient deltaSph, sound speed c0) less its hydrostatic part.
+  bool continuity = false;
+  double deltaSph = 0.0;
+  double c0 = 0.0;
+  glm::dvec3 gravityOnly{0.0};  // gravity without the body force (m/s^2)
+  double lastDt = 0.0;          // s
 };
 
 // x_i - x_j, by the minimum image on periodic axes.

@@ -34,6 +34,9 @@ enum class ParticleKind : std::uint32_t { Fluid = 0, Boundary = 1 };
 // Runge-Kutta midpoint rule (two; the reference scheme).
 enum class Integrator { SymplecticEuler, Rk2Midpoint };
 
+// How the fluid's density is found (docs/physics.md).
+enum class DensityMethod { Summation, Continuity };
+
 // Memory layout of the neighbour list (interface/sph.h, listStride). Auto: contiguous on CPU
 // devices (lavapipe), interleaved on GPUs. Results do not depend on it.
 enum class ListLayout { Auto, Interleaved, Contiguous };
@@ -66,6 +69,10 @@ struct SphSettings {
   float backgroundPressure = 0.0f;  // p_bg (Pa) added to the Tait pressure: a vessel's lumen
                                     // (transmural) pressure; 0 for free surfaces
   float backgroundPressureRamp = 0.0f;  // s: p_bg rises linearly from 0 over this time (0: at once)
+  // Summation density (the default), or density carried by each particle and advanced by the
+  // continuity equation with the density-diffusion term of delta-SPH (docs/physics.md).
+  DensityMethod densityMethod = DensityMethod::Summation;
+  float deltaSph = 0.1f;            // delta of the diffusion term (continuity only)
 
   float h() const { return smoothingRatio * spacing; }
   float supportRadius() const { return 2.0f * h(); }
@@ -99,9 +106,10 @@ struct SphParams {
   float origin[4], period[4], invPeriod[4];  // set by the solver from its grid
   float backgroundPressure, backgroundRamp;
   std::uint32_t listParticleStride;
-  float reserved1;
+  float deltaSph;  // delta of the continuity density's diffusion term (0 with summation density)
+  float gravityOnly[4];  // gravity without the body force (m/s^2): the diffusion term's hydrostatic part
 };
-static_assert(sizeof(SphParams) == 176);
+static_assert(sizeof(SphParams) == 192);
 
 SphParams makeParams(const SphSettings& s);
 
