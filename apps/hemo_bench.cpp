@@ -260,21 +260,22 @@ double gpuStepMs(hemo::sim::Simulation& sim) {
 Json accuracy(Context& ctx, const std::string& only) {
   using hemo::sim::Integrator;
   Json rows = Json::array();
-  std::printf("%-12s %10s %5s %-17s %10s %-28s %10s %8s %12s\n", "case", "spacing_m", "h/dp", "integrator", "error",
+  std::printf("%-12s %10s %5s %-17s %-11s %10s %-28s %10s %8s %12s\n", "case", "spacing_m", "h/dp", "integrator", "density", "error",
               "metric", "ms/step", "steps", "wall s/sim s");
   // One row per run; the scene supplies spacing, smoothing ratio and integrator.
   auto row = [&](const std::string& name, const hemo::scene::Scene& scene, double error, const std::string& metric,
                  hemo::sim::Simulation& sim, double wall) {
     const char* integ = scene.sph.integrator == Integrator::Rk2Midpoint ? "rk2_midpoint" : "symplectic_euler";
+    const char* density = scene.sph.densityMethod == hemo::sim::DensityMethod::Continuity ? "continuity" : "summation";
     const std::uint64_t steps = sim.steps();
     const double wallPerSim = wall / sim.time();
     const double msPerStep = gpuStepMs(sim);
-    std::printf("%-12s %10.6f %5.2f %-17s %10.4f %-28s %10.2f %8llu %12.1f\n", name.c_str(), scene.sph.spacing,
-                scene.sph.smoothingRatio, integ, error, metric.c_str(), msPerStep, static_cast<unsigned long long>(steps),
-                wallPerSim);
+    std::printf("%-12s %10.6f %5.2f %-17s %-11s %10.4f %-28s %10.2f %8llu %12.1f\n", name.c_str(), scene.sph.spacing,
+                scene.sph.smoothingRatio, integ, density, error, metric.c_str(), msPerStep,
+                static_cast<unsigned long long>(steps), wallPerSim);
     std::fflush(stdout);
     rows.push_back({{"case", name}, {"spacing_m", scene.sph.spacing}, {"smoothing_ratio", scene.sph.smoothingRatio},
-                    {"integrator", integ}, {"error", error}, {"error_metric", metric}, {"ms_per_step", msPerStep},
+                    {"integrator", integ}, {"density", density}, {"error", error}, {"error_metric", metric}, {"ms_per_step", msPerStep},
                     {"steps", steps}, {"wall_s_per_sim_s", wallPerSim}});
   };
   const Integrator integrators[] = {Integrator::SymplecticEuler, Integrator::Rk2Midpoint};
@@ -285,7 +286,14 @@ Json accuracy(Context& ctx, const std::string& only) {
     // also the largest drift from 0.8 to 1.0 s, of all particles and of those more than 2h
     // below the free surface.
     for (double dp : {0.02, 0.01, 0.008}) {
-      for (Integrator integrator : integrators) {
+      struct Variant {
+        Integrator integrator;
+        hemo::sim::DensityMethod density;
+      };
+      for (const Variant v : {Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Summation},
+                              Variant{Integrator::Rk2Midpoint, hemo::sim::DensityMethod::Summation},
+                              Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Continuity}}) {
+        const Integrator integrator = v.integrator;
         const std::string text = R"({"scene": "hydrostatic_bench", "particles": {"spacing_m": )" + std::to_string(dp) +
                                  R"(}, "fluid": {"viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.5,
           "blocks": [{"min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.12], "lattice": "bcc"}]},
@@ -294,6 +302,7 @@ Json accuracy(Context& ctx, const std::string& only) {
           "domain": {"min_m": [-0.06, -0.06, -0.06], "max_m": [0.14, 0.14, 0.2]}})";
         hemo::scene::Scene scene = hemo::scene::parseScene(text, "hydrostatic_bench");
         scene.sph.integrator = integrator;
+        scene.sph.densityMethod = v.density;
         hemo::sim::Simulation sim(ctx, scene);
         double wall = runTo(sim, 0.8), load = 0.0;
         const hemo::sim::Snapshot settled = sim.snapshot();
@@ -335,14 +344,17 @@ Json accuracy(Context& ctx, const std::string& only) {
   if (only.empty() || only == "dam_break") {
     // scenes/dam_break.json geometry; mean |dZ| against Martin & Moyce (1952) over T in
     // [0, 3] with the gate-release offset dT = 0.15 of docs/physics.md. Both integrators at
-    // the scene's h/dp = 1.3; symplectic Euler also at 1.0 and 1.15 (fewer neighbours).
+    // the scene's h/dp = 1.3; symplectic Euler also at 1.0 and 1.15 (fewer neighbours), and with
+    // continuity density at 1.3.
     const double a = 0.05715, g = 9.81, offset = 0.15;
     struct Variant {
       Integrator integrator;
       float smoothingRatio;
+      hemo::sim::DensityMethod density = hemo::sim::DensityMethod::Summation;
     };
     const Variant variants[] = {{Integrator::SymplecticEuler, 1.3f}, {Integrator::Rk2Midpoint, 1.3f},
-                                {Integrator::SymplecticEuler, 1.15f}, {Integrator::SymplecticEuler, 1.0f}};
+                                {Integrator::SymplecticEuler, 1.15f}, {Integrator::SymplecticEuler, 1.0f},
+                                {Integrator::SymplecticEuler, 1.3f, hemo::sim::DensityMethod::Continuity}};
     for (double fraction : {8.0, 10.0, 16.0}) {
       for (const Variant& v : variants) {
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
@@ -351,6 +363,7 @@ Json accuracy(Context& ctx, const std::string& only) {
         // the periodic slab: 0.6 a thick as in the scene, at least three list radii
         scene = hemo::scene::withSlabThickness(scene, 1, std::max(9, int(std::lround(0.6 * fraction))));
         scene.sph.integrator = v.integrator;
+        scene.sph.densityMethod = v.density;
         hemo::sim::Simulation sim(ctx, scene);
         const auto& table = hemo::reference::martinMoyceN2();
         double sum = 0.0, wall = 0.0;
