@@ -90,6 +90,20 @@ TEST_F(SphPhysicsTest, BodyCentredLatticeIsAStableEquilibriumUnderPressure) {
   EXPECT_LT(fastest, 0.1) << "m/s";
 }
 
+// The open test column: 0.1 m of water filled body-centred (576 particles) in an open tank,
+// settled with damping until 0.8 s; `density` is fluid.density.
+scene::Scene openColumn(const std::string& density) {
+  return scene::parseScene(R"({
+    "scene": "hydrostatic_test",
+    "particles": { "spacing_m": 0.01 },
+    "fluid": { "density_kg_m3": 1000, "viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.4, "density": ")" + density + R"(",
+               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.1], "lattice": "bcc" } ] },
+    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.11], "layers": 3 } ] },
+    "time": { "max_dt_s": 0.001, "steps_per_batch": 128, "settle_damping_1_s": 30, "settle_until_s": 0.8 },
+    "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.12, 0.12, 0.15] }
+  })", "hydrostatic_test");
+}
+
 // Hydrostatics: a 0.1 m column filled body-centred (576 particles; the simple cubic lattice
 // is unstable under pressure, see BodyCentredLatticeIsAStableEquilibriumUnderPressure), settled
 // with damping until 0.8 s. The pressure on the floor is the vertical force the fluid exerts
@@ -102,15 +116,7 @@ TEST_F(SphPhysicsTest, BodyCentredLatticeIsAStableEquilibriumUnderPressure) {
 // the bulk and keeps rearranging (0.38 dp in the same 0.2 s; docs/physics.md); the closed
 // column below holds every particle.
 TEST_F(SphPhysicsTest, HydrostaticColumnLoadsTheFloorWithRhoGH) {
-  const scene::Scene scene = scene::parseScene(R"({
-    "scene": "hydrostatic_test",
-    "particles": { "spacing_m": 0.01 },
-    "fluid": { "density_kg_m3": 1000, "viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.4,
-               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.1], "lattice": "bcc" } ] },
-    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.11], "layers": 3 } ] },
-    "time": { "max_dt_s": 0.001, "steps_per_batch": 128, "settle_damping_1_s": 30, "settle_until_s": 0.8 },
-    "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.12, 0.12, 0.15] }
-  })", "hydrostatic_test");
+  const scene::Scene scene = openColumn("summation");
   sim::Simulation sim(ctx(), scene);
   const double g = 9.81, rho0 = 1000.0, H = 0.1, area = 0.08 * 0.08, h = scene.sph.h(), dp = scene.sph.spacing;
   double loadSum = 0.0, slopeSum = 0.0;
@@ -173,15 +179,7 @@ HeldColumn holdColumn(sim::Simulation& sim, double dp, Load load) {
 // leaves them (docs/physics.md, "The free-surface drift"), and do not sink and rearrange. From
 // 0.8 to 1.4 s no particle moves more than 0.1 dp; the floor load is rho0 g H within 2%.
 TEST_F(SphPhysicsTest, OpenHydrostaticColumnWithContinuityDensityStaysPut) {
-  const scene::Scene scene = scene::parseScene(R"({
-    "scene": "hydrostatic_continuity_test",
-    "particles": { "spacing_m": 0.01 },
-    "fluid": { "density_kg_m3": 1000, "viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.4, "density": "continuity",
-               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.1], "lattice": "bcc" } ] },
-    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.11], "layers": 3 } ] },
-    "time": { "max_dt_s": 0.001, "steps_per_batch": 128, "settle_damping_1_s": 30, "settle_until_s": 0.8 },
-    "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.12, 0.12, 0.15] }
-  })", "hydrostatic_continuity_test");
+  const scene::Scene scene = openColumn("continuity");
   sim::Simulation sim(ctx(), scene);
   const double g = 9.81, rho0 = 1000.0, H = 0.1, area = 0.08 * 0.08, h = scene.sph.h();
   const HeldColumn c = holdColumn(sim, scene.sph.spacing, [&](const sim::Snapshot& s) {
