@@ -126,7 +126,6 @@ void main() {
       const vec4 x = positions[i];
       savedPos[i] = x;
       savedVel[i] = v;
-
       const vec4 a = accel[i];
       vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
       vec3 drift = v.xyz;
