@@ -282,6 +282,8 @@ int main(int argc, char** argv) {
                {"sim_time_s", sim.time()},
                {"wall_time_s", wall},
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},
+               // fluid particles times steps per wall second: throughput across scene sizes
+               {"fluid_particle_steps_per_s", wall > 0 ? double(result.steps) * sim.fluidParticles() / wall : 0.0},
                {"finite", finite}};
     if (rupture) summary["rupture_pressure_estimate_Pa"] = rupture->pressure;
     if (profileSteps > 0) {
