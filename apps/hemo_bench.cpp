@@ -292,7 +292,8 @@ Json accuracy(Context& ctx, const std::string& only) {
       };
       for (const Variant v : {Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Summation},
                               Variant{Integrator::Rk2Midpoint, hemo::sim::DensityMethod::Summation},
-                              Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Continuity}}) {
+                              Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Continuity},
+                              Variant{Integrator::Rk2Midpoint, hemo::sim::DensityMethod::Continuity}}) {
         const Integrator integrator = v.integrator;
         const std::string text = R"({"scene": "hydrostatic_bench", "particles": {"spacing_m": )" + std::to_string(dp) +
                                  R"(}, "fluid": {"viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.5,
@@ -344,8 +345,8 @@ Json accuracy(Context& ctx, const std::string& only) {
   if (only.empty() || only == "dam_break") {
     // scenes/dam_break.json geometry; mean |dZ| against Martin & Moyce (1952) over T in
     // [0, 3] with the gate-release offset dT = 0.15 of docs/physics.md. Both integrators at
-    // the scene's h/dp = 1.3; symplectic Euler also at 1.0 and 1.15 (fewer neighbours), and with
-    // continuity density at 1.3.
+    // the scene's h/dp = 1.3; symplectic Euler also at 1.0 and 1.15 (fewer neighbours); both
+    // integrators with continuity density at 1.3.
     const double a = 0.05715, g = 9.81, offset = 0.15;
     struct Variant {
       Integrator integrator;
@@ -354,7 +355,8 @@ Json accuracy(Context& ctx, const std::string& only) {
     };
     const Variant variants[] = {{Integrator::SymplecticEuler, 1.3f}, {Integrator::Rk2Midpoint, 1.3f},
                                 {Integrator::SymplecticEuler, 1.15f}, {Integrator::SymplecticEuler, 1.0f},
-                                {Integrator::SymplecticEuler, 1.3f, hemo::sim::DensityMethod::Continuity}};
+                                {Integrator::SymplecticEuler, 1.3f, hemo::sim::DensityMethod::Continuity},
+                                {Integrator::Rk2Midpoint, 1.3f, hemo::sim::DensityMethod::Continuity}};
     for (double fraction : {8.0, 10.0, 16.0}) {
       for (const Variant& v : variants) {
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");

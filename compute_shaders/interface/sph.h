@@ -80,10 +80,12 @@
 #define HEMO_DENSITY_BINDING_NLIST 5
 #define HEMO_DENSITY_BINDING_CLOCK 6  // the solver's clock (ramped background pressure)
 #define HEMO_DENSITY_BINDING_VISCOUS_VEL 7  // written for fluid particles: their velocity and kind
-// With continuity density (specialization constant 1 of this pass and the integrator), a fluid
-// particle's density is carried in normals[i].w (fluid particles have no normal; the grid's
-// reorder moves it with the particle; 0 reads as rho0, the fill's density). The pass advances
-// it over the last step into state.x, and the integrator stores state.x back in normals[i].w.
+// With continuity density (specialization constant 1 of this pass and the integrator: 1 with
+// symplectic Euler, 2 with RK2), a fluid particle's density is carried in normals[i].w (fluid
+// particles have no normal; the grid's reorder moves it with the particle; 0 reads as rho0,
+// the fill's density). With 1 the pass advances it over the last step into state.x and the
+// integrator stores that back; with 2 the pass writes its rate to state.z and the integrator's
+// stages advance it.
 #define HEMO_DENSITY_BINDING_NORMALS 8
 #define HEMO_DENSITY_BINDING_COUNT 9
 

@@ -8,11 +8,14 @@
 // Fluid particles only; boundary particles get theirs from boundary_pressure.comp.
 // Also copies each fluid particle's velocity and kind into the viscous velocities (interface/sph.h).
 //
-// With continuity density (kContinuity = 1) the density is not summed: each fluid particle
-// carries its own (normals[i].w, interface/sph.h; the integrator stores this pass's result
-// there), and this pass advances it over the step just taken, with the rate at the positions
-// and velocities that step produced (the partner of symplectic Euler's x1 = x0 + dt v1):
+// With continuity density (kContinuity = 1 or 2) the density is not summed: each fluid
+// particle carries its own (normals[i].w, interface/sph.h). With symplectic Euler (1) this pass
+// advances it over the step just taken, with the rate at the positions and velocities that
+// step produced (the partner of symplectic Euler's x1 = x0 + dt v1), and the integrator stores
+// the result back:
 //   rho_i(t + dt) = rho_i(t) + dt (d rho_i / dt)(x(t + dt), v(t + dt), rho(t))
+// With the RK2 midpoint rule (2) the pass gives the pressure of the carried density as it is
+// and the rate in state.z, and the integrator's two stages advance the density with it.
 //   d rho_i / dt = sum_j m_j (v_i - v_j) . grad W_ij                     (continuity)
 //                + delta h c0 sum_{j fluid} psi_ij (x_ji . grad W_ij) / (r^2 + eta^2) m_j / rho_j
 //   psi_ij = 2 ((rho_j - rho_i) - (rho^H_j - rho^H_i)),
@@ -38,7 +41,7 @@ layout(std430, binding = HEMO_DENSITY_BINDING_NLIST) readonly buffer List { uint
 layout(std430, binding = HEMO_DENSITY_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
-layout(constant_id = 1) const uint kContinuity = 0u;
+layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
 
 // A fluid particle's carried density (continuity); 0 (never advanced) reads as rho0.
 float hemo_carried_density(uint i) {
@@ -64,6 +67,7 @@ void main() {
   const HemoPairParams pp = hemo_pair_params();
   const uint count = neighbourCount[i];
   float rho;
+  float rate = 0.0;  // d rho / dt, for the RK2 stages (kContinuity = 2)
   if (kContinuity != 0u) {
     rho = hemo_carried_density(i);
     const float invH = 1.0 / pp.h;
@@ -86,7 +90,11 @@ void main() {
         diffused += 2.0 * ((rhoJ - rho) - hydro) * (-dot(d, gradW)) / (r2 + etaSq) * (pj.w / rhoJ);
       }
     }
-    rho += clocks[pc.clockIn].lastDt * (continuity + diffusion * diffused);
+    rate = continuity + diffusion * diffused;
+    if (kContinuity == 1u) {
+      rho += clocks[pc.clockIn].lastDt * rate;
+      rate = 0.0;
+    }
   } else {
     rho = pi.w * hemo_kernel_w(0.0, pp.h, pp.kernelNorm);
     for (uint k = 0u; k < count; ++k) {
@@ -99,5 +107,5 @@ void main() {
     }
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
-  state[i] = vec4(rho, hemo_tait_pressure(rho, background, params), 0.0, 0.0);
+  state[i] = vec4(rho, hemo_tait_pressure(rho, background, params), rate, 0.0);
 }

@@ -40,9 +40,16 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_DRIFT_X) writeonly buffer DriftX
 layout(std430, binding = HEMO_INTEGRATE_BINDING_INFLOW) readonly buffer Inflow { InflowParams inflow; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STATE) readonly buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_NORMALS) buffer Normals { vec4 normals[]; };
-// 1: fluid particles carry their density in normals[i].w: this step's, as the density pass
-// advanced it (state.x), is stored there for the next (symplectic Euler only).
+// Continuity density (sph/density.comp): fluid particles carry their density in normals[i].w.
+// 1 (symplectic Euler): the density pass advanced it (state.x); it is stored back for the next
+// step. 2 (RK2 midpoint): the stages advance it with the rate in state.z, the first stage
+// keeping rho(t) in savedVel.w. 0: summation density, nothing to carry.
 layout(constant_id = 1) const uint kContinuity = 0u;
+
+float hemo_carried_density(uint i) {
+  const float rho = normals[i].w;
+  return rho > 0.0 ? rho : params.rho0;  // 0: never advanced, the fill's rho0
+}
 layout(push_constant) uniform Push {
   uint n;
   uint step;
@@ -126,6 +133,11 @@ void main() {
       const vec4 x = positions[i];
       savedPos[i] = x;
       savedVel[i] = v;
+      if (kContinuity == 2u && uint(v.w) == HEMO_KIND_FLUID) {
+        const float rho = hemo_carried_density(i);
+        savedVel[i].w = rho;  // the second stage reads only savedVel.xyz as a velocity
+        normals[i].w = rho + state[i].z * (0.5 * dt);
+      }
       const vec4 a = accel[i];
       vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
       vec3 drift = v.xyz;
@@ -210,7 +222,8 @@ void main() {
     atomicAdd(status[HEMO_STATUS_NONFINITE], 1u);
   }
   if (kContinuity != 0u && uint(v.w) == HEMO_KIND_FLUID) {
-    normals[i].w = state[i].x;  // non-finite densities show in the forces (blow-up diagnosis)
+    // (non-finite densities show in the next force pass's blow-up diagnosis)
+    normals[i].w = kContinuity == 1u ? state[i].x : savedVel[i].w + state[i].z * dt;
   }
   velocities[i] = v;
   x.w = hemo_sph_mass(x.w, accel[i].w);

@@ -28,7 +28,7 @@ def main():
         fig, ax = plt.subplots(figsize=(6, 4.2))
         ratios = sorted({r.get("smoothing_ratio", 1.3) for r in rows if r["case"] == case}, reverse=True)
         series = (("symplectic_euler", "summation", "o"), ("rk2_midpoint", "summation", "s"),
-                  ("symplectic_euler", "continuity", "^"))
+                  ("symplectic_euler", "continuity", "^"), ("rk2_midpoint", "continuity", "v"))
         for integrator, density, marker in series:
             for ratio in ratios:
                 pts = sorted((r["wall_s_per_sim_s"], r["error"], r["spacing_m"]) for r in rows

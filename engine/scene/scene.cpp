@@ -539,9 +539,6 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.sph.densityMethod = fluid["density"].get<std::string>() == "continuity" ? sim::DensityMethod::Continuity
                                                                             : sim::DensityMethod::Summation;
   s.sph.deltaSph = fluid["delta_sph"].get<float>();
-  if (s.sph.densityMethod == sim::DensityMethod::Continuity && j["time"]["integrator"].get<std::string>() != "symplectic_euler") {
-    c.fail("fluid.density", "\"continuity\" needs time.integrator \"symplectic_euler\" (its density update is that scheme's partner)");
-  }
   s.sph.smagorinsky = fluid["smagorinsky_constant"].get<float>();
   s.sph.blinn = fluid["blinn_constant"].get<float>();
   s.sph.backgroundPressure = fluid["background_pressure_Pa"].get<float>();

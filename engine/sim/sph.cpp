@@ -66,8 +66,6 @@ void SphSettings::validate() const {
   require(std::isfinite(backgroundPressureRamp) && backgroundPressureRamp >= 0.0f,
           "background pressure ramp must be >= 0 (s)");
   require(std::isfinite(deltaSph) && deltaSph >= 0.0f && deltaSph <= 1.0f, "delta-SPH coefficient must be in [0, 1]");
-  require(densityMethod == DensityMethod::Summation || integrator == Integrator::SymplecticEuler,
-          "continuity density needs the symplectic Euler integrator");
 }
 
 float SphSettings::particleMass() const {
@@ -204,8 +202,11 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   auto& cache = context.pipelines();
   markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
   buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
-  // Constant 1 of the density pass and the integrator: continuity density (1) or summation (0).
-  const std::uint32_t continuity = settings.densityMethod == DensityMethod::Continuity ? 1u : 0u;
+  // Constant 1 of the density pass and the integrator: summation density (0), or continuity
+  // density advanced by the density pass (1, symplectic Euler) or by the RK2 stages (2).
+  const std::uint32_t continuity = settings.densityMethod == DensityMethod::Summation ? 0u
+                                   : settings.integrator == Integrator::Rk2Midpoint  ? 2u
+                                                                                     : 1u;
   density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {continuity}});
   boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {}});
   spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});

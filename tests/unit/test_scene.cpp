@@ -110,10 +110,6 @@ TEST(Scene, WrongTypesAreNamed) {
   expectError(j, {"fluid.density", "summation", "continuity"});
   j = validScene();
   j["fluid"]["density"] = "continuity";
-  j["time"] = Json::object({{"integrator", "rk2_midpoint"}});
-  expectError(j, {"fluid.density", "symplectic_euler"});
-  j = validScene();
-  j["fluid"]["density"] = "continuity";
   j["fluid"]["delta_sph"] = 2;
   expectError(j, {"fluid.delta_sph"});
   j = validScene();
