@@ -367,23 +367,32 @@ INSTANTIATE_TEST_SUITE_P(Integrators, SphIntegratorTest,
                            return param.param == sim::Integrator::Rk2Midpoint ? "rk2_midpoint" : "symplectic_euler";
                          });
 
+// With either density method (the continuity density reads its neighbours' carried densities,
+// never ones this step has written).
 TEST_F(SphPhysicsTest, TwoRunsAreBitIdentical) {
-  const scene::Scene scene = scene::parseScene(kColumn, "column_test");
-  std::vector<glm::vec4> first;
-  for (int run = 0; run < 2; ++run) {
-    sim::Simulation sim(ctx(), scene);
-    sim::RunOptions opt;
-    opt.steps = 300;
-    sim.run(opt);
-    const auto s = sim.snapshot();
-    std::vector<glm::vec4> state = s.positions;
-    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
-    if (run == 0) {
-      first = state;
-    } else {
-      ASSERT_EQ(state.size(), first.size());
-      EXPECT_EQ(0, std::memcmp(state.data(), first.data(), state.size() * sizeof(glm::vec4)))
-          << "positions/velocities differ between two runs of the same scene";
+  for (const sim::DensityMethod method : {sim::DensityMethod::Summation, sim::DensityMethod::Continuity}) {
+    SCOPED_TRACE(method == sim::DensityMethod::Continuity ? "continuity density" : "summation density");
+    scene::Scene scene = scene::parseScene(kColumn, "column_test");
+    scene.sph.densityMethod = method;
+    std::vector<glm::vec4> first;
+    for (int run = 0; run < 2; ++run) {
+      sim::Simulation sim(ctx(), scene);
+      sim::RunOptions opt;
+      opt.steps = 300;
+      sim.run(opt);
+      const auto s = sim.snapshot();
+      std::vector<glm::vec4> state = s.positions;
+      state.insert(state.end(), s.velocities.begin(), s.velocities.end());
+      for (std::size_t k = 0; k + 1 < s.densityPressure.size(); k += 2) {
+        state.emplace_back(s.densityPressure[k], s.densityPressure[k + 1]);
+      }
+      if (run == 0) {
+        first = state;
+      } else {
+        ASSERT_EQ(state.size(), first.size());
+        EXPECT_EQ(0, std::memcmp(state.data(), first.data(), state.size() * sizeof(glm::vec4)))
+            << "positions/velocities/densities differ between two runs of the same scene";
+      }
     }
   }
 }
