@@ -65,3 +65,9 @@ vec3 hemo_min_image(vec3 d, HemoPairParams pp) {
 
 // Position wrapped into [origin, origin + period) on periodic axes (needs `params` bound).
 #define hemo_wrap_position(x) ((x) - params.period.xyz * floor(((x) - params.origin.xyz) * params.invPeriod.xyz))
+
+// A fluid particle's carried density under continuity density, from what normals[i].w holds
+// (interface/sph.h): 0 means never advanced, the fill's rest density.
+float hemo_carried_density(float stored, float rho0) {
+  return stored > 0.0 ? stored : rho0;
+}

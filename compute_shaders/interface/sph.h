@@ -152,7 +152,7 @@
 #define HEMO_INTEGRATE_BINDING_POS_AT_BUILD 11
 #define HEMO_INTEGRATE_BINDING_DRIFT_X 12  // float: x displacement since the list build
 #define HEMO_INTEGRATE_BINDING_INFLOW 13  // InflowParams (common/inflow.glsl): the driven inflow zone
-#define HEMO_INTEGRATE_BINDING_STATE 14  // vec4 (rho, p): the inflow zone's mass supply reads rho
+#define HEMO_INTEGRATE_BINDING_STATE 14  // vec4 (rho, p, rate, 0): the inflow zone's mass supply reads rho; continuity density rho or its rate
 #define HEMO_INTEGRATE_BINDING_NORMALS 15  // w: where a fluid particle carries its density (continuity)
 #define HEMO_INTEGRATE_BINDING_COUNT 16
 

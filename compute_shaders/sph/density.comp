@@ -16,6 +16,7 @@
 //   rho_i(t + dt) = rho_i(t) + dt (d rho_i / dt)(x(t + dt), v(t + dt), rho(t))
 // With the RK2 midpoint rule (2) the pass gives the pressure of the carried density as it is
 // and the rate in state.z, and the integrator's two stages advance the density with it.
+// The rate:
 //   d rho_i / dt = sum_j m_j (v_i - v_j) . grad W_ij                     (continuity)
 //                + delta h c0 sum_{j fluid} psi_ij (x_ji . grad W_ij) / (r^2 + eta^2) m_j / rho_j
 //   psi_ij = 2 ((rho_j - rho_i) - (rho^H_j - rho^H_i)),
@@ -42,12 +43,6 @@ layout(std430, binding = HEMO_DENSITY_BINDING_CLOCK) readonly buffer Clock { Clo
 layout(std430, binding = HEMO_DENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
-
-// A fluid particle's carried density (continuity); 0 (never advanced) reads as rho0.
-float hemo_carried_density(uint i) {
-  const float rho = normals[i].w;
-  return rho > 0.0 ? rho : params.rho0;
-}
 layout(push_constant) uniform Push {
   uint n;
   uint clockIn;  // the record this step reads
@@ -69,7 +64,7 @@ void main() {
   float rho;
   float rate = 0.0;  // d rho / dt, for the RK2 stages (kContinuity = 2)
   if (kContinuity != 0u) {
-    rho = hemo_carried_density(i);
+    rho = hemo_carried_density(normals[i].w, params.rho0);
     const float invH = 1.0 / pp.h;
     const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
     const float diffusion = params.deltaSph * pp.h * params.c0;
@@ -85,7 +80,7 @@ void main() {
       const vec4 vj = velocities[j];
       continuity += pj.w * dot(vi.xyz - vj.xyz, gradW);
       if (uint(vj.w) == HEMO_KIND_FLUID) {
-        const float rhoJ = hemo_carried_density(j);
+        const float rhoJ = hemo_carried_density(normals[j].w, rho0);
         const float hydro = rho0 * (pow(max(1.0 - hydroScale * dot(g, d), 1.0e-6), 1.0 / 7.0) - 1.0);
         diffused += 2.0 * ((rhoJ - rho) - hydro) * (-dot(d, gradW)) / (r2 + etaSq) * (pj.w / rhoJ);
       }

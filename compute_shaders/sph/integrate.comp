@@ -45,11 +45,6 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_NORMALS) buffer Normals { vec4 n
 // step. 2 (RK2 midpoint): the stages advance it with the rate in state.z, the first stage
 // keeping rho(t) in savedVel.w. 0: summation density, nothing to carry.
 layout(constant_id = 1) const uint kContinuity = 0u;
-
-float hemo_carried_density(uint i) {
-  const float rho = normals[i].w;
-  return rho > 0.0 ? rho : params.rho0;  // 0: never advanced, the fill's rho0
-}
 layout(push_constant) uniform Push {
   uint n;
   uint step;
@@ -134,7 +129,7 @@ void main() {
       savedPos[i] = x;
       savedVel[i] = v;
       if (kContinuity == 2u && uint(v.w) == HEMO_KIND_FLUID) {
-        const float rho = hemo_carried_density(i);
+        const float rho = hemo_carried_density(normals[i].w, params.rho0);
         savedVel[i].w = rho;  // the second stage reads only savedVel.xyz as a velocity
         normals[i].w = rho + state[i].z * (0.5 * dt);
       }
