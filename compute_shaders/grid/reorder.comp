@@ -1,8 +1,9 @@
 #version 450
 // Neighbour grid, step 4 (after the sort and the cell ranges): gathers particle data
 // (positions, velocities, normals, ids) from the scratch copy into cell order in the live
-// arrays, keeps the positions of this build (for the list's validity check) and records
-// where each particle id now lives.
+// arrays, keeps the positions of this build (for the list's validity check; w: the particle's
+// kind, so the list build finds position and kind in one load) and records where each
+// particle id now lives.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/grid.h"
 #include "common/index.glsl"
@@ -27,9 +28,10 @@ void main() {
   }
   const uint src = pairs[i].y;
   const vec4 p = posIn[src];
+  const vec4 v = velIn[src];
   posOut[i] = p;
-  posAtBuild[i] = p;
-  velOut[i] = velIn[src];
+  posAtBuild[i] = vec4(p.xyz, v.w);
+  velOut[i] = v;
   normalOut[i] = normalIn[src];
   const uint id = idIn[src];
   idOut[i] = id;

@@ -61,15 +61,14 @@
 #define HEMO_MARK_BINDING_COUNT 3
 
 // sph/build_list.comp: the neighbour (Verlet) list.
-#define HEMO_BUILD_BINDING_POSITIONS 0
-#define HEMO_BUILD_BINDING_VELOCITIES 1
-#define HEMO_BUILD_BINDING_CELL_START 2
-#define HEMO_BUILD_BINDING_PARAMS 3
-#define HEMO_BUILD_BINDING_NCOUNT 4
-#define HEMO_BUILD_BINDING_NLIST 5
-#define HEMO_BUILD_BINDING_STATUS 6
-#define HEMO_BUILD_BINDING_FLUID_CELLS 7
-#define HEMO_BUILD_BINDING_COUNT 8
+#define HEMO_BUILD_BINDING_POSITIONS 0  // the grid's positions at build, with the kind in w
+#define HEMO_BUILD_BINDING_CELL_START 1
+#define HEMO_BUILD_BINDING_PARAMS 2
+#define HEMO_BUILD_BINDING_NCOUNT 3
+#define HEMO_BUILD_BINDING_NLIST 4
+#define HEMO_BUILD_BINDING_STATUS 5
+#define HEMO_BUILD_BINDING_FLUID_CELLS 6
+#define HEMO_BUILD_BINDING_COUNT 7
 
 // sph/density.comp: summation density and Tait pressure of fluid particles from the list.
 #define HEMO_DENSITY_BINDING_POSITIONS 0
@@ -79,7 +78,7 @@
 #define HEMO_DENSITY_BINDING_NCOUNT 4
 #define HEMO_DENSITY_BINDING_NLIST 5
 #define HEMO_DENSITY_BINDING_CLOCK 6  // the solver's clock (ramped background pressure)
-#define HEMO_DENSITY_BINDING_VISCOUS_VEL 7  // written for fluid particles: their velocity and kind
+#define HEMO_DENSITY_BINDING_VISCOUS_VEL 7  // written for fluid particles (see the pair data below)
 // With continuity density (specialization constant 1 of this pass and the integrator: 1 with
 // symplectic Euler, 2 with RK2), a fluid particle's density is carried in normals[i].w (fluid
 // particles have no normal; the grid's reorder moves it with the particle; 0 reads as rho0,
@@ -87,7 +86,8 @@
 // integrator stores that back; with 2 the pass writes its rate to state.z and the integrator's
 // stages advance it.
 #define HEMO_DENSITY_BINDING_NORMALS 8
-#define HEMO_DENSITY_BINDING_COUNT 9
+#define HEMO_DENSITY_BINDING_PRESSURE_TERM 9  // written for fluid particles (see the pair data below)
+#define HEMO_DENSITY_BINDING_COUNT 10
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).
@@ -97,13 +97,20 @@
 #define HEMO_BPRESSURE_BINDING_STATE 3
 #define HEMO_BPRESSURE_BINDING_NCOUNT 4
 #define HEMO_BPRESSURE_BINDING_NLIST 5
-// Viscous velocities (all three passes): per particle, vec4(the velocity the viscous term sees,
-// kind): a fluid particle's own velocity (density.comp), a boundary particle's no-slip
-// velocity (boundary_pressure.comp). The force pass gathers neighbours' velocity and kind
-// from this one buffer instead of a velocity load plus a conditional one for walls.
+// The pair data: what the force pass gathers of a neighbour j besides its position and mass,
+// written each force evaluation by the density pass (fluid) and the boundary-pressure pass
+// (boundary and wall particles):
+//   viscous velocity (v_j, +-V_j),  V_j = m_j / rho_j    (m/s, m^3)
+//   pressure term    p_j / rho_j^2                       (Pa m^6/kg^2), one float
+// v_j is what the viscous term sees: a fluid particle's own velocity, a boundary particle's
+// no-slip velocity. The sign of the volume tells the kind: positive for fluid, negative for
+// boundary and wall particles, zero for detached wall particles (no SPH mass). Gathering the
+// density and pressure as a vec2 instead cost the force pass a sixth more on llvmpipe, where
+// a gather's cost grows with its components (docs/benchmarks.md).
 #define HEMO_BPRESSURE_BINDING_VISCOUS_VEL 6
 #define HEMO_BPRESSURE_BINDING_CLOCK 7
-#define HEMO_BPRESSURE_BINDING_COUNT 8
+#define HEMO_BPRESSURE_BINDING_PRESSURE_TERM 8
+#define HEMO_BPRESSURE_BINDING_COUNT 9
 
 // sph/sps_stress.comp: the SPS stress tau/rho of each fluid particle from its strain rate.
 #define HEMO_SPS_BINDING_POSITIONS 0
@@ -131,7 +138,8 @@
 #define HEMO_FORCES_BINDING_TAU_A 11
 #define HEMO_FORCES_BINDING_TAU_B 12
 #define HEMO_FORCES_BINDING_VISCOUS_VEL 13
-#define HEMO_FORCES_BINDING_COUNT 14
+#define HEMO_FORCES_BINDING_PRESSURE_TERM 14
+#define HEMO_FORCES_BINDING_COUNT 15
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
 // step, clock, status. Push constant `mode`:

@@ -8,6 +8,8 @@
 // (eq. 22-23): v = 2 v_wall - sum_f v_f W_bf / sum_f W_bf, so the shear across the wall is
 // that of a velocity that vanishes at the wall (a zero velocity gives about half of it, and
 // the fluid slips).
+// Also writes the particle's pair data (interface/sph.h): viscous velocity (no-slip v, -m / rho)
+// and pressure term p / rho^2.
 // A boundary particle without fluid neighbours keeps (rho0, p_bg) and its own velocity. The force pass then treats
 // boundary particles like fluid ones in the symmetric pressure term, which holds a fluid
 // column at the hydrostatic pressure without the wall having to be penetrated.
@@ -27,6 +29,7 @@ layout(std430, binding = HEMO_BPRESSURE_BINDING_NCOUNT) readonly buffer Counts {
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_PRESSURE_TERM) writeonly buffer PressureTerm { float pressureTerm[]; };
 layout(push_constant) uniform Push {
   uint n;
   uint clockIn;
@@ -41,7 +44,8 @@ void main() {
   if (uint(vb.w) == HEMO_KIND_FLUID) {
     return;
   }
-  const vec3 xb = positions[b].xyz;
+  const vec4 xb4 = positions[b];
+  const vec3 xb = xb4.xyz;
   const HemoPairParams pp = hemo_pair_params();
   float sumW = 0.0;
   float sumP = 0.0;
@@ -62,16 +66,19 @@ void main() {
     sumRhoR += sf.x * d * w;
     sumV += velocities[f].xyz * w;
   }
-  if (sumW <= 0.0) {
-    state[b] = vec4(params.rho0, hemo_background_pressure(clocks[pc.clockIn].time, params), 0.0, 0.0);
-    viscousVel[b] = vb;
-    return;
+  const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
+  float rho = params.rho0;
+  float p = background;
+  vec3 v = vb.xyz;
+  if (sumW > 0.0) {
+    v = 2.0 * vb.xyz - sumV / sumW;
+    p = (sumP + dot(params.gravity.xyz, sumRhoR)) / sumW;
+    if (params.clampNegativePressure != 0u) {
+      p = max(p, 0.0);
+    }
+    rho = hemo_tait_density(p, background, params);
   }
-  viscousVel[b] = vec4(2.0 * vb.xyz - sumV / sumW, vb.w);  // w: the kind
-  float p = (sumP + dot(params.gravity.xyz, sumRhoR)) / sumW;
-  if (params.clampNegativePressure != 0u) {
-    p = max(p, 0.0);
-  }
-  const float rho = hemo_tait_density(p, hemo_background_pressure(clocks[pc.clockIn].time, params), params);
   state[b] = vec4(rho, p, 0.0, 0.0);
+  pressureTerm[b] = p / (rho * rho);
+  viscousVel[b] = vec4(v, -(xb4.w / rho));  // < 0: boundary or wall; -0 (neither) when detached
 }

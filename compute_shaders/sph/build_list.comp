@@ -12,8 +12,9 @@
 #include "common/grid.glsl"
 #include "common/sph_params.glsl"
 
+// The positions of this build with each particle's kind in w (grid/reorder.comp), so a
+// candidate's position and kind come in one load.
 layout(std430, binding = HEMO_BUILD_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_BUILD_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_CELL_START) readonly buffer CellStart { uint cellStart[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_PARAMS) readonly buffer Params { SphParams params; };
 layout(std430, binding = HEMO_BUILD_BINDING_NCOUNT) writeonly buffer Counts { uint neighbourCount[]; };
@@ -39,8 +40,9 @@ void main() {
   if (i >= pc.grid.dimsN.w) {
     return;
   }
-  const bool fluidI = uint(velocities[i].w) == HEMO_KIND_FLUID;
-  const vec3 xi = positions[i].xyz;
+  const vec4 xi4 = positions[i];
+  const bool fluidI = uint(xi4.w) == HEMO_KIND_FLUID;
+  const vec3 xi = xi4.xyz;
   const float list2 = params.listRadius * params.listRadius;
   const uint capacity = params.neighbourCapacity;
   const HemoPairParams pp = hemo_pair_params();
@@ -106,14 +108,15 @@ void main() {
         }
         const uint jEnd = cellStart[hemo_cell_linear(ivec3(x1, y, z), dims) + 1u];
         for (uint j = cellStart[hemo_cell_linear(ivec3(x0, y, z), dims)]; j < jEnd; ++j) {
-          const vec3 d = hemo_grid_min_image(xi - positions[j].xyz, pc.grid);
+          const vec4 xj = positions[j];
+          const vec3 d = hemo_grid_min_image(xi - xj.xyz, pc.grid);
           // Every candidate is written to the next free slot, and the slot is kept (count
           // advances) only if the candidate is a neighbour: a store under a data-dependent
           // condition cost llvmpipe more than the candidate test itself (dam break: list
           // build 20 -> 14 ms, docs/benchmarks.md). Past the capacity the last slot is
           // overwritten; that overflow stops the run at the end of the batch (status).
           neighbourList[hemo_list_slot(i, min(count, capacity - 1u), pp)] = j;
-          if (j != i && dot(d, d) < list2 && (fluidI || uint(velocities[j].w) == HEMO_KIND_FLUID)) {
+          if (j != i && dot(d, d) < list2 && (fluidI || uint(xj.w) == HEMO_KIND_FLUID)) {
             ++count;
           }
         }

@@ -6,7 +6,8 @@
 //   p_i   = B ((rho_i / rho0)^7 - 1) + p_bg,  B = c0^2 rho0 / 7,  optionally clamped at 0
 // with p_bg the (ramped) background pressure of common/tait.glsl.
 // Fluid particles only; boundary particles get theirs from boundary_pressure.comp.
-// Also copies each fluid particle's velocity and kind into the viscous velocities (interface/sph.h).
+// Also writes each fluid particle's pair data (interface/sph.h): viscous velocity (v, m / rho)
+// and pressure term p / rho^2.
 //
 // With continuity density (kContinuity = 1 or 2) the density is not summed: each fluid
 // particle carries its own (normals[i].w, interface/sph.h). With symplectic Euler (1) this pass
@@ -42,6 +43,7 @@ layout(std430, binding = HEMO_DENSITY_BINDING_NLIST) readonly buffer List { uint
 layout(std430, binding = HEMO_DENSITY_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
+layout(std430, binding = HEMO_DENSITY_BINDING_PRESSURE_TERM) writeonly buffer PressureTerm { float pressureTerm[]; };
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
 layout(push_constant) uniform Push {
   uint n;
@@ -57,7 +59,6 @@ void main() {
   if (uint(vi.w) != HEMO_KIND_FLUID) {
     return;
   }
-  viscousVel[i] = vi;  // what the force pass gathers of a fluid neighbour: velocity and kind
   const vec4 pi = positions[i];
   const HemoPairParams pp = hemo_pair_params();
   const uint count = neighbourCount[i];
@@ -102,5 +103,8 @@ void main() {
     }
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
-  state[i] = vec4(rho, hemo_tait_pressure(rho, background, params), rate, 0.0);
+  const float p = hemo_tait_pressure(rho, background, params);
+  state[i] = vec4(rho, p, rate, 0.0);
+  pressureTerm[i] = p / (rho * rho);
+  viscousVel[i] = vec4(vi.xyz, pi.w / rho);  // > 0: fluid
 }

@@ -13,6 +13,9 @@
 //             by max(sum T, 1), so it stays constant while a particle slides along a wall.
 //  SPS        when enabled: a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW_ij (fluid
 //             pairs; the stresses come from sps_stress.comp)
+// A neighbour's data: position and mass, the viscous velocity (v_j, +-V_j) with V_j = m_j / rho_j,
+// and p_j / rho_j^2 (the pair data of interface/sph.h), so the viscous term reads
+//   a += 2 mu / rho_i V_j (x_ij . gradW_ij) / (r^2 + eta^2) v_ij.
 //  gravity and body force.
 // accel.w keeps the repulsion's normalisation 1 / max(sum T, 1), so a wall particle can apply
 // the exact reaction of its share. Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc).
@@ -37,6 +40,7 @@ layout(std430, binding = HEMO_FORCES_BINDING_STATUS) buffer Status { uint status
 layout(std430, binding = HEMO_FORCES_BINDING_TAU_A) readonly buffer TauA { vec4 tauA[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_TAU_B) readonly buffer TauB { vec4 tauB[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_VISCOUS_VEL) readonly buffer ViscousVel { vec4 viscousVel[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_PRESSURE_TERM) readonly buffer PressureTerm { float pressureTerm[]; };
 // 1 when the scene enables the SPS term. A specialization constant rather than a branch on
 // the parameter block: llvmpipe runs a branch's body under a lane mask even when no lane
 // takes it, and the dead SPS loads cost ~10% of the pass (dam break, docs/benchmarks.md).
@@ -84,36 +88,34 @@ void main() {
   const float cutoff = params.repulsionCutoff;
   const float wallSpacing = params.wallSpacing;
   const float psi = params.psi;
-  const float pOverRho2I = si.y / (si.x * si.x);
 
   const bool sps = kSps != 0u;
   const mat3 spsI = sps ? hemo_sps_tensor(i, si.x) : mat3(0.0);
+  const float pOverRho2I = si.y / (si.x * si.x);
+  vec3 viscous = vec3(0.0);  // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
   vec3 a = vec3(0.0);
   vec3 repulsion = vec3(0.0);
   float repulsionWeight = 0.0;
   const uint count = neighbourCount[i];
   for (uint k = 0u; k < count; ++k) {
     const uint j = neighbourList[hemo_list_slot(i, k, pp)];
-    const vec4 pj = positions[j];
+    const vec4 pj = positions[j];  // (x_j, m_j)
     const vec3 d = hemo_min_image(xi - pj.xyz, pp);
     const float r2 = dot(d, d);
     // grad W vanishes beyond the support (the list's skin) and for a coincident pair (no
     // defined direction), so neither needs a branch: llvmpipe runs both ways of a branch under
     // a lane mask, and the branch itself cost ~5% of the pass.
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);
-    const vec4 vj = viscousVel[j];  // fluid: own velocity; boundary: no-slip velocity
-    const bool fluidJ = uint(vj.w) == HEMO_KIND_FLUID;
-    const vec2 sj = state[j].xy;
-    const float rhoJ = sj.x;
-    const float pOverRho2J = sj.y / (sj.x * sj.x);
-    const float invRhoIJ = 1.0 / (si.x * rhoJ);
-    a -= (pj.w * (pOverRho2I + pOverRho2J)) * gradW;
-    a += (pj.w * twoMu * invRhoIJ * dot(d, gradW) / (r2 + etaSq)) * (vi.xyz - vj.xyz);
-    if (sps && fluidJ) {
-      // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
-      a += pj.w * ((spsI + hemo_sps_tensor(j, rhoJ)) * gradW);
+    const vec4 vj = viscousVel[j];  // (fluid: own velocity, boundary: no-slip velocity; +-V_j)
+    const float volumeJ = abs(vj.w);
+    a -= (pj.w * (pOverRho2I + pressureTerm[j])) * gradW;
+    viscous += (volumeJ * dot(d, gradW) / (r2 + etaSq)) * (vi.xyz - vj.xyz);
+    if (sps && vj.w > 0.0) {
+      // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only; tau is stored
+      // per density, so m_j tau_j / rho_j^2 = V_j (tau_j / rho_j)
+      a += (pj.w * spsI + volumeJ * hemo_sps_tensor(j, 1.0)) * gradW;
     }
-    if (!fluidJ && pj.w > 0.0 && r2 > 0.0) {  // detached wall particles (no SPH mass) do not repel
+    if (vj.w < 0.0 && r2 > 0.0) {  // boundary and wall particles; detached ones (V = 0) do not repel
       const vec3 nrm = normals[j].xyz;
       const float x = dot(d, nrm);
       float w;
@@ -124,6 +126,7 @@ void main() {
       }
     }
   }
+  a += (twoMu / si.x) * viscous;
   const float repulsionScale = 1.0 / max(repulsionWeight, 1.0);
   a += repulsion * repulsionScale;
   a += params.gravity.xyz;

@@ -170,6 +170,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       driftX_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "x displacement since the list build"),
       reach_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "reach since the list build"),
       viscousVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "viscous velocities"),
+      pressureTerm_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "pressure terms p / rho^2"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
@@ -218,8 +219,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   markSet_ = markFluid_->makeSet({{HEMO_MARK_BINDING_CELL_START, &grid_.cellStart()},
                                   {HEMO_MARK_BINDING_VELOCITIES, &a.velocities},
                                   {HEMO_MARK_BINDING_FLAGS, &fluidCells_}});
-  buildListSet_ = buildList_->makeSet({{HEMO_BUILD_BINDING_POSITIONS, &a.positions},
-                                       {HEMO_BUILD_BINDING_VELOCITIES, &a.velocities},
+  buildListSet_ = buildList_->makeSet({{HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild()},
                                        {HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart()},
                                        {HEMO_BUILD_BINDING_PARAMS, &paramsBuffer_},
                                        {HEMO_BUILD_BINDING_NCOUNT, &ncount_},
@@ -234,7 +234,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_DENSITY_BINDING_NLIST, &nlist_},
                                    {HEMO_DENSITY_BINDING_CLOCK, &clock_},
                                    {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
-                                   {HEMO_DENSITY_BINDING_NORMALS, &a.normals}});
+                                   {HEMO_DENSITY_BINDING_NORMALS, &a.normals},
+                                   {HEMO_DENSITY_BINDING_PRESSURE_TERM, &pressureTerm_}});
   boundarySet_ = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
                                              {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
                                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
@@ -242,7 +243,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                              {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
                                              {HEMO_BPRESSURE_BINDING_NLIST, &nlist_},
                                              {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
-                                             {HEMO_BPRESSURE_BINDING_CLOCK, &clock_}});
+                                             {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
+                                             {HEMO_BPRESSURE_BINDING_PRESSURE_TERM, &pressureTerm_}});
   spsSet_ = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
                                  {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
@@ -264,7 +266,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  {HEMO_FORCES_BINDING_STATUS, &status_},
                                  {HEMO_FORCES_BINDING_TAU_A, &tauA_},
                                  {HEMO_FORCES_BINDING_TAU_B, &tauB_},
-                                 {HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_}});
+                                 {HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_},
+                                 {HEMO_FORCES_BINDING_PRESSURE_TERM, &pressureTerm_}});
   integrateSet_ = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                        {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},

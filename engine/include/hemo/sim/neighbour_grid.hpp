@@ -58,7 +58,7 @@ class NeighbourGrid {
   const gpu::Buffer& pairs() const { return pairs_; }          // sorted (cell, old slot)
   const gpu::Buffer& slotOfId() const { return slotOfId_; }    // id -> slot (ids < capacity)
   const gpu::Buffer& counters() const { return counters_; }
-  const gpu::Buffer& positionsAtBuild() const { return posAtBuild_; }  // vec4 per slot
+  const gpu::Buffer& positionsAtBuild() const { return posAtBuild_; }  // vec4 per slot: (x, kind)
   GridCounters readCounters() const;
 
   struct Push {  // mirrors HemoGrid in common/grid.glsl

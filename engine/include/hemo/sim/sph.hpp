@@ -199,6 +199,7 @@ class SphSolver {
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, driftX_, reach_, viscousVel_;
+  gpu::Buffer pressureTerm_;  // p / rho^2 per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer fluidCells_;
