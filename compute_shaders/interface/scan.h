@@ -18,12 +18,14 @@
 // rounded up).
 #define HEMO_SCAN_NO_LENGTH 0xffffffffu
 
-// scan/reduce_minmax.comp: per-workgroup (min, max) of floats or of earlier partials.
+// scan/reduce_minmax.comp: (min, max) of floats in one dispatch (per-workgroup partials, the
+// last workgroup to finish reduces them; the counter must start at 0 and is left at 0).
 #define HEMO_REDUCE_ITEMS 8
 #define HEMO_REDUCE_BINDING_VALUES 0
-#define HEMO_REDUCE_BINDING_PARTIALS_IN 1
-#define HEMO_REDUCE_BINDING_PARTIALS_OUT 2
-#define HEMO_REDUCE_BINDING_COUNT 3
-// push constants: uint n; uint fromPartials  (8 bytes)
+#define HEMO_REDUCE_BINDING_PARTIALS 1  // vec2 per workgroup
+#define HEMO_REDUCE_BINDING_COUNTER 2   // uint: workgroups finished
+#define HEMO_REDUCE_BINDING_RESULT 3    // vec2
+#define HEMO_REDUCE_BINDING_COUNT 4
+// push constants: uint n  (4 bytes)
 
 #endif

@@ -19,9 +19,8 @@ static_assert(sizeof(ScanPush) == 16);
 
 struct ReducePush {
   std::uint32_t n;
-  std::uint32_t fromPartials;
 };
-static_assert(sizeof(ReducePush) == 8);
+static_assert(sizeof(ReducePush) == 4);
 
 struct SortPush {
   std::uint32_t n;
@@ -117,25 +116,19 @@ void PrefixScan::recordLevels(CommandRecorder& rec, std::uint64_t n, std::uint32
 
 // ---------------------------------------------------------------------------------------------
 MinMaxReduce::MinMaxReduce(Context& context, const Buffer& values, std::uint64_t capacity)
-    : capacity_(capacity), result_(context, 8, MemoryUse::Device, "min/max result") {
+    : capacity_(capacity),
+      partials_(context, ceilDiv(std::max<std::uint64_t>(capacity, 1), std::uint64_t(kWorkgroup) * HEMO_REDUCE_ITEMS) * 8,
+                MemoryUse::Device, "min/max partials"),
+      counter_(context, 4, MemoryUse::Device, "min/max finished workgroups"),
+      result_(context, 8, MemoryUse::Device, "min/max result") {
   checkCount(capacity, 0xffffffffull, "MinMaxReduce");
   reduce_ = &context.pipelines().get(
       {"scan/reduce_minmax", HEMO_REDUCE_BINDING_COUNT, sizeof(ReducePush), kWorkgroup, {}});
-  const std::uint64_t block = std::uint64_t(kWorkgroup) * HEMO_REDUCE_ITEMS;
-  std::uint64_t len = std::max<std::uint64_t>(capacity, 1);
-  while (true) {
-    const std::uint64_t blocks = ceilDiv(len, block);
-    partials_.emplace_back(context, blocks * 8, MemoryUse::Device, "min/max partials L" + std::to_string(partials_.size()));
-    const Buffer& in = partials_.size() > 1 ? partials_[partials_.size() - 2] : partials_.back();
-    sets_.push_back(reduce_->makeSet({{HEMO_REDUCE_BINDING_VALUES, &values},
-                                      {HEMO_REDUCE_BINDING_PARTIALS_IN, &in},
-                                      {HEMO_REDUCE_BINDING_PARTIALS_OUT, &partials_.back()}}));
-    finalSets_.push_back(reduce_->makeSet({{HEMO_REDUCE_BINDING_VALUES, &values},
-                                           {HEMO_REDUCE_BINDING_PARTIALS_IN, &in},
-                                           {HEMO_REDUCE_BINDING_PARTIALS_OUT, &result_}}));
-    if (blocks <= 1) break;
-    len = blocks;
-  }
+  set_ = reduce_->makeSet({{HEMO_REDUCE_BINDING_VALUES, &values},
+                           {HEMO_REDUCE_BINDING_PARTIALS, &partials_},
+                           {HEMO_REDUCE_BINDING_COUNTER, &counter_},
+                           {HEMO_REDUCE_BINDING_RESULT, &result_}});
+  counter_.upload(std::vector<std::uint32_t>{0u});
 }
 
 void MinMaxReduce::record(CommandRecorder& rec, std::uint64_t n) const {
@@ -146,19 +139,8 @@ void MinMaxReduce::record(CommandRecorder& rec, std::uint64_t n) const {
     rec.transferToCompute();
     return;
   }
-  const std::uint64_t block = std::uint64_t(kWorkgroup) * HEMO_REDUCE_ITEMS;
-  std::uint64_t len = n;
-  std::size_t k = 0;
-  for (;; ++k) {
-    // The last level (one workgroup) writes the result itself: no copy, and no transfer
-    // barriers around one, in every step's three reductions.
-    const bool last = len <= block;
-    rec.dispatch(*reduce_, last ? finalSets_[k] : sets_[k],
-                 ReducePush{static_cast<std::uint32_t>(len), k > 0 ? 1u : 0u}, reduce_->groupsFor(len, HEMO_REDUCE_ITEMS));
-    rec.computeToCompute();
-    if (last) break;
-    len = ceilDiv(len, block);
-  }
+  rec.dispatch(*reduce_, set_, ReducePush{static_cast<std::uint32_t>(n)}, reduce_->groupsFor(n, HEMO_REDUCE_ITEMS));
+  rec.computeToCompute();
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 
 namespace hemo::test {
@@ -60,6 +61,43 @@ TEST_F(ReduceTest, AnyNanPoisonsTheResult) {
     v[where] = std::numeric_limits<float>::quiet_NaN();
     const glm::vec2 got = gpuMinMax(v);
     EXPECT_TRUE(std::isnan(got.x) && std::isnan(got.y)) << "NaN at " << where;
+  }
+}
+
+// One reducer recorded many times in one command buffer, on changing data and sizes: the
+// finished-workgroup counter of the single-dispatch reduction must be back at 0 after every
+// use, and a smaller n must not see an earlier run's partials.
+TEST_F(ReduceTest, OneReducerRecordedManyTimesInACommandBuffer) {
+  auto rng = rngFor();
+  std::normal_distribution<float> dist(0.0f, 1.0f);
+  const std::size_t capacity = 300007;
+  const std::size_t sizes[] = {300007, 5000, 2049, 300007, 1, 70000};
+  constexpr std::size_t kRuns = std::size(sizes);
+  gpu::Buffer data(ctx(), capacity * 4, gpu::MemoryUse::Device, "values");
+  gpu::Buffer sources(ctx(), kRuns * capacity * 4, gpu::MemoryUse::Device, "sources");
+  gpu::Buffer results(ctx(), kRuns * 8, gpu::MemoryUse::Device, "results");
+  std::vector<float> all(kRuns * capacity);
+  for (auto& x : all) x = dist(rng);
+  sources.upload(all);
+  gpu::MinMaxReduce reduce(ctx(), data, capacity);
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  for (std::size_t k = 0; k < kRuns; ++k) {
+    rec.computeToTransfer();
+    rec.copy(sources, data, capacity * 4, k * capacity * 4, 0);
+    rec.transferToCompute();
+    reduce.record(rec, sizes[k]);
+    rec.computeToTransfer();
+    rec.copy(reduce.result(), results, 8, 0, k * 8);
+  }
+  rec.end();
+  rec.submitAndWait();
+  const auto got = results.readback<glm::vec2>(kRuns);
+  for (std::size_t k = 0; k < kRuns; ++k) {
+    const auto first = all.begin() + std::ptrdiff_t(k * capacity);
+    const auto [lo, hi] = std::minmax_element(first, first + std::ptrdiff_t(sizes[k]));
+    EXPECT_EQ(got[k].x, *lo) << "run " << k << ", n = " << sizes[k];
+    EXPECT_EQ(got[k].y, *hi) << "run " << k << ", n = " << sizes[k];
   }
 }
 

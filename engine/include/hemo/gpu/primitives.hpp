@@ -40,7 +40,9 @@ class PrefixScan {
 };
 
 // (min, max) of values[0, n) as a vec2 in result() (+inf, -inf for n = 0; NaN, NaN if any
-// value is NaN).
+// value is NaN), in one dispatch (scan/reduce_minmax.comp). Recordings of one reducer must
+// not run concurrently (they share the partials and the finished-workgroup counter); the
+// barrier after each recording sees to that within a command buffer.
 class MinMaxReduce {
  public:
   MinMaxReduce(Context& context, const Buffer& values, std::uint64_t capacity);
@@ -50,10 +52,10 @@ class MinMaxReduce {
  private:
   const ComputePipeline* reduce_;
   std::uint64_t capacity_;
-  std::deque<Buffer> partials_;
-  std::vector<DescriptorSet> sets_;        // level k: reads level k - 1's partials, writes its own
-  std::vector<DescriptorSet> finalSets_;   // the same, writing the result (the last level of a run)
+  Buffer partials_;  // vec2 per workgroup
+  Buffer counter_;   // workgroups finished (0 between recordings)
   Buffer result_;
+  DescriptorSet set_;
 };
 
 // Stable sort of pairs[0, n) (uvec2: x = key, y = value) by key, in place, using keyBits low
