@@ -157,9 +157,15 @@ Json primitives(Context& ctx, int repeat) {
       for (std::uint32_t k = 0; k < entries; ++k) contiguous[std::size_t(i) * entries + k] = list[std::size_t(k) * n + i];
     hemo::gpu::Buffer contiguousBuffer(ctx, list.size() * 4, hemo::gpu::MemoryUse::Device, "pair_gather list");
     contiguousBuffer.upload(contiguous);
-    for (std::uint32_t layout = 0; layout < 2; ++layout)
+    // Rows: both layouts with vec4 gathers, then the interleaved layout with narrow gathers
+    // and with a workgroup-uniform index (variants of bench/pair_gather.comp).
+    const std::uint32_t runs[4][2] = {{0, 0}, {1, 0}, {0, 1}, {0, 2}};  // layout, variant
+    const char* variantNames[3] = {"vec4", "narrow (2nd float, 3rd vec2)", "uniform index"};
+    for (const auto& run : runs)
     for (std::uint32_t loads = 0; loads <= 4; ++loads) {
-      const auto& probe = ctx.pipelines().get({"bench/pair_gather", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {loads, layout}});
+      const std::uint32_t layout = run[0], variant = run[1];
+      const auto& probe =
+          ctx.pipelines().get({"bench/pair_gather", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {loads, layout, variant}});
       const auto set = probe.makeSet({{HEMO_BENCH_BINDING_LIST, layout ? &contiguousBuffer : &listBuffer}, {HEMO_BENCH_BINDING_A, &data[0]},
                                       {HEMO_BENCH_BINDING_B, &data[1]}, {HEMO_BENCH_BINDING_C, &data[2]},
                                       {HEMO_BENCH_BINDING_D, &data[3]}, {HEMO_BENCH_BINDING_OUT, &data[4]}});
@@ -168,7 +174,8 @@ Json primitives(Context& ctx, int repeat) {
         rec.dispatch(probe, set, push, probe.groupsFor(n));
       });
       row("pair_gather", std::uint64_t(n) * entries, ms,
-          {{"vec4_loads_per_pair", loads}, {"list_layout", layout ? "contiguous" : "interleaved"}, {"particles", n}, {"entries_per_particle", entries}});
+          {{"vec4_loads_per_pair", loads}, {"list_layout", layout ? "contiguous" : "interleaved"},
+           {"gathers", variantNames[variant]}, {"particles", n}, {"entries_per_particle", entries}});
     }
   }
 
