@@ -105,8 +105,8 @@
 // v_j is what the viscous term sees: a fluid particle's own velocity, a boundary particle's
 // no-slip velocity. The sign of the volume tells the kind: positive for fluid, negative for
 // boundary and wall particles, zero for detached wall particles (no SPH mass). Gathering the
-// density and pressure as a vec2 instead cost the force pass a sixth more on llvmpipe, where
-// a gather's cost grows with its components (docs/benchmarks.md).
+// density and pressure as a vec2 instead cost the force pass a fifth more on llvmpipe, where
+// a one-component gather costs a third of a vec4 one (docs/benchmarks.md).
 #define HEMO_BPRESSURE_BINDING_VISCOUS_VEL 6
 #define HEMO_BPRESSURE_BINDING_CLOCK 7
 #define HEMO_BPRESSURE_BINDING_PRESSURE_TERM 8

@@ -13,10 +13,10 @@
 //             by max(sum T, 1), so it stays constant while a particle slides along a wall.
 //  SPS        when enabled: a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW_ij (fluid
 //             pairs; the stresses come from sps_stress.comp)
+//  gravity and body force.
 // A neighbour's data: position and mass, the viscous velocity (v_j, +-V_j) with V_j = m_j / rho_j,
 // and p_j / rho_j^2 (the pair data of interface/sph.h), so the viscous term reads
 //   a += 2 mu / rho_i V_j (x_ij . gradW_ij) / (r^2 + eta^2) v_ij.
-//  gravity and body force.
 // accel.w keeps the repulsion's normalisation 1 / max(sum T, 1), so a wall particle can apply
 // the exact reaction of its share. Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc).
 #extension GL_GOOGLE_include_directive : require
