@@ -84,7 +84,7 @@ void main() {
     nan = nan || isnan(v.x) || isnan(v.y);
     mm = vec2(min(mm.x, v.x), max(mm.y, v.y));
   }
-  barrier();  // the first round's shared values have been read
+  // (The first round's shared values were all read before the barrier after s_last.)
   const vec2 total = hemo_workgroup_minmax(mm, nan);
   if (gl_LocalInvocationID.x == 0u) {
     result = total;
