@@ -39,28 +39,39 @@ TEST_F(BifurcationTest, FlowSplitsEquallyAndIsConserved) {
   const scene::BifurcationGeometry g = scene::bifurcationGeometry(scene::vesselSpec(scene));
   sim::Simulation sim(ctx(), scene);
   sim::RunOptions opt;
-  opt.until = 0.02;
+  opt.until = 0.025;
   sim.run(opt);
-  // Mass flow rates (kg/s) from the particles in slabs 2 dp thick across the flow, sum of
-  // m v_x / thickness, averaged over snapshots 20 steps apart: in the parent just after the
-  // zone, and at the bends (x of the loop's middle), where only the branches pass: y > 0 the
-  // upper, y < 0 the lower. (Counting particles that cross a plane is too coarse here: each
-  // moves about a spacing over the measurement.)
-  const double bends = g.joints[1].x, parentAt = inflow.zoneEnd + 2.0 * scene.sph.spacing;
-  const double slab = 2.0 * scene.sph.spacing;
+  // Mass flow rates (kg/s) as volume averages: the sum of m v_x over the fluid in a stretch of
+  // x, divided by its length, averaged over snapshots 40 steps apart from 0.025 s (the ramp
+  // ends at 0.01 s) to about 0.047 s. Averaged over time, that is the mean of the mass that
+  // crossed each plane x = const of the stretch, and in a steady flow every plane outside the
+  // zone carries the same. The parent: its two stretches outside the zone (from a spacing past
+  // the zone to the split, and from the merge to the tube's end, 10 dp in all). The branches:
+  // 8 dp around the bends (x of the loop's middle), where only the branches pass, y > 0 the
+  // upper, y < 0 the lower.
+  // Why from 0.025 s and over stretches: right after the ramp the flow sloshes (over 0.02-0.0245 s
+  // the branches carried 1.14 of the parent's flow), and a 2 dp slab sees the particles'
+  // layering, which they keep over the measurement (until session 12 the test read 2 dp slabs
+  // over 0.02-0.029 s: 0.98). The flow is still developing (viscous time R^2 / nu of about
+  // 0.7 s), so parent and branches differ by what the lumen between them stores over the
+  // window: 0.4-0.9% (0.996 with these snapshots, 1.008 with twice as many over 0.02-0.047 s).
+  const double dp = scene.sph.spacing;
+  const double bends = g.joints[1].x, split = g.joints[0].x, merge = g.joints[2].x;
+  const double parentFrom = inflow.zoneEnd + dp, parentLength = (split - parentFrom) + (g.period - merge);
+  const double branchHalf = 4.0 * dp;
   double parent = 0.0, upper = 0.0, lower = 0.0;
   int samples = 0;
   opt.until.reset();
-  opt.steps = 20;
+  opt.steps = 40;
   for (int k = 0; k < 60; ++k) {
     sim.run(opt);
     const sim::Snapshot s = sim.snapshot();
     for (std::uint32_t i = 0; i < s.positions.size(); ++i) {
       if (s.velocities[i].w != 0.0f) continue;
       const glm::vec4 x = s.positions[i];
-      const double q = x.w * s.velocities[i].x / slab;
-      if (std::abs(x.x - parentAt) < 0.5 * slab) parent += q;
-      if (std::abs(x.x - bends) < 0.5 * slab) (x.y > 0.0f ? upper : lower) += q;
+      const double q = x.w * s.velocities[i].x;
+      if ((x.x >= parentFrom && x.x < split) || x.x >= merge) parent += q / parentLength;
+      if (std::abs(x.x - bends) < branchHalf) (x.y > 0.0f ? upper : lower) += q / (2.0 * branchHalf);
     }
     ++samples;
   }
