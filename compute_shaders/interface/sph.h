@@ -86,7 +86,7 @@
 // integrator stores that back; with 2 the pass writes its rate to state.z and the integrator's
 // stages advance it.
 #define HEMO_DENSITY_BINDING_NORMALS 8
-#define HEMO_DENSITY_BINDING_PRESSURE_TERM 9  // written for fluid particles (see the pair data below)
+#define HEMO_DENSITY_BINDING_PAIR_POSITION 9  // written for fluid particles (see the pair data below)
 #define HEMO_DENSITY_BINDING_COUNT 10
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
@@ -97,29 +97,31 @@
 #define HEMO_BPRESSURE_BINDING_STATE 3
 #define HEMO_BPRESSURE_BINDING_NCOUNT 4
 #define HEMO_BPRESSURE_BINDING_NLIST 5
-// The pair data: what the force pass gathers of a neighbour j besides its position and mass,
-// written each force evaluation by the density pass (fluid) and the boundary-pressure pass
-// (boundary and wall particles):
-//   viscous velocity (v_j, +-V_j),  V_j = m_j / rho_j    (m/s, m^3)
-//   pressure term    p_j / rho_j^2                       (Pa m^6/kg^2), one float
-// v_j is what the viscous term sees: a fluid particle's own velocity, a boundary particle's
-// no-slip velocity. The sign of the volume tells the kind: positive for fluid, negative for
-// boundary and wall particles, zero for detached wall particles (no SPH mass). Gathering the
-// density and pressure as a vec2 instead cost the force pass a fifth more on llvmpipe, where
-// a one-component gather costs a third of a vec4 one (docs/benchmarks.md).
+// The pair data: what the force pass gathers of a neighbour j, written each force evaluation
+// by the density pass (fluid) and the boundary-pressure pass (boundary and wall particles),
+// two vec4:
+//   pair position    (x_j, V_j p_j)     (m, m^3 Pa)
+//   viscous velocity (v_j, +-V_j)       (m/s, m^3),   V_j = m_j / rho_j
+// which is all the pressure form a_i = -(1 / rho_i) sum_j V_j (p_i + p_j) gradW_ij, the viscous
+// term and the SPS term need (sph/forces.comp). v_j is what the viscous term sees: a fluid
+// particle's own velocity, a boundary particle's no-slip velocity. The sign of the volume
+// tells the kind: positive for fluid, negative for boundary and wall particles, zero for
+// detached wall particles (no SPH mass). On llvmpipe a gather costs by its components (a float
+// a third of a vec4, a vec2 nearly a vec4; docs/benchmarks.md), so two vec4 is the floor for
+// seven numbers.
 #define HEMO_BPRESSURE_BINDING_VISCOUS_VEL 6
 #define HEMO_BPRESSURE_BINDING_CLOCK 7
-#define HEMO_BPRESSURE_BINDING_PRESSURE_TERM 8
+#define HEMO_BPRESSURE_BINDING_PAIR_POSITION 8
 #define HEMO_BPRESSURE_BINDING_COUNT 9
 
-// sph/sps_stress.comp: the SPS stress tau/rho of each fluid particle from its strain rate.
+// sph/sps_stress.comp: the SPS stress tau of each fluid particle from its strain rate.
 #define HEMO_SPS_BINDING_POSITIONS 0
 #define HEMO_SPS_BINDING_VELOCITIES 1
 #define HEMO_SPS_BINDING_PARAMS 2
 #define HEMO_SPS_BINDING_STATE 3
 #define HEMO_SPS_BINDING_NCOUNT 4
 #define HEMO_SPS_BINDING_NLIST 5
-#define HEMO_SPS_BINDING_TAU_A 6  // vec4 (xx, yy, zz, xy) of tau/rho (m^2/s^2)
+#define HEMO_SPS_BINDING_TAU_A 6  // vec4 (xx, yy, zz, xy) of tau (Pa)
 #define HEMO_SPS_BINDING_TAU_B 7  // vec4 (xz, yz, 0, 0)
 #define HEMO_SPS_BINDING_COUNT 8
 
@@ -138,7 +140,7 @@
 #define HEMO_FORCES_BINDING_TAU_A 11
 #define HEMO_FORCES_BINDING_TAU_B 12
 #define HEMO_FORCES_BINDING_VISCOUS_VEL 13
-#define HEMO_FORCES_BINDING_PRESSURE_TERM 14
+#define HEMO_FORCES_BINDING_PAIR_POSITION 14
 #define HEMO_FORCES_BINDING_COUNT 15
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time

@@ -8,8 +8,8 @@
 // (eq. 22-23): v = 2 v_wall - sum_f v_f W_bf / sum_f W_bf, so the shear across the wall is
 // that of a velocity that vanishes at the wall (a zero velocity gives about half of it, and
 // the fluid slips).
-// Also writes the particle's pair data (interface/sph.h): viscous velocity (no-slip v, -m / rho)
-// and pressure term p / rho^2.
+// Also writes the particle's pair data (interface/sph.h): pair position (x, V p) and viscous
+// velocity (no-slip v, -V), V = m / rho.
 // A boundary particle without fluid neighbours keeps (rho0, p_bg) and its own velocity. The force pass then treats
 // boundary particles like fluid ones in the symmetric pressure term, which holds a fluid
 // column at the hydrostatic pressure without the wall having to be penetrated.
@@ -29,7 +29,7 @@ layout(std430, binding = HEMO_BPRESSURE_BINDING_NCOUNT) readonly buffer Counts {
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
-layout(std430, binding = HEMO_BPRESSURE_BINDING_PRESSURE_TERM) writeonly buffer PressureTerm { float pressureTerm[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
 layout(push_constant) uniform Push {
   uint n;
   uint clockIn;
@@ -79,6 +79,7 @@ void main() {
     rho = hemo_tait_density(p, background, params);
   }
   state[b] = vec4(rho, p, 0.0, 0.0);
-  pressureTerm[b] = p / (rho * rho);
-  viscousVel[b] = vec4(v, -(xb4.w / rho));  // < 0: boundary or wall; -0 (neither) when detached
+  const float volume = xb4.w / rho;  // 0 when detached
+  pairPosition[b] = vec4(xb, volume * p);
+  viscousVel[b] = vec4(v, -volume);  // < 0: boundary or wall; -0 (neither) when detached
 }

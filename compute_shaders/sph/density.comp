@@ -6,8 +6,8 @@
 //   p_i   = B ((rho_i / rho0)^7 - 1) + p_bg,  B = c0^2 rho0 / 7,  optionally clamped at 0
 // with p_bg the (ramped) background pressure of common/tait.glsl.
 // Fluid particles only; boundary particles get theirs from boundary_pressure.comp.
-// Also writes each fluid particle's pair data (interface/sph.h): viscous velocity (v, m / rho)
-// and pressure term p / rho^2.
+// Also writes each fluid particle's pair data (interface/sph.h): pair position (x, V p) and
+// viscous velocity (v, V), V = m / rho.
 //
 // With continuity density (kContinuity = 1 or 2) the density is not summed: each fluid
 // particle carries its own (normals[i].w, interface/sph.h). With symplectic Euler (1) this pass
@@ -43,7 +43,7 @@ layout(std430, binding = HEMO_DENSITY_BINDING_NLIST) readonly buffer List { uint
 layout(std430, binding = HEMO_DENSITY_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
-layout(std430, binding = HEMO_DENSITY_BINDING_PRESSURE_TERM) writeonly buffer PressureTerm { float pressureTerm[]; };
+layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
 layout(push_constant) uniform Push {
   uint n;
@@ -105,6 +105,7 @@ void main() {
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   const float p = hemo_tait_pressure(rho, background, params);
   state[i] = vec4(rho, p, rate, 0.0);
-  pressureTerm[i] = p / (rho * rho);
-  viscousVel[i] = vec4(vi.xyz, pi.w / rho);  // > 0: fluid
+  const float volume = pi.w / rho;
+  pairPosition[i] = vec4(pi.xyz, volume * p);
+  viscousVel[i] = vec4(vi.xyz, volume);  // > 0: fluid
 }

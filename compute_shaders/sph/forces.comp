@@ -1,9 +1,12 @@
 #version 450
 // Accelerations of fluid particles from their neighbour list:
-//  pressure   a -= m_j (p_i / rho_i^2 + p_j / rho_j^2) gradW_ij     (Monaghan 1992; pairwise
-//             forces are equal and opposite. Mueller et al. 2003's (p_i + p_j) / (2 rho_j) is
-//             the same symmetrisation but approximates only half of grad p for a smooth field,
-//             see docs/physics.md)
+//  pressure   a -= (1 / rho_i) sum_j V_j (p_i + p_j) gradW_ij,  V_j = m_j / rho_j
+//             The seed's symmetrisation (Mueller et al. 2003: f_i = -sum_j m_j (p_i + p_j) /
+//             (2 rho_j) gradW, a force per volume) per unit mass and without its 1/2: for a
+//             smooth field sum_j V_j p_i gradW_ij is about 0, so the sum approximates grad p,
+//             where the halved one gives half of it (docs/physics.md). The form of DualSPHysics
+//             (Crespo et al. 2015). m_i a_ij = -V_i V_j (p_i + p_j) gradW_ij: pairwise forces
+//             are equal and opposite.
 //  viscosity  a += m_j 2 mu / (rho_i rho_j) (x_ij . gradW_ij) / (r^2 + eta^2) v_ij
 //             (laminar term of Morris et al. 1997 / Lo & Shao 2002)
 //  boundary   neighbours take part with the pressure, density and no-slip velocity
@@ -11,12 +14,14 @@
 //             N(x) = Psi (1 - r) / sqrt(r), r = x / 2h, for 0 < x < D (normal distance),
 //             T(y) = 1 - y / dp for tangential distance y < dp; the summed force is divided
 //             by max(sum T, 1), so it stays constant while a particle slides along a wall.
-//  SPS        when enabled: a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW_ij (fluid
-//             pairs; the stresses come from sps_stress.comp)
+//  SPS        when enabled: a += (1 / rho_i) sum_j V_j (tau_i + tau_j) . gradW_ij (fluid
+//             pairs; the stresses of Dalrymple & Rogers 2006 from sps_stress.comp, in the
+//             pressure's symmetrisation)
 //  gravity and body force.
-// A neighbour's data: position and mass, the viscous velocity (v_j, +-V_j) with V_j = m_j / rho_j,
-// and p_j / rho_j^2 (the pair data of interface/sph.h), so the viscous term reads
-//   a += 2 mu / rho_i V_j (x_ij . gradW_ij) / (r^2 + eta^2) v_ij.
+// A neighbour's data is the pair data of interface/sph.h: the pair position (x_j, V_j p_j) and
+// the viscous velocity (v_j, +-V_j), so the pair terms read
+//   a += (1 / rho_i) sum_j [ -(V_j p_i + V_j p_j) gradW_ij + V_j (tau_i + tau_j) . gradW_ij
+//                            + 2 mu V_j (x_ij . gradW_ij) / (r^2 + eta^2) v_ij ].
 // accel.w keeps the repulsion's normalisation 1 / max(sum T, 1), so a wall particle can apply
 // the exact reaction of its share. Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc).
 #extension GL_GOOGLE_include_directive : require
@@ -40,16 +45,16 @@ layout(std430, binding = HEMO_FORCES_BINDING_STATUS) buffer Status { uint status
 layout(std430, binding = HEMO_FORCES_BINDING_TAU_A) readonly buffer TauA { vec4 tauA[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_TAU_B) readonly buffer TauB { vec4 tauB[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_VISCOUS_VEL) readonly buffer ViscousVel { vec4 viscousVel[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_PRESSURE_TERM) readonly buffer PressureTerm { float pressureTerm[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_PAIR_POSITION) readonly buffer PairPosition { vec4 pairPosition[]; };
 // 1 when the scene enables the SPS term. A specialization constant rather than a branch on
 // the parameter block: llvmpipe runs a branch's body under a lane mask even when no lane
 // takes it, and the dead SPS loads cost ~10% of the pass (dam break, docs/benchmarks.md).
 layout(constant_id = 1) const uint kSps = 0u;
 
-// tau / rho^2 as a symmetric matrix, from the SPS stress per density (sps_stress.comp).
-mat3 hemo_sps_tensor(uint j, float rho) {
-  const vec4 a = tauA[j] / rho;
-  const vec4 b = tauB[j] / rho;
+// The SPS stress tau (Pa) of particle j as a symmetric matrix (sps_stress.comp).
+mat3 hemo_sps_tensor(uint j) {
+  const vec4 a = tauA[j];
+  const vec4 b = tauB[j];
   return mat3(a.x, a.w, b.x, a.w, a.y, b.y, b.x, b.y, a.z);
 }
 layout(push_constant) uniform Push { uint n; } pc;
@@ -90,16 +95,16 @@ void main() {
   const float psi = params.psi;
 
   const bool sps = kSps != 0u;
-  const mat3 spsI = sps ? hemo_sps_tensor(i, si.x) : mat3(0.0);
-  const float pOverRho2I = si.y / (si.x * si.x);
+  const mat3 spsI = sps ? hemo_sps_tensor(i) : mat3(0.0);
+  const float pI = si.y;
+  vec3 stress = vec3(0.0);   // sum V_j [ -(p_i + p_j) I + tau_i + tau_j ] . gradW
   vec3 viscous = vec3(0.0);  // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
-  vec3 a = vec3(0.0);
   vec3 repulsion = vec3(0.0);
   float repulsionWeight = 0.0;
   const uint count = neighbourCount[i];
   for (uint k = 0u; k < count; ++k) {
     const uint j = neighbourList[hemo_list_slot(i, k, pp)];
-    const vec4 pj = positions[j];  // (x_j, m_j)
+    const vec4 pj = pairPosition[j];  // (x_j, V_j p_j)
     const vec3 d = hemo_min_image(xi - pj.xyz, pp);
     const float r2 = dot(d, d);
     // grad W vanishes beyond the support (the list's skin) and for a coincident pair (no
@@ -108,12 +113,11 @@ void main() {
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);
     const vec4 vj = viscousVel[j];  // (fluid: own velocity, boundary: no-slip velocity; +-V_j)
     const float volumeJ = abs(vj.w);
-    a -= (pj.w * (pOverRho2I + pressureTerm[j])) * gradW;
+    stress -= (volumeJ * pI + pj.w) * gradW;
     viscous += (volumeJ * dot(d, gradW) / (r2 + etaSq)) * (vi.xyz - vj.xyz);
     if (sps && vj.w > 0.0) {
-      // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only; tau is stored
-      // per density, so m_j tau_j / rho_j^2 = V_j (tau_j / rho_j)
-      a += (pj.w * spsI + volumeJ * hemo_sps_tensor(j, 1.0)) * gradW;
+      // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
+      stress += volumeJ * ((spsI + hemo_sps_tensor(j)) * gradW);
     }
     if (vj.w < 0.0 && r2 > 0.0) {  // boundary and wall particles; detached ones (V = 0) do not repel
       const vec3 nrm = normals[j].xyz;
@@ -126,7 +130,7 @@ void main() {
       }
     }
   }
-  a += (twoMu / si.x) * viscous;
+  vec3 a = (stress + twoMu * viscous) / si.x;
   const float repulsionScale = 1.0 / max(repulsionWeight, 1.0);
   a += repulsion * repulsionScale;
   a += params.gravity.xyz;

@@ -3,10 +3,10 @@
 // by DualSPHysics: with the strain rate S = (grad u + grad u^T) / 2 from
 //   grad u_i = sum_j (m_j / rho_j) (u_j - u_i) (x) gradW_ij   (fluid and boundary neighbours;
 //   boundary particles bring their wall velocity, so walls shear the flow),
-// |S| = sqrt(2 S:S), nu_t = (C_s dp)^2 |S|, the stress per density is
-//   tau / rho = 2 nu_t (S - tr(S) I / 3) - 2/3 C_I dp^2 |S|^2 I.
-// forces.comp adds sum_j m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW_ij between fluid
-// particles. Runs only when the scene enables SPS.
+// |S| = sqrt(2 S:S), nu_t = (C_s dp)^2 |S|, the stress is
+//   tau = rho (2 nu_t (S - tr(S) I / 3) - 2/3 C_I dp^2 |S|^2 I).
+// forces.comp adds (1 / rho_i) sum_j V_j (tau_i + tau_j) . gradW_ij between fluid particles,
+// the symmetrisation of its pressure term. Runs only when the scene enables SPS.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -55,10 +55,11 @@ void main() {
   const float syz = 0.5 * (g[2][1] + g[1][2]);
   const float s2 = 2.0 * (sxx * sxx + syy * syy + szz * szz + 2.0 * (sxy * sxy + sxz * sxz + syz * syz));  // |S|^2
   const float magnitude = sqrt(s2);
-  const float nuT = params.spsSmagorinsky * magnitude;
+  const float rho = state[i].x;
+  const float twoMuT = 2.0 * rho * params.spsSmagorinsky * magnitude;  // 2 rho nu_t
   const float trace3 = (sxx + syy + szz) / 3.0;
-  const float iso = (2.0 / 3.0) * params.spsBlinn * s2;
-  tauA[i] = vec4(2.0 * nuT * (sxx - trace3) - iso, 2.0 * nuT * (syy - trace3) - iso, 2.0 * nuT * (szz - trace3) - iso,
-                 2.0 * nuT * sxy);
-  tauB[i] = vec4(2.0 * nuT * sxz, 2.0 * nuT * syz, 0.0, 0.0);
+  const float iso = rho * (2.0 / 3.0) * params.spsBlinn * s2;
+  tauA[i] = vec4(twoMuT * (sxx - trace3) - iso, twoMuT * (syy - trace3) - iso, twoMuT * (szz - trace3) - iso,
+                 twoMuT * sxy);
+  tauB[i] = vec4(twoMuT * sxz, twoMuT * syz, 0.0, 0.0);
 }

@@ -47,7 +47,7 @@ vec3 hemo_fluid_reaction(uint w) {
   const float psi = params.psi;
   const vec4 xw = positions[w];  // w: SPH mass
   const vec2 sw = state[w].xy;
-  const float pOverRho2W = sw.y / (sw.x * sw.x);
+  const float volumeW = xw.w / sw.x;
   const vec3 vw = wallVel[w].xyz;
   const vec3 nrm = normals[w].xyz;
   vec3 force = vec3(0.0);
@@ -62,10 +62,8 @@ vec3 hemo_fluid_reaction(uint w) {
     }
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // as sph/forces.comp
     const vec2 sf = state[f].xy;
-    const float pOverRho2F = sf.y / (sf.x * sf.x);
-    const float invRhoFW = 1.0 / (sf.x * sw.x);
-    vec3 a = -(xw.w * (pOverRho2F + pOverRho2W)) * gradW;
-    a += (xw.w * twoMu * invRhoFW * dot(d, gradW) / (r2 + etaSq)) * (velocities[f].xyz - vw);
+    vec3 a = (volumeW / sf.x) * (-(sf.y + sw.y) * gradW +
+                                 (twoMu * dot(d, gradW) / (r2 + etaSq)) * (velocities[f].xyz - vw));
     if (xw.w > 0.0) {  // detached particles (no SPH mass) do not repel
       const float x = dot(d, nrm);
       float w;

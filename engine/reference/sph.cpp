@@ -117,8 +117,8 @@ std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& par
     const double nuT = m.spsSmagorinsky * std::sqrt(s2);
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) {
-        out[i][a * 3 + b] = 2.0 * nuT * (S[a][b] - (a == b ? trace / 3.0 : 0.0)) -
-                            (a == b ? (2.0 / 3.0) * m.spsBlinn * s2 : 0.0);
+        out[i][a * 3 + b] = rp[i].x * (2.0 * nuT * (S[a][b] - (a == b ? trace / 3.0 : 0.0)) -
+                                       (a == b ? (2.0 / 3.0) * m.spsBlinn * s2 : 0.0));
       }
   }
   return out;
@@ -172,20 +172,20 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
       if (r >= support || r == 0.0) continue;
       const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
       const bool fluidJ = pj.kind == 0;
-      const double rhoJ = rp[j].x;
-      const double pOverRho2I = rp[i].y / (rp[i].x * rp[i].x);
-      const double pOverRho2J = rp[j].y / (rp[j].x * rp[j].x);
-      const glm::dvec3 pairAccel = -pj.mass * (pOverRho2I + pOverRho2J) * gradW +
-                                   pj.mass * 2.0 * m.mu / (rp[i].x * rhoJ) * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[j]);
+      // a_i = (1 / rho_i) sum_j V_j [ -(p_i + p_j) gradW + 2 mu (x_ij . gradW) / (r^2 + eta^2) v_ij ]
+      const double volumeJ = pj.mass / rp[j].x;
+      const glm::dvec3 pairAccel = volumeJ / rp[i].x *
+                                   (-(rp[i].y + rp[j].y) * gradW +
+                                    2.0 * m.mu * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[j]));
       a += pairAccel;
       if (m.sps && fluidJ) {
-        // a += m_j (tau_i / rho_i^2 + tau_j / rho_j^2) . gradW, with tau / rho stored
+        // a += (1 / rho_i) sum_j V_j (tau_i + tau_j) . gradW
         for (int c = 0; c < 3; ++c) {
           double sum = 0.0;
           for (int b = 0; b < 3; ++b) {
-            sum += (tau[i][c * 3 + b] / rp[i].x + tau[j][c * 3 + b] / rp[j].x) * gradW[b];
+            sum += (tau[i][c * 3 + b] + tau[j][c * 3 + b]) * gradW[b];
           }
-          a[c] += pj.mass * sum;
+          a[c] += volumeJ / rp[i].x * sum;
         }
       }
       if (!fluidJ) {

@@ -170,7 +170,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       driftX_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "x displacement since the list build"),
       reach_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "reach since the list build"),
       viscousVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "viscous velocities"),
-      pressureTerm_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "pressure terms p / rho^2"),
+      pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
@@ -235,7 +235,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_DENSITY_BINDING_CLOCK, &clock_},
                                    {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
                                    {HEMO_DENSITY_BINDING_NORMALS, &a.normals},
-                                   {HEMO_DENSITY_BINDING_PRESSURE_TERM, &pressureTerm_}});
+                                   {HEMO_DENSITY_BINDING_PAIR_POSITION, &pairPosition_}});
   boundarySet_ = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
                                              {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
                                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
@@ -244,7 +244,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                              {HEMO_BPRESSURE_BINDING_NLIST, &nlist_},
                                              {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
                                              {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
-                                             {HEMO_BPRESSURE_BINDING_PRESSURE_TERM, &pressureTerm_}});
+                                             {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_}});
   spsSet_ = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
                                  {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
@@ -267,7 +267,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  {HEMO_FORCES_BINDING_TAU_A, &tauA_},
                                  {HEMO_FORCES_BINDING_TAU_B, &tauB_},
                                  {HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_},
-                                 {HEMO_FORCES_BINDING_PRESSURE_TERM, &pressureTerm_}});
+                                 {HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_}});
   integrateSet_ = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                        {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},

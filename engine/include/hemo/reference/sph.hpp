@@ -45,7 +45,7 @@ struct SphModel {
 // x_i - x_j, by the minimum image on periodic axes.
 glm::dvec3 separation(const SphModel& model, const glm::dvec3& xi, const glm::dvec3& xj);
 
-// SPS stress per density tau/rho (symmetric 3x3, row-major) of each particle (zero for
+// SPS stress tau (Pa, symmetric 3x3, row-major) of each particle (zero for
 // boundary particles).
 std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& particles,
                                              const std::vector<glm::dvec2>& densityPressure, const SphModel& model);

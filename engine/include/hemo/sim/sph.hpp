@@ -9,8 +9,8 @@
 //   dt ........ min reduction of the limits (stays on the GPU)
 //   integrate . symplectic Euler with that dt; clock, step log and status on the GPU; each
 //               particle's reach since the list build, reduced for the next step's gate
-// Sources: Monaghan (1994) for WCSPH and the Tait equation, Mueller et al. (2003) for the
-// symmetric pressure force, Morris et al. (1997) for laminar viscosity, Wendland (1995)
+// Sources: Monaghan (1994) for WCSPH and the Tait equation, Mueller et al. (2003) and
+// Crespo et al. (2015) for the symmetric pressure force, Morris et al. (1997) for laminar viscosity, Wendland (1995)
 // for the kernel; docs/physics.md.
 #include "hemo/gpu/gate.hpp"
 #include "hemo/gpu/primitives.hpp"
@@ -199,7 +199,7 @@ class SphSolver {
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, driftX_, reach_, viscousVel_;
-  gpu::Buffer pressureTerm_;  // p / rho^2 per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
+  gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer fluidCells_;
