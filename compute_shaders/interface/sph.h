@@ -107,8 +107,8 @@
 // particle's own velocity, a boundary particle's no-slip velocity. The sign of the volume
 // tells the kind: positive for fluid, negative for boundary and wall particles, zero for
 // detached wall particles (no SPH mass). On llvmpipe a gather costs by its components (a float
-// a third of a vec4, a vec2 nearly a vec4; docs/benchmarks.md), so two vec4 is the floor for
-// seven numbers.
+// a third of a vec4, a vec2 nearly a vec4; docs/benchmarks.md); Monaghan's pressure form, which
+// also needs m_j, took a third gather and 12% more time in the force pass (session 12).
 #define HEMO_BPRESSURE_BINDING_VISCOUS_VEL 6
 #define HEMO_BPRESSURE_BINDING_CLOCK 7
 #define HEMO_BPRESSURE_BINDING_PAIR_POSITION 8
