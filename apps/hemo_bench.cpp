@@ -179,6 +179,43 @@ Json primitives(Context& ctx, int repeat) {
     }
   }
 
+  // What a parameter read costs (bench/param_read.comp): one vec4 per loop iteration at an
+  // address that is the same for the whole dispatch, from a storage buffer, a uniform buffer
+  // or push constants, against the loop without reads. 20,000 invocations (a scene's
+  // particle count) x 64 reads.
+  {
+    const std::uint32_t n = 20000, reads = 64;
+    struct Push {
+      glm::vec4 p[HEMO_BENCH_PARAM_VEC4S - 1];
+      std::uint32_t n, reads;
+    };
+    static_assert(sizeof(Push) == 120);
+    Push push{};
+    std::vector<glm::vec4> values(HEMO_BENCH_PARAM_VEC4S);
+    for (std::uint32_t k = 0; k < HEMO_BENCH_PARAM_VEC4S; ++k) {
+      values[k] = glm::vec4(0.999f, 1e-3f * float(k), 0.5f, 0.25f);
+      if (k + 1 < HEMO_BENCH_PARAM_VEC4S) push.p[k] = values[k];
+    }
+    push.n = n;
+    push.reads = reads;
+    hemo::gpu::Buffer params(ctx, values.size() * 16, hemo::gpu::MemoryUse::Device, "param_read params");
+    params.upload(values);
+    hemo::gpu::Buffer out(ctx, std::uint64_t(n) * 16, hemo::gpu::MemoryUse::Device, "param_read out");
+    const char* sources[4] = {"none", "storage buffer", "uniform buffer", "push constants"};
+    for (std::uint32_t variant = 0; variant < 4; ++variant) {
+      const auto& probe = ctx.pipelines().get({"bench/param_read", HEMO_BENCH_PARAM_BINDING_COUNT, sizeof(Push), 64,
+                                               {variant}, 1u << HEMO_BENCH_PARAM_BINDING_UNIFORM});
+      const auto set = probe.makeSet({{HEMO_BENCH_PARAM_BINDING_STORAGE, &params},
+                                      {HEMO_BENCH_PARAM_BINDING_UNIFORM, &params},
+                                      {HEMO_BENCH_PARAM_BINDING_OUT, &out}});
+      const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+        rec.dispatch(probe, set, push, probe.groupsFor(n));
+      });
+      row("param_read", std::uint64_t(n) * reads, ms,
+          {{"source", sources[variant]}, {"invocations", n}, {"reads_per_invocation", reads}});
+    }
+  }
+
   for (std::uint64_t n : {10000ull, 100000ull, 1000000ull, 16000000ull}) {
     std::vector<std::uint32_t> v(n);
     for (auto& x : v) x = static_cast<std::uint32_t>(rng() & 0xff);

@@ -1,4 +1,5 @@
-// The SPH parameter block (see interface/sph.h for units), bound read-only.
+// The SPH parameter block (see interface/sph.h for units), bound as a uniform buffer (its
+// layout is the same under std140 and std430: scalars and vec4 only, 192 bytes).
 struct SphParams {
   vec4 gravity;
   float h;
@@ -34,6 +35,13 @@ struct SphParams {
   float deltaSph;  // delta of the continuity density's diffusion term
   vec4 gravityOnly;  // xyz: gravity without the body force (m/s^2)
 };
+
+// Declares `params` at a binding slot. A uniform buffer, not a storage buffer: llvmpipe reads a
+// uniform-buffer value once for all lanes, but a storage-buffer load lane by lane even when
+// every lane reads the same address, 0.4 against 15 ns per invocation and vec4 read
+// (hemo-bench primitives, param_read; docs/benchmarks.md). The host declares the slot uniform
+// (PipelineDesc::uniformSlots).
+#define HEMO_SPH_PARAMS_UNIFORM(slot) layout(std140, binding = slot) uniform Params { SphParams params; }
 
 // The parameters the neighbour loops use, read once into registers: llvmpipe does not hoist
 // storage-buffer loads out of a loop, and reloading them for every pair cost 35-50% of the

@@ -16,4 +16,16 @@
 #define HEMO_BENCH_BINDING_COUNT 6
 // push constants: uint n; uint entries  (8 bytes)
 
+
+// bench/param_read.comp: invocation i of n runs `reads` iterations, each reading one vec4 at
+// an index that depends only on the iteration (the same address for the whole dispatch) from
+// a storage buffer, a uniform buffer or push constants (specialization constant 1 picks),
+// with two fused multiply-adds per read; the result goes to OUT[i].
+#define HEMO_BENCH_PARAM_BINDING_STORAGE 0
+#define HEMO_BENCH_PARAM_BINDING_UNIFORM 1
+#define HEMO_BENCH_PARAM_BINDING_OUT 2
+#define HEMO_BENCH_PARAM_BINDING_COUNT 3
+#define HEMO_BENCH_PARAM_VEC4S 8
+// push constants: vec4 p[HEMO_BENCH_PARAM_VEC4S - 1]; uint n; uint reads  (120 bytes)
+
 #endif

@@ -23,12 +23,12 @@
 
 layout(std430, binding = HEMO_BPRESSURE_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_BPRESSURE_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_BPRESSURE_BINDING_PARAMS);
 layout(std430, binding = HEMO_BPRESSURE_BINDING_STATE) buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
-layout(std430, binding = HEMO_BPRESSURE_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
+layout(std140, binding = HEMO_BPRESSURE_BINDING_CLOCK) uniform Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
 layout(push_constant) uniform Push {
   uint n;

@@ -16,7 +16,7 @@
 // candidate's position and kind come in one load.
 layout(std430, binding = HEMO_BUILD_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_CELL_START) readonly buffer CellStart { uint cellStart[]; };
-layout(std430, binding = HEMO_BUILD_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_BUILD_BINDING_PARAMS);
 layout(std430, binding = HEMO_BUILD_BINDING_NCOUNT) writeonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_NLIST) writeonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_STATUS) buffer Status { uint status[]; };

@@ -25,10 +25,13 @@
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POSITIONS) buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_VELOCITIES) buffer Velocities { vec4 velocities[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_ACCEL) readonly buffer Accel { vec4 accel[]; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_PARAMS) readonly buffer Params { SphParams params; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_DT) readonly buffer Dt { vec2 dtMinMax; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_INTEGRATE_BINDING_PARAMS);
+// Values every invocation reads at the same address are uniform buffers (common/sph_params.glsl
+// says why).
+layout(std140, binding = HEMO_INTEGRATE_BINDING_DT) uniform Dt { vec2 dtMinMax; };
 // Two clock records: this step reads clocks[in] and invocation 0 writes clocks[1 - in], so no
-// invocation can see a half-advanced clock (workgroups run in any order).
+// invocation can see a half-advanced clock (workgroups run in any order). (Read through a
+// uniform binding of the same buffer, the step measured no faster.)
 layout(std430, binding = HEMO_INTEGRATE_BINDING_CLOCK) buffer Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STATUS) buffer Status { uint status[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_LOG) writeonly buffer Log { vec2 stepLog[]; };
@@ -37,7 +40,7 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) readonly buffer PosAtBuild { vec4 posAtBuild[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_DRIFT_X) writeonly buffer DriftX { float driftX[]; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_INFLOW) readonly buffer Inflow { InflowParams inflow; };
+layout(std140, binding = HEMO_INTEGRATE_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STATE) readonly buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_NORMALS) buffer Normals { vec4 normals[]; };
 // Continuity density (sph/density.comp): fluid particles carry their density in normals[i].w.
@@ -80,8 +83,8 @@ float hemo_inflow_mean_speed(float time) {
     const float cycles = time / inflow.period;
     const float phase = (cycles - floor(cycles)) * float(inflow.samples);
     const uint k = min(uint(phase), inflow.samples - 1u);
-    const float a = inflow.waveform[k];
-    const float b = inflow.waveform[(k + 1u) % inflow.samples];
+    const float a = hemo_inflow_sample(inflow, k);
+    const float b = hemo_inflow_sample(inflow, (k + 1u) % inflow.samples);
     w = a + (b - a) * (phase - float(k));
   }
   const float ramp = inflow.ramp > 0.0 ? clamp(time / inflow.ramp, 0.0, 1.0) : 1.0;

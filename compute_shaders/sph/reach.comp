@@ -17,8 +17,8 @@
 layout(std430, binding = HEMO_REACH_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_REACH_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
 layout(std430, binding = HEMO_REACH_BINDING_POS_AT_BUILD) readonly buffer PosAtBuild { vec4 posAtBuild[]; };
-layout(std430, binding = HEMO_REACH_BINDING_PARAMS) readonly buffer Params { SphParams params; };
-layout(std430, binding = HEMO_REACH_BINDING_DRIFT_RANGE) readonly buffer DriftRange { vec2 driftRange; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_REACH_BINDING_PARAMS);
+layout(std140, binding = HEMO_REACH_BINDING_DRIFT_RANGE) uniform DriftRange { vec2 driftRange; };
 layout(std430, binding = HEMO_REACH_BINDING_REACH) writeonly buffer Reach { float reach[]; };
 layout(push_constant) uniform Push {
   uint n;

@@ -15,7 +15,7 @@
 
 layout(std430, binding = HEMO_SPS_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_SPS_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_SPS_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_SPS_BINDING_PARAMS);
 layout(std430, binding = HEMO_SPS_BINDING_STATE) readonly buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_SPS_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_SPS_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };

@@ -9,7 +9,7 @@
 
 layout(std430, binding = HEMO_PSTATS_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
 layout(std430, binding = HEMO_PSTATS_BINDING_STATE) readonly buffer State { vec4 state[]; };
-layout(std430, binding = HEMO_PSTATS_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_PSTATS_BINDING_PARAMS);
 layout(std430, binding = HEMO_PSTATS_BINDING_SPEED) writeonly buffer Speed { float speed[]; };
 layout(std430, binding = HEMO_PSTATS_BINDING_DENSITY_ERROR) writeonly buffer DensityError { float densityError[]; };
 layout(push_constant) uniform Push { uint n; } pc;

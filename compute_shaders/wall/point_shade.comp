@@ -18,7 +18,7 @@ layout(std430, binding = HEMO_SHADE_BINDING_SLOT_OF_ID) readonly buffer SlotOfId
 layout(std430, binding = HEMO_SHADE_BINDING_SPRINGS) readonly buffer Springs { Spring springs[]; };
 layout(std430, binding = HEMO_SHADE_BINDING_FIRST) readonly buffer First { uint first[]; };
 layout(std430, binding = HEMO_SHADE_BINDING_SPRINGS_OF) readonly buffer SpringsOf { uint springsOf[]; };
-layout(std430, binding = HEMO_SHADE_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_SHADE_BINDING_PARAMS);
 layout(std430, binding = HEMO_SHADE_BINDING_SHADE) writeonly buffer Shade { vec2 shade[]; };
 layout(push_constant) uniform Push {
   uint n;

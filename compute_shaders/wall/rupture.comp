@@ -14,7 +14,7 @@ layout(std430, binding = HEMO_RUPTURE_BINDING_VELOCITIES) readonly buffer Veloci
 layout(std430, binding = HEMO_RUPTURE_BINDING_SLOT_OF_ID) readonly buffer SlotOfId { uint slotOfId[]; };
 layout(std430, binding = HEMO_RUPTURE_BINDING_SPRINGS) buffer Springs { Spring springs[]; };
 layout(std430, binding = HEMO_RUPTURE_BINDING_COUNTERS) buffer Counters { uint counters[]; };
-layout(std430, binding = HEMO_RUPTURE_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_RUPTURE_BINDING_PARAMS);
 layout(push_constant) uniform Push { uint springCount; } pc;
 
 void main() {

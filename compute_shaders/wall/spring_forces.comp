@@ -24,7 +24,7 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS_OF) readonly buffer Spring
 layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_INFO) readonly buffer WallInfo { vec4 wallInfo[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_ACCEL) buffer Accel { vec4 accel[]; };  // fluid's read, wall's written
 layout(std430, binding = HEMO_SPRINGF_BINDING_DT_LIMIT) writeonly buffer DtLimit { float dtLimit[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_PARAMS) readonly buffer Params { SphParams params; };
+HEMO_SPH_PARAMS_UNIFORM(HEMO_SPRINGF_BINDING_PARAMS);
 layout(std430, binding = HEMO_SPRINGF_BINDING_STATE) readonly buffer State { vec4 state[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };

@@ -3,6 +3,7 @@
 #include "hemo/shaders.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <stdexcept>
 #include <utility>
 
@@ -31,6 +32,7 @@ void DescriptorSet::release() {
 ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
     : context_(&context),
       bindingCount_(desc.bindingCount),
+      uniformSlots_(desc.uniformSlots),
       pushBytes_(desc.pushConstantBytes),
       workgroupSize_(desc.workgroupSize),
       name_(desc.shader) {
@@ -40,6 +42,10 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
     throw GpuError("workgroup size " + std::to_string(workgroupSize_) + " for '" + name_ +
                    "' is outside the device's limits (max " +
                    std::to_string(limits.maxComputeWorkGroupSize[0]) + ")");
+  }
+  if (bindingCount_ < 32 && (uniformSlots_ >> bindingCount_) != 0) {
+    throw GpuError("uniform slots of '" + name_ + "' name a slot beyond its " +
+                   std::to_string(bindingCount_) + " bindings");
   }
   if (pushBytes_ > limits.maxPushConstantsSize) {
     throw GpuError("push constants of '" + name_ + "' exceed the device's " +
@@ -52,7 +58,7 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
     std::vector<VkDescriptorSetLayoutBinding> slots(bindingCount_);
     for (std::uint32_t i = 0; i < bindingCount_; ++i) {
       slots[i].binding = i;
-      slots[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+      slots[i].descriptorType = descriptorType(i);
       slots[i].descriptorCount = 1;
       slots[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
     }
@@ -116,6 +122,7 @@ ComputePipeline& ComputePipeline::operator=(ComputePipeline&& other) noexcept {
     layout_ = std::exchange(other.layout_, VK_NULL_HANDLE);
     pipeline_ = std::exchange(other.pipeline_, VK_NULL_HANDLE);
     bindingCount_ = other.bindingCount_;
+    uniformSlots_ = other.uniformSlots_;
     pushBytes_ = other.pushBytes_;
     workgroupSize_ = other.workgroupSize_;
     name_ = std::move(other.name_);
@@ -152,7 +159,12 @@ Groups ComputePipeline::groupsFor(std::uint64_t items, std::uint32_t itemsPerInv
   return groupsFor((items + itemsPerInvocation - 1) / itemsPerInvocation);
 }
 
+VkDescriptorType ComputePipeline::descriptorType(std::uint32_t slot) const {
+  return (uniformSlots_ >> slot) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+}
+
 DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) const {
+  const auto& limits = context_->limits();
   std::vector<const Binding*> bySlot(bindingCount_, nullptr);
   for (const Binding& b : bindings) {
     if (b.slot >= bindingCount_) {
@@ -168,6 +180,23 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
       throw std::invalid_argument("'" + name_ + "' binding slot " + std::to_string(b.slot) +
                                   ": buffer '" + b.buffer->name() + "' is not a device buffer");
     }
+    const bool uniform = descriptorType(b.slot) == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+    const VkDeviceSize alignment =
+        uniform ? limits.minUniformBufferOffsetAlignment : limits.minStorageBufferOffsetAlignment;
+    if (alignment > 1 && b.offset % alignment != 0) {
+      throw std::invalid_argument("'" + name_ + "' binding slot " + std::to_string(b.slot) + ": offset " +
+                                  std::to_string(b.offset) + " is not a multiple of the device's " +
+                                  (uniform ? "minUniformBufferOffsetAlignment " : "minStorageBufferOffsetAlignment ") +
+                                  std::to_string(alignment));
+    }
+    const VkDeviceSize range = b.range == VK_WHOLE_SIZE ? b.buffer->size() - std::min(b.offset, b.buffer->size()) : b.range;
+    const VkDeviceSize maxRange = uniform ? limits.maxUniformBufferRange : limits.maxStorageBufferRange;
+    if (range > maxRange) {
+      throw std::invalid_argument("'" + name_ + "' binding slot " + std::to_string(b.slot) + ": buffer '" +
+                                  b.buffer->name() + "' binds " + std::to_string(range) + " bytes, more than the device's " +
+                                  (uniform ? "maxUniformBufferRange " : "maxStorageBufferRange ") +
+                                  std::to_string(maxRange));
+    }
     bySlot[b.slot] = &b;
   }
   for (std::uint32_t i = 0; i < bindingCount_; ++i) {
@@ -178,11 +207,14 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
 
   DescriptorSet set;
   set.device_ = context_->device();
-  VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(bindingCount_, 1u)};
+  const auto uniformCount = static_cast<std::uint32_t>(std::popcount(uniformSlots_));
+  const VkDescriptorPoolSize sizes[2] = {
+      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(bindingCount_ - uniformCount, 1u)},
+      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, std::max(uniformCount, 1u)}};
   VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   poolInfo.maxSets = 1;
-  poolInfo.poolSizeCount = 1;
-  poolInfo.pPoolSizes = &size;
+  poolInfo.poolSizeCount = 2;
+  poolInfo.pPoolSizes = sizes;
   check(vkCreateDescriptorPool(set.device_, &poolInfo, nullptr, &set.pool_), "vkCreateDescriptorPool");
   VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
   alloc.descriptorPool = set.pool_;
@@ -199,7 +231,7 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
     writes[i].dstSet = set.set_;
     writes[i].dstBinding = i;
     writes[i].descriptorCount = 1;
-    writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+    writes[i].descriptorType = descriptorType(i);
     writes[i].pBufferInfo = &infos[i];
   }
   vkUpdateDescriptorSets(set.device_, bindingCount_, writes.data(), 0, nullptr);

@@ -202,19 +202,25 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   inflow_.upload(std::vector<InflowParams>{disabledInflowParams()});
   auto& cache = context.pipelines();
   markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
-  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}});
+  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}, 1u << HEMO_BUILD_BINDING_PARAMS});
   // Constant 1 of the density pass and the integrator: summation density (0), or continuity
   // density advanced by the density pass (1, symplectic Euler) or by the RK2 stages (2).
   const std::uint32_t continuity = settings.densityMethod == DensityMethod::Summation ? 0u
                                    : settings.integrator == Integrator::Rk2Midpoint  ? 2u
                                                                                      : 1u;
-  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {continuity}});
-  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {}});
-  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {continuity},
+                         1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK});
+  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {},
+                                  1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK});
+  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 1u << HEMO_SPS_BINDING_PARAMS});
+  // constant 1: the SPS term compiled in or out
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup,
-                        {settings.sps ? 1u : 0u}});  // constant 1: the SPS term compiled in or out
-  integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity}});
-  reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {}});
+                        {settings.sps ? 1u : 0u}, 1u << HEMO_FORCES_BINDING_PARAMS});
+  integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity},
+                           1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW |
+                               1u << HEMO_INTEGRATE_BINDING_DT});
+  reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {},
+                           1u << HEMO_REACH_BINDING_PARAMS | 1u << HEMO_REACH_BINDING_DRIFT_RANGE});
   const ParticleArrays& a = particles.live();
   markSet_ = markFluid_->makeSet({{HEMO_MARK_BINDING_CELL_START, &grid_.cellStart()},
                                   {HEMO_MARK_BINDING_VELOCITIES, &a.velocities},

@@ -31,7 +31,7 @@ StepStats::StepStats(gpu::Context& context, const ParticleStore& particles, cons
       errorMax_(context, densityError_, slots(particles)) {
   zeros_.upload(std::vector<std::uint32_t>(4, 0u));
   auto& cache = context.pipelines();
-  particleStats_ = &cache.get({"stats/particle_stats", HEMO_PSTATS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  particleStats_ = &cache.get({"stats/particle_stats", HEMO_PSTATS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 1u << HEMO_PSTATS_BINDING_PARAMS});
   logRow_ = &cache.get({"stats/log_row", HEMO_STATSLOG_BINDING_COUNT, sizeof(LogPush), 64, {}});
   particleSet_ = particleStats_->makeSet({{HEMO_PSTATS_BINDING_VELOCITIES, &particles.live().velocities},
                                           {HEMO_PSTATS_BINDING_STATE, &solver.state()},

@@ -119,9 +119,9 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   wallInfo_.upload(info);
 
   auto& cache = context.pipelines();
-  rupture_ = &cache.get({"wall/rupture", HEMO_RUPTURE_BINDING_COUNT, sizeof(RupturePush), kWorkgroup, {}});
-  forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, {}});
-  shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}});
+  rupture_ = &cache.get({"wall/rupture", HEMO_RUPTURE_BINDING_COUNT, sizeof(RupturePush), kWorkgroup, {}, 1u << HEMO_RUPTURE_BINDING_PARAMS});
+  forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, {}, 1u << HEMO_SPRINGF_BINDING_PARAMS});
+  shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}, 1u << HEMO_SHADE_BINDING_PARAMS});
   const ParticleArrays& a = particles.live();
   ruptureSet_ = rupture_->makeSet({{HEMO_RUPTURE_BINDING_POSITIONS, &a.positions},
                                    {HEMO_RUPTURE_BINDING_VELOCITIES, &a.velocities},

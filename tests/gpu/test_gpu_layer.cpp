@@ -2,9 +2,13 @@
 #include "gpu_test.hpp"
 #include "hemo/gpu/commands.hpp"
 #include "hemo/gpu/pipeline_cache.hpp"
+#include "interface/bench.h"
 #include "interface/scan.h"
 
+#include <cmath>
 #include <cstdlib>
+#include <glm/glm.hpp>
+#include <vector>
 
 namespace hemo::test {
 namespace {
@@ -94,6 +98,79 @@ TEST_F(GpuLayerTest, BindingsAreCheckedBySlot) {
   EXPECT_NO_THROW(p.makeSet({{0, &a}, {1, &a}, {2, &a}}));
   // The same description returns the same pipeline object.
   EXPECT_EQ(&p, &ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}}));
+}
+
+// Uniform-buffer slots: the same values read as a uniform buffer, a storage buffer and push
+// constants (bench/param_read.comp) give the same results, and a uniform slot's offset must
+// respect minUniformBufferOffsetAlignment.
+TEST_F(GpuLayerTest, UniformSlotsReadTheBoundBuffer) {
+  struct Push {
+    glm::vec4 p[HEMO_BENCH_PARAM_VEC4S - 1];
+    std::uint32_t n, reads;
+  };
+  const std::uint32_t n = 300, reads = 13;
+  Push push{};
+  std::vector<glm::vec4> values(HEMO_BENCH_PARAM_VEC4S);
+  for (std::uint32_t k = 0; k < HEMO_BENCH_PARAM_VEC4S; ++k) {
+    values[k] = glm::vec4(0.5f + 0.0625f * float(k), 0.125f * float(k), -0.25f, 1.0f + float(k));
+    if (k + 1 < HEMO_BENCH_PARAM_VEC4S) push.p[k] = values[k];
+  }
+  push.n = n;
+  push.reads = reads;
+  gpu::Buffer params(ctx(), values.size() * 16, gpu::MemoryUse::Device, "params");
+  params.upload(values);
+  // CPU double reference of the loop in bench/param_read.comp.
+  std::vector<glm::dvec4> expected(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    glm::dvec4 sum(double(float(i) * 1e-3f), 0.5, 0.25, 1.0);
+    for (std::uint32_t k = 0; k < reads; ++k) {
+      const glm::dvec4 q(values[k % (HEMO_BENCH_PARAM_VEC4S - 1)]);
+      sum = sum * q.x + glm::dvec4(q.y, q.z, q.w, q.x);
+    }
+    expected[i] = sum;
+  }
+  for (std::uint32_t variant = 1; variant <= 3; ++variant) {
+    SCOPED_TRACE("variant " + std::to_string(variant));
+    const auto& p = ctx().pipelines().get({"bench/param_read", HEMO_BENCH_PARAM_BINDING_COUNT, sizeof(Push), 64,
+                                           {variant}, 1u << HEMO_BENCH_PARAM_BINDING_UNIFORM});
+    gpu::Buffer out(ctx(), std::uint64_t(n) * 16, gpu::MemoryUse::Device, "out");
+    const auto set = p.makeSet({{HEMO_BENCH_PARAM_BINDING_STORAGE, &params},
+                                {HEMO_BENCH_PARAM_BINDING_UNIFORM, &params},
+                                {HEMO_BENCH_PARAM_BINDING_OUT, &out}});
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    rec.dispatch(p, set, push, p.groupsFor(n));
+    rec.end();
+    rec.submitAndWait();
+    const auto got = out.readback<glm::vec4>(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      for (int c = 0; c < 4; ++c) {
+        ASSERT_NEAR(got[i][c], expected[i][c], 1e-5 * (1.0 + std::abs(expected[i][c]))) << "invocation " << i;
+      }
+    }
+  }
+  // A uniform slot at an offset that breaks the device's alignment is refused, naming the slot.
+  const auto& p = ctx().pipelines().get({"bench/param_read", HEMO_BENCH_PARAM_BINDING_COUNT, sizeof(Push), 64, {2u},
+                                         1u << HEMO_BENCH_PARAM_BINDING_UNIFORM});
+  const VkDeviceSize align = ctx().limits().minUniformBufferOffsetAlignment;
+  gpu::Buffer big(ctx(), 4096, gpu::MemoryUse::Device, "big");
+  if (align > 1) {
+    try {
+      p.makeSet({{HEMO_BENCH_PARAM_BINDING_STORAGE, &big},
+                 {HEMO_BENCH_PARAM_BINDING_UNIFORM, &big, align / 2, 128},
+                 {HEMO_BENCH_PARAM_BINDING_OUT, &big}});
+      ADD_FAILURE() << "a misaligned uniform offset was accepted";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find("minUniformBufferOffsetAlignment"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_NO_THROW(p.makeSet({{HEMO_BENCH_PARAM_BINDING_STORAGE, &big},
+                             {HEMO_BENCH_PARAM_BINDING_UNIFORM, &big, align, 128},
+                             {HEMO_BENCH_PARAM_BINDING_OUT, &big}}));
+  // A uniform mask naming a slot the pipeline does not have is an error.
+  EXPECT_THROW(ctx().pipelines().get({"bench/param_read", HEMO_BENCH_PARAM_BINDING_COUNT, sizeof(Push), 64, {2u},
+                                      1u << HEMO_BENCH_PARAM_BINDING_COUNT}),
+               gpu::GpuError);
 }
 
 TEST_F(GpuLayerTest, PushConstantSizeMismatchIsRejected) {

@@ -1,6 +1,7 @@
 #pragma once
-// One compute shader with its descriptor layout (storage buffers only), push constants and
-// workgroup size (specialization constant 0). Bindings are addressed by the slot numbers of
+// One compute shader with its descriptor layout (storage buffers, and uniform buffers at the
+// slots PipelineDesc::uniformSlots names), push constants and workgroup size (specialization
+// constant 0). Bindings are addressed by the slot numbers of
 // the shader family's interface header, never by position in a list.
 #include "hemo/gpu/buffer.hpp"
 
@@ -20,7 +21,8 @@ struct Groups {
   std::uint64_t total() const { return std::uint64_t(x) * y; }
 };
 
-// A buffer (or a byte range of one) bound to one storage-buffer slot.
+// A buffer (or a byte range of one) bound to one slot (storage or uniform, as the pipeline
+// declares it).
 struct Binding {
   std::uint32_t slot = 0;
   const Buffer* buffer = nullptr;
@@ -48,10 +50,14 @@ class DescriptorSet {
 
 struct PipelineDesc {
   std::string_view shader;             // name in compute_shaders/, e.g. "scan/scan_block"
-  std::uint32_t bindingCount = 0;      // storage buffers at slots 0 .. bindingCount-1
+  std::uint32_t bindingCount = 0;      // buffers at slots 0 .. bindingCount-1
   std::uint32_t pushConstantBytes = 0;
   std::uint32_t workgroupSize = 256;   // specialization constant 0
   std::vector<std::uint32_t> specialization;  // constants 1, 2, ... (uint32 each)
+  // Bit i set: slot i is a uniform buffer (a small read-only block whose every read has the
+  // same address across a dispatch, such as parameters: devices read those once per
+  // subgroup, see docs/benchmarks.md "uniform parameters"); otherwise a storage buffer.
+  std::uint32_t uniformSlots = 0;
 };
 
 class ComputePipeline {
@@ -76,16 +82,20 @@ class ComputePipeline {
   // Workgroups for shaders whose invocations each handle `itemsPerInvocation` items.
   Groups groupsFor(std::uint64_t items, std::uint32_t itemsPerInvocation) const;
 
-  // Binds every slot exactly once; throws std::invalid_argument naming the slot otherwise.
+  // Binds every slot exactly once; throws std::invalid_argument naming the slot otherwise,
+  // and when a uniform slot's range exceeds maxUniformBufferRange or its offset is not a
+  // multiple of minUniformBufferOffsetAlignment (storage slots likewise with theirs).
   DescriptorSet makeSet(std::initializer_list<Binding> bindings) const;
 
  private:
   void release();
+  VkDescriptorType descriptorType(std::uint32_t slot) const;
   Context* context_ = nullptr;
   VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
   VkPipelineLayout layout_ = VK_NULL_HANDLE;
   VkPipeline pipeline_ = VK_NULL_HANDLE;
   std::uint32_t bindingCount_ = 0;
+  std::uint32_t uniformSlots_ = 0;
   std::uint32_t pushBytes_ = 0;
   std::uint32_t workgroupSize_ = 0;
   std::string name_;
