@@ -87,7 +87,15 @@
 // stages advance it.
 #define HEMO_DENSITY_BINDING_NORMALS 8
 #define HEMO_DENSITY_BINDING_PAIR_POSITION 9  // written for fluid particles (see the pair data below)
-#define HEMO_DENSITY_BINDING_COUNT 10
+// The interacting pairs: of a fluid particle's list (built with a skin, so up to a third of
+// its entries lie beyond the support at any step), the entries within interaction range now,
+// in list order and with the list's layout (hemo_list_slot), for the SPS and force passes of
+// the same evaluation. Interaction range: the kernel's support, or the repulsion's reach
+// sqrt((|D| + dp)^2 + dp^2) where that is larger (common/repulsion.glsl). Entries of other
+// particles are not written.
+#define HEMO_DENSITY_BINDING_PAIR_COUNT 10
+#define HEMO_DENSITY_BINDING_PAIR_LIST 11
+#define HEMO_DENSITY_BINDING_COUNT 12
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).
@@ -115,6 +123,8 @@
 #define HEMO_BPRESSURE_BINDING_COUNT 9
 
 // sph/sps_stress.comp: the SPS stress tau of each fluid particle from its strain rate.
+// NCOUNT / NLIST here and in the force pass: the interacting pairs (PAIR_COUNT / PAIR_LIST of
+// the density pass), not the neighbour list.
 #define HEMO_SPS_BINDING_POSITIONS 0
 #define HEMO_SPS_BINDING_VELOCITIES 1
 #define HEMO_SPS_BINDING_PARAMS 2

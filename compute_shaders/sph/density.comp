@@ -7,7 +7,8 @@
 // with p_bg the (ramped) background pressure of common/tait.glsl.
 // Fluid particles only; boundary particles get theirs from boundary_pressure.comp.
 // Also writes each fluid particle's pair data (interface/sph.h): pair position (x, V p) and
-// viscous velocity (v, V), V = m / rho.
+// viscous velocity (v, V), V = m / rho; and its interacting pairs, the list entries within
+// interaction range, which the SPS and force passes walk instead of the whole list.
 //
 // With continuity density (kContinuity = 1 or 2) the density is not summed: each fluid
 // particle carries its own (normals[i].w, interface/sph.h). With symplectic Euler (1) this pass
@@ -44,6 +45,8 @@ layout(std140, binding = HEMO_DENSITY_BINDING_CLOCK) uniform Clock { ClockRecord
 layout(std430, binding = HEMO_DENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
+layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_COUNT) writeonly buffer PairCount { uint pairCount[]; };
+layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_LIST) writeonly buffer PairList { uint pairList[]; };
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
 layout(push_constant) uniform Push {
   uint n;
@@ -62,6 +65,11 @@ void main() {
   const vec4 pi = positions[i];
   const HemoPairParams pp = hemo_pair_params();
   const uint count = neighbourCount[i];
+  // Interacting pairs: every entry is stored at the next free slot and the slot advances only
+  // for entries in range (no branch around the store; m <= k keeps it inside the list).
+  const float cutoffReach = abs(params.repulsionCutoff) + params.wallSpacing;
+  const float keep2 = max(pp.support2, cutoffReach * cutoffReach + params.wallSpacing * params.wallSpacing);
+  uint m = 0u;
   float rho;
   float rate = 0.0;  // d rho / dt, for the RK2 stages (kContinuity = 2)
   if (kContinuity != 0u) {
@@ -77,6 +85,8 @@ void main() {
       const vec4 pj = positions[j];
       const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);  // x_ij
       const float r2 = dot(d, d);
+      pairList[hemo_list_slot(i, m, pp)] = j;
+      m += r2 < keep2 ? 1u : 0u;
       const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // 0 beyond the support
       const vec4 vj = velocities[j];
       continuity += pj.w * dot(vi.xyz - vj.xyz, gradW);
@@ -94,9 +104,12 @@ void main() {
   } else {
     rho = pi.w * hemo_kernel_w(0.0, pp.h, pp.kernelNorm);
     for (uint k = 0u; k < count; ++k) {
-      const vec4 pj = positions[neighbourList[hemo_list_slot(i, k, pp)]];
+      const uint j = neighbourList[hemo_list_slot(i, k, pp)];
+      const vec4 pj = positions[j];
       const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);
       const float r2 = dot(d, d);
+      pairList[hemo_list_slot(i, m, pp)] = j;
+      m += r2 < keep2 ? 1u : 0u;
       if (r2 < pp.support2) {
         rho += pj.w * hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
       }
@@ -104,6 +117,7 @@ void main() {
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   const float p = hemo_tait_pressure(rho, background, params);
+  pairCount[i] = m;
   state[i] = vec4(rho, p, rate, 0.0);
   const float volume = pi.w / rho;
   pairPosition[i] = vec4(pi.xyz, volume * p);

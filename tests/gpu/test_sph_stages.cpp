@@ -373,6 +373,64 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
   }
 }
 
+// The density pass's interacting pairs: of each fluid particle's list, exactly the entries
+// within interaction range (the support, or the repulsion's reach where larger), in list
+// order, in both list layouts. The list's skin must leave entries out, or nothing is tested.
+TEST_F(SphStageTest, InteractingPairsAreTheListEntriesWithinRange) {
+  auto rng = rngFor();
+  sim::SphSettings s = settings();
+  const Case c = makeCase(rng, s, 8, 7, 6);
+  const auto n = static_cast<std::uint32_t>(c.pos.size());
+  for (const sim::ListLayout layout : {sim::ListLayout::Interleaved, sim::ListLayout::Contiguous}) {
+    SCOPED_TRACE(layout == sim::ListLayout::Interleaved ? "interleaved" : "contiguous");
+    s.listLayout = layout;
+    const Stages st = runStages(c, s, glm::vec3(0.15f));
+    const sim::SphParams& p = st.solver->params();
+    const double reach = std::abs(double(p.repulsionCutoff)) + p.wallSpacing;
+    const double keep2 = std::max(double(p.supportRadius) * p.supportRadius, reach * reach + double(p.wallSpacing) * p.wallSpacing);
+    const auto positions = st.store->readPositions();
+    const auto velocities = st.store->live().velocities.readback<glm::vec4>(n);
+    const auto counts = st.solver->neighbourCounts().readback<std::uint32_t>(n);
+    const auto list = st.solver->neighbourList().readback<std::uint32_t>(std::size_t(n) * s.neighbourCapacity);
+    const auto pairCounts = st.solver->interactingPairCounts().readback<std::uint32_t>(n);
+    const auto pairs = st.solver->interactingPairs().readback<std::uint32_t>(std::size_t(n) * s.neighbourCapacity);
+    auto at = [&](std::uint32_t slot, std::uint32_t k) {
+      return std::size_t(slot) * p.listParticleStride + std::size_t(k) * p.listStride;
+    };
+    std::size_t fluid = 0, listed = 0, kept = 0, mismatches = 0;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      if (velocities[slot].w != float(sim::ParticleKind::Fluid)) continue;
+      ++fluid;
+      std::vector<std::uint32_t> want, got, undecided;
+      for (std::uint32_t k = 0; k < counts[slot]; ++k) {
+        const std::uint32_t j = list[at(slot, k)];
+        const double r2 = glm::dot(glm::dvec3(positions[slot]) - glm::dvec3(positions[j]),
+                                   glm::dvec3(positions[slot]) - glm::dvec3(positions[j]));
+        if (std::abs(r2 - keep2) < 1e-5 * keep2) {
+          undecided.push_back(j);  // float rounding may decide either way
+        } else if (r2 < keep2) {
+          want.push_back(j);
+        }
+      }
+      ASSERT_LE(pairCounts[slot], counts[slot]);
+      for (std::uint32_t k = 0; k < pairCounts[slot]; ++k) {
+        const std::uint32_t j = pairs[at(slot, k)];
+        if (std::find(undecided.begin(), undecided.end(), j) == undecided.end()) got.push_back(j);
+      }
+      listed += counts[slot];
+      kept += pairCounts[slot];
+      if (got != want && ++mismatches <= 5) {
+        ADD_FAILURE() << "slot " << slot << ": " << got.size() << " interacting pairs, " << want.size()
+                      << " list entries within range";
+      }
+    }
+    EXPECT_EQ(mismatches, 0u);
+    EXPECT_GT(fluid, 300u);
+    EXPECT_LT(kept, listed * 9 / 10) << "the list's skin should hold entries beyond the interaction range";
+    EXPECT_GT(kept, listed / 2);
+  }
+}
+
 // recordStep rebuilds the grid and the neighbour list only when the largest reach (distance
 // moved since the build relative to the middle of the x displacements, GPU-reduced after the
 // integrator) exceeds half the list's skin.

@@ -173,6 +173,10 @@ class SphSolver {
   const gpu::Buffer& dtLimits() const { return dtLimit_; }
   const gpu::Buffer& neighbourCounts() const { return ncount_; }
   const gpu::Buffer& neighbourList() const { return nlist_; }
+  // A fluid particle's list entries within interaction range at the last density pass, in
+  // list order and layout (interface/sph.h, HEMO_DENSITY_BINDING_PAIR_LIST), and their number.
+  const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
+  const gpu::Buffer& interactingPairs() const { return pairList_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
   const gpu::Buffer& paramsBuffer() const { return paramsBuffer_; }
   // The clock's two records and which one holds the current time (after the recorded steps).
@@ -198,7 +202,7 @@ class SphSolver {
                            std::uint32_t mode);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
-  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, driftX_, reach_, viscousVel_;
+  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, driftX_, reach_, viscousVel_;
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer inflow_;  // InflowParams
