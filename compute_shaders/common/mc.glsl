@@ -1,4 +1,7 @@
 // Surface grid maths shared by the marching-cubes stages (layouts in interface/mc.h).
+// The grid's description, written by mc/bounds.comp or mc/prepare.comp (storage) and read by
+// the other passes as a uniform buffer (std140 and std430 agree: four 16-byte vectors; see
+// common/sph_params.glsl for why uniform).
 struct McGrid {
   vec4 origin;  // xyz: point (0,0,0) (m); w: voxel size (m)
   uvec4 points; // xyz: points per axis; w: row stride (ints per x-row, a multiple of 4)

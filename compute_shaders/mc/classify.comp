@@ -9,7 +9,7 @@
 #include "common/index.glsl"
 #include "common/mc.glsl"
 
-layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_GRID) readonly buffer Grid { McGrid grid; };
+layout(std140, binding = HEMO_MC_CLASSIFY_BINDING_GRID) uniform Grid { McGrid grid; };
 layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_FIELD) readonly buffer Field { ivec4 field4[]; };
 // x of each entry: the case's triangle count. (A table of specialization constants in a
 // local array was 2.7x slower on llvmpipe: dynamically indexed local arrays go through

@@ -14,7 +14,7 @@
 #include "common/index.glsl"
 #include "common/mc.glsl"
 
-layout(std430, binding = HEMO_MC_GENERATE_BINDING_GRID) readonly buffer Grid { McGrid grid; };
+layout(std140, binding = HEMO_MC_GENERATE_BINDING_GRID) uniform Grid { McGrid grid; };
 layout(std430, binding = HEMO_MC_GENERATE_BINDING_FIELD) readonly buffer Field { int field[]; };
 layout(std430, binding = HEMO_MC_GENERATE_BINDING_TABLE) readonly buffer Table { uvec4 table[256]; };
 layout(std430, binding = HEMO_MC_GENERATE_BINDING_RUN_TRIANGLES) readonly buffer RunTriangles { uint runTriangles[]; };

@@ -19,7 +19,7 @@
 layout(std430, binding = HEMO_MC_SPLAT_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_MC_SPLAT_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
 layout(std430, binding = HEMO_MC_SPLAT_BINDING_STATE) readonly buffer State { vec4 state[]; };
-layout(std430, binding = HEMO_MC_SPLAT_BINDING_GRID) readonly buffer Grid { McGrid grid; };
+layout(std140, binding = HEMO_MC_SPLAT_BINDING_GRID) uniform Grid { McGrid grid; };
 layout(std430, binding = HEMO_MC_SPLAT_BINDING_FIELD) buffer Field { int field[]; };
 layout(push_constant) uniform Push {
   uint n;

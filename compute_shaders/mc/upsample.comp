@@ -8,8 +8,8 @@
 #include "common/index.glsl"
 #include "common/mc.glsl"
 
-layout(std430, binding = HEMO_MC_UPSAMPLE_BINDING_GRID) readonly buffer Grid { McGrid grid; };
-layout(std430, binding = HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID) readonly buffer SplatGrid { McGrid splatGrid; };
+layout(std140, binding = HEMO_MC_UPSAMPLE_BINDING_GRID) uniform Grid { McGrid grid; };
+layout(std140, binding = HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID) uniform SplatGrid { McGrid splatGrid; };
 layout(std430, binding = HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD) readonly buffer SplatField { int coarse[]; };
 layout(std430, binding = HEMO_MC_UPSAMPLE_BINDING_FIELD) writeonly buffer Field { int field[]; };
 

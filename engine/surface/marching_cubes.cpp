@@ -95,9 +95,11 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
   args_.upload(std::vector<std::uint32_t>(16, 0u));
   auto& cache = context.pipelines();
   prepare_ = &cache.get({"mc/prepare", HEMO_MC_PREPARE_BINDING_COUNT, sizeof(PreparePush), 64, {}});
-  classify_ = &cache.get({"mc/classify", HEMO_MC_CLASSIFY_BINDING_COUNT, 0, kWorkgroup, {}});
+  classify_ = &cache.get({"mc/classify", HEMO_MC_CLASSIFY_BINDING_COUNT, 0, kWorkgroup, {},
+                          1u << HEMO_MC_CLASSIFY_BINDING_GRID});
   compact_ = &cache.get({"mc/compact", HEMO_MC_COMPACT_BINDING_COUNT, sizeof(CompactPush), kWorkgroup, {}});
-  generate_ = &cache.get({"mc/generate", HEMO_MC_GENERATE_BINDING_COUNT, sizeof(GeneratePush), kWorkgroup, {}});
+  generate_ = &cache.get({"mc/generate", HEMO_MC_GENERATE_BINDING_COUNT, sizeof(GeneratePush), kWorkgroup, {},
+                          1u << HEMO_MC_GENERATE_BINDING_GRID});
   prepareSet_ = prepare_->makeSet({{HEMO_MC_PREPARE_BINDING_GRID, &grid_}, {HEMO_MC_PREPARE_BINDING_ARGS, &args_}});
   classifySet_ = classify_->makeSet({{HEMO_MC_CLASSIFY_BINDING_GRID, &grid_},
                                      {HEMO_MC_CLASSIFY_BINDING_FIELD, &field_},
@@ -236,8 +238,10 @@ ParticleField::ParticleField(gpu::Context& context, MarchingCubes& target, const
   }
   auto& cache = context.pipelines();
   bounds_ = &cache.get({"mc/bounds", HEMO_MC_BOUNDS_BINDING_COUNT, sizeof(BoundsPush), kBoundsWorkgroup, {}});
-  splat_ = &cache.get({"mc/splat", HEMO_MC_SPLAT_BINDING_COUNT, sizeof(SplatPush), kWorkgroup, {}});
-  upsample_ = &cache.get({"mc/upsample", HEMO_MC_UPSAMPLE_BINDING_COUNT, 0, kBoundsWorkgroup, {}});
+  splat_ = &cache.get({"mc/splat", HEMO_MC_SPLAT_BINDING_COUNT, sizeof(SplatPush), kWorkgroup, {},
+                        1u << HEMO_MC_SPLAT_BINDING_GRID});
+  upsample_ = &cache.get({"mc/upsample", HEMO_MC_UPSAMPLE_BINDING_COUNT, 0, kBoundsWorkgroup, {},
+                           1u << HEMO_MC_UPSAMPLE_BINDING_GRID | 1u << HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID});
   const bool coarse = settings.splatVoxelOverH > 0.0f;
   boundsSet_ = bounds_->makeSet({{HEMO_MC_BOUNDS_BINDING_POSITIONS, &particles.live().positions},
                                  {HEMO_MC_BOUNDS_BINDING_VELOCITIES, &particles.live().velocities},
