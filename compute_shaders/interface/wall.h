@@ -46,10 +46,15 @@
 #define HEMO_SPRINGF_BINDING_NCOUNT 12    // neighbour list (a wall particle's: its fluid neighbours)
 #define HEMO_SPRINGF_BINDING_NLIST 13
 #define HEMO_SPRINGF_BINDING_NORMALS 14
-#define HEMO_SPRINGF_BINDING_WALL_VEL 15  // the no-slip velocity the fluid's viscous term used
+// The pair data of interface/sph.h: viscous velocity (v, +-V) and pair position (x, V p). A
+// wall particle's own viscous velocity is the no-slip velocity the fluid's viscous term used;
+// a fluid neighbour's two vec4 are all the reaction's pair terms need (the repulsion also
+// reads the neighbour's mass and normalisation, only where it acts).
+#define HEMO_SPRINGF_BINDING_WALL_VEL 15
 #define HEMO_SPRINGF_BINDING_COUNTERS 16
 #define HEMO_SPRINGF_BINDING_FRAMES 17    // uvec2 per id: the normal's two frame points
-#define HEMO_SPRINGF_BINDING_COUNT 18
+#define HEMO_SPRINGF_BINDING_PAIR_POSITION 18
+#define HEMO_SPRINGF_BINDING_COUNT 19
 
 // wall/point_shade.comp: per particle slot, vec2(largest strain of its unbroken springs,
 // fraction of its springs broken) for the renderer; push: uint n, uint idCount.

@@ -31,11 +31,15 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_NLIST) readonly buffer List { uint
 layout(std430, binding = HEMO_SPRINGF_BINDING_NORMALS) buffer Normals { vec4 normals[]; };  // own slot only
 layout(std430, binding = HEMO_SPRINGF_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_FRAMES) readonly buffer Frames { uvec2 frames[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_VEL) readonly buffer WallVel { vec4 wallVel[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_VEL) readonly buffer ViscousVel { vec4 viscousVel[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_PAIR_POSITION) readonly buffer PairPosition { vec4 pairPosition[]; };
 
 // The force (N) the fluid exerts on wall particle w: minus the sum, over its fluid neighbours
 // f, of m_f times the pair terms sph/forces.comp gave f for w (same formulas, same inputs),
-// the repulsion with f's normalisation 1 / max(sum T, 1) from accel[f].w.
+// the repulsion with f's normalisation 1 / max(sum T, 1) from accel[f].w. With V = m / rho,
+// m_f (V_w / rho_f) = V_w V_f, so the pressure and viscous terms come from f's pair data
+// alone (two vec4, as in the force pass): m_f a = V_w [ -(V_f p_f + V_f p_w) gradW
+// + 2 mu V_f (x . gradW) / (r^2 + eta^2) (v_f - v_w) ].
 vec3 hemo_fluid_reaction(uint w) {
   const HemoPairParams pp = hemo_pair_params();
   const float invH = 1.0 / pp.h;
@@ -48,33 +52,34 @@ vec3 hemo_fluid_reaction(uint w) {
   const vec4 xw = positions[w];  // w: SPH mass
   const vec2 sw = state[w].xy;
   const float volumeW = xw.w / sw.x;
-  const vec3 vw = wallVel[w].xyz;
+  const float pW = sw.y;
+  const vec3 vw = viscousVel[w].xyz;
   const vec3 nrm = normals[w].xyz;
-  vec3 force = vec3(0.0);
+  const bool repels = xw.w > 0.0;  // detached particles (no SPH mass) do not repel
+  vec3 sum = vec3(0.0);            // sum of V_f [ ... ] above, times V_w at the end
+  vec3 repulsion = vec3(0.0);      // sum of m_f a_repulsion
   const uint count = neighbourCount[w];
   for (uint k = 0u; k < count; ++k) {
     const uint f = neighbourList[hemo_list_slot(w, k, pp)];
-    const vec4 xf = positions[f];
-    const vec3 d = hemo_min_image(xf.xyz - xw.xyz, pp);  // from w to f, as f sees it
+    const vec4 pf = pairPosition[f];  // (x_f, V_f p_f)
+    const vec3 d = hemo_min_image(pf.xyz - xw.xyz, pp);  // from w to f, as f sees it
     const float r2 = dot(d, d);
     if (r2 >= pp.support2 || r2 == 0.0) {
       continue;
     }
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // as sph/forces.comp
-    const vec2 sf = state[f].xy;
-    vec3 a = (volumeW / sf.x) * (-(sf.y + sw.y) * gradW +
-                                 (twoMu * dot(d, gradW) / (r2 + etaSq)) * (velocities[f].xyz - vw));
-    if (xw.w > 0.0) {  // detached particles (no SPH mass) do not repel
+    const vec4 vf = viscousVel[f];  // (v_f, V_f)
+    sum += -(pf.w + vf.w * pW) * gradW + (vf.w * twoMu * dot(d, gradW) / (r2 + etaSq)) * (vf.xyz - vw);
+    if (repels) {
       const float x = dot(d, nrm);
-      float w;
-      const float push = hemo_repulsion(x, length(d - x * nrm), pp.h, psi, cutoff, wallSpacing, w);
-      if (w > 0.0) {
-        a += nrm * push * accel[f].w;
+      float weight;
+      const float push = hemo_repulsion(x, length(d - x * nrm), pp.h, psi, cutoff, wallSpacing, weight);
+      if (weight > 0.0) {
+        repulsion += nrm * (positions[f].w * push * accel[f].w);
       }
     }
-    force -= xf.w * a;
   }
-  return force;
+  return -(volumeW * sum + repulsion);
 }
 
 // The normal of the deformed wall from the particle's frame points, for the fluid's next force
@@ -125,19 +130,25 @@ void main() {
   float stiffness = 0.0;
   uint intact = 0u;
   float marker = 0.0;
+  const vec3 xSelf = positions[slot].xyz;
+  const vec3 vSelf = velocities[slot].xyz;
   const uint end = first[id + 1u];
   for (uint e = first[id]; e < end; ++e) {
     const Spring s = springs[springsOf[e]];
     if (s.broken != 0u) {
       continue;
     }
-    const uint sa = slotOfId[s.a];
-    const uint sb = slotOfId[s.b];
+    // Only the other end is gathered; the force is computed from (a, b) in the spring's own
+    // order either way, so both ends get exactly opposite forces.
+    const bool selfIsA = id == s.a;
+    const uint other = slotOfId[selfIsA ? s.b : s.a];
+    const vec3 xOther = positions[other].xyz;
+    const vec3 vOther = velocities[other].xyz;
     float tension;
-    const vec3 delta = hemo_min_image(positions[sb].xyz - positions[sa].xyz, pp);
-    const vec3 fa = hemo_spring_force_on_a(delta, velocities[sa].xyz, velocities[sb].xyz, s.restLength, s.stiffness,
-                                           s.damping, tension);
-    force += id == s.a ? fa : -fa;
+    const vec3 delta = hemo_min_image(selfIsA ? xOther - xSelf : xSelf - xOther, pp);
+    const vec3 fa = hemo_spring_force_on_a(delta, selfIsA ? vSelf : vOther, selfIsA ? vOther : vSelf, s.restLength,
+                                           s.stiffness, s.damping, tension);
+    force += selfIsA ? fa : -fa;
     stiffness += s.stiffness;
     ++intact;
   }

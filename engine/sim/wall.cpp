@@ -146,7 +146,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
                                  {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities},
                                  {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
-                                 {HEMO_SPRINGF_BINDING_FRAMES, &frames_}});
+                                 {HEMO_SPRINGF_BINDING_FRAMES, &frames_},
+                                 {HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions}});
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
                                     {HEMO_SHADE_BINDING_IDS, &a.ids},

@@ -73,6 +73,7 @@ struct FluidBuffers {
   const gpu::Buffer* neighbourCounts;
   const gpu::Buffer* neighbourList;
   const gpu::Buffer* viscousVelocities;  // a wall particle's entry: the no-slip velocity the fluid saw
+  const gpu::Buffer* pairPositions;      // (x, V p) per slot (interface/sph.h, the pair data)
 };
 
 class MassSpring {
