@@ -5,8 +5,7 @@
 // Variants (constant 3): 0 every gather a vec4; 1 "narrow": the second gather reads one
 // float and the third a vec2 (what a gather's width costs); 2 "uniform index": every
 // invocation of a workgroup reads the same entries (whether the device broadcasts a load whose
-// index is the same across the workgroup); 3 "scalar": every vec4 is read as four float loads
-// (through a float view of the same buffer), the cost of a structure-of-arrays layout.
+// index is the same across the workgroup).
 #extension GL_GOOGLE_include_directive : require
 #include "interface/bench.h"
 #include "common/index.glsl"
@@ -21,18 +20,6 @@ layout(std430, binding = HEMO_BENCH_BINDING_B) readonly buffer B { vec4 b[]; };
 layout(std430, binding = HEMO_BENCH_BINDING_C) readonly buffer C { vec4 c[]; };
 layout(std430, binding = HEMO_BENCH_BINDING_D) readonly buffer D { vec4 d[]; };
 layout(std430, binding = HEMO_BENCH_BINDING_OUT) writeonly buffer Out { vec4 outv[]; };
-layout(std430, binding = HEMO_BENCH_BINDING_A) readonly buffer AF { float af[]; };
-layout(std430, binding = HEMO_BENCH_BINDING_B) readonly buffer BF { float bf[]; };
-layout(std430, binding = HEMO_BENCH_BINDING_C) readonly buffer CF { float cf[]; };
-layout(std430, binding = HEMO_BENCH_BINDING_D) readonly buffer DF { float df[]; };
-
-vec4 scalar4(uint buf, uint j) {
-  const uint b = 4u * j;
-  if (buf == 0u) return vec4(af[b], af[b + 1u], af[b + 2u], af[b + 3u]);
-  if (buf == 1u) return vec4(bf[b], bf[b + 1u], bf[b + 2u], bf[b + 3u]);
-  if (buf == 2u) return vec4(cf[b], cf[b + 1u], cf[b + 2u], cf[b + 3u]);
-  return vec4(df[b], df[b + 1u], df[b + 2u], df[b + 3u]);
-}
 layout(push_constant) uniform Push {
   uint n;
   uint entries;
@@ -50,10 +37,10 @@ void main() {
                                   : list[kContiguous != 0u ? i * pc.entries + k : k * pc.n + i];
     // Without loads the neighbour's "position" comes from its index, so the loop still
     // depends on j.
-    vec4 x = kLoads >= 1u ? (kVariant == 3u ? scalar4(0u, j) : a[j]) : vec4(float(j) * 1e-3, 0.0, 0.0, 1.0);
-    if (kLoads >= 2u) x += kVariant == 1u ? vec4(b[j].x) : kVariant == 3u ? scalar4(1u, j) : b[j];
-    if (kLoads >= 3u) x += kVariant == 1u ? vec4(c[j].xy, 0.0, 0.0) : kVariant == 3u ? scalar4(2u, j) : c[j];
-    if (kLoads >= 4u) x += kVariant == 3u ? scalar4(3u, j) : d[j];
+    vec4 x = kLoads >= 1u ? a[j] : vec4(float(j) * 1e-3, 0.0, 0.0, 1.0);
+    if (kLoads >= 2u) x += kVariant == 1u ? vec4(b[j].x) : b[j];
+    if (kLoads >= 3u) x += kVariant == 1u ? vec4(c[j].xy, 0.0, 0.0) : c[j];
+    if (kLoads >= 4u) x += d[j];
     const vec3 r = self.xyz - x.xyz;
     const float r2 = dot(r, r) + 1e-6;
     sum += vec4(r * (x.w * inversesqrt(r2)), r2);

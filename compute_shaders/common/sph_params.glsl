@@ -43,9 +43,9 @@ struct SphParams {
 // (PipelineDesc::uniformSlots).
 #define HEMO_SPH_PARAMS_UNIFORM(slot) layout(std140, binding = slot) uniform Params { SphParams params; }
 
-// The parameters the neighbour loops use, read once into registers: llvmpipe does not hoist
-// storage-buffer loads out of a loop, and reloading them for every pair cost 35-50% of the
-// force pass (measured on the dam break).
+// The parameters the neighbour loops use, read once into registers: llvmpipe did not hoist
+// the block's loads out of a loop, and reloading them for every pair cost 35-50% of the force
+// pass (dam break, measured while the block was a storage buffer).
 struct HemoPairParams {
   float h;
   float kernelNorm;
