@@ -177,6 +177,28 @@ Json primitives(Context& ctx, int repeat) {
           {{"vec4_loads_per_pair", loads}, {"list_layout", layout ? "contiguous" : "interleaved"},
            {"gathers", variantNames[variant]}, {"particles", n}, {"entries_per_particle", entries}});
     }
+    // The same loop reading the list and the data as uniform texel buffers
+    // (bench/pair_gather_texel.comp), both layouts.
+    for (std::uint32_t layout = 0; layout <= 1; ++layout)
+    for (std::uint32_t loads = 0; loads <= 4; ++loads) {
+      const std::uint32_t texels = 0x1fu;  // slots LIST and A..D
+      const auto& probe = ctx.pipelines().get(
+          {"bench/pair_gather_texel", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {loads, layout}, 0u, texels});
+      using hemo::gpu::texelBinding;
+      const auto set = probe.makeSet({texelBinding(HEMO_BENCH_BINDING_LIST, layout ? &contiguousBuffer : &listBuffer, VK_FORMAT_R32_UINT),
+                                      texelBinding(HEMO_BENCH_BINDING_A, &data[0], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                      texelBinding(HEMO_BENCH_BINDING_B, &data[1], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                      texelBinding(HEMO_BENCH_BINDING_C, &data[2], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                      texelBinding(HEMO_BENCH_BINDING_D, &data[3], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                      {HEMO_BENCH_BINDING_OUT, &data[4]}});
+      const Push push{n, entries};
+      const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+        rec.dispatch(probe, set, push, probe.groupsFor(n));
+      });
+      row("pair_gather", std::uint64_t(n) * entries, ms,
+          {{"vec4_loads_per_pair", loads}, {"list_layout", layout ? "contiguous" : "interleaved"},
+           {"gathers", "texel buffer"}, {"particles", n}, {"entries_per_particle", entries}});
+    }
   }
 
   // What a parameter read costs (bench/param_read.comp): one vec4 per loop iteration at an

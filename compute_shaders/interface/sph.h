@@ -2,6 +2,17 @@
 #ifndef HEMO_INTERFACE_SPH_H
 #define HEMO_INTERFACE_SPH_H
 
+// Texel slots. The passes read their read-only per-particle inputs (the list, positions,
+// velocities, pair data, state...) as uniform texel buffers (GLSL samplerBuffer /
+// usamplerBuffer with texelFetch; R32G32B32A32_SFLOAT for vec4 records, R32_UINT for indices)
+// and write their outputs as storage buffers. On llvmpipe a storage-buffer load walks the
+// SIMD lanes one by one with a branch per lane and component, where a texel fetch is one
+// unrolled gather: the pair_gather probe's four vec4 gathers per entry fell from ~60 to
+// ~5.6 ns (docs/benchmarks.md, "texel gathers"). On GPUs both are ordinary cached loads.
+// Where a pass writes some records of a buffer and reads others (boundary_pressure.comp's
+// state, wall/spring_forces.comp's accelerations), the buffer is bound twice, storage for
+// the records it writes and texel for those it reads; no record is both.
+
 // Particle kinds, stored as a float in velocities[i].w (exact small integers).
 #define HEMO_KIND_FLUID 0
 #define HEMO_KIND_BOUNDARY 1  // rigid: fixed position, counts in density, viscosity, repulsion
@@ -120,7 +131,10 @@
 #define HEMO_BPRESSURE_BINDING_VISCOUS_VEL 6
 #define HEMO_BPRESSURE_BINDING_CLOCK 7
 #define HEMO_BPRESSURE_BINDING_PAIR_POSITION 8
-#define HEMO_BPRESSURE_BINDING_COUNT 9
+// The state buffer again, read as a texel buffer at the fluid neighbours (STATE writes only
+// the boundary particles' records, so no record is both read and written in the pass).
+#define HEMO_BPRESSURE_BINDING_FLUID_STATE 9
+#define HEMO_BPRESSURE_BINDING_COUNT 10
 
 // sph/sps_stress.comp: the SPS stress tau of each fluid particle from its strain rate.
 // NCOUNT / NLIST here and in the force pass: the interacting pairs (PAIR_COUNT / PAIR_LIST of

@@ -54,7 +54,10 @@
 #define HEMO_SPRINGF_BINDING_COUNTERS 16
 #define HEMO_SPRINGF_BINDING_FRAMES 17    // uvec2 per id: the normal's two frame points
 #define HEMO_SPRINGF_BINDING_PAIR_POSITION 18
-#define HEMO_SPRINGF_BINDING_COUNT 19
+// The acceleration buffer again, read as a texel buffer at the fluid neighbours (ACCEL writes
+// only wall particles' records, so no record is both read and written in the pass).
+#define HEMO_SPRINGF_BINDING_FLUID_ACCEL 19
+#define HEMO_SPRINGF_BINDING_COUNT 20
 
 // wall/point_shade.comp: per particle slot, vec2(largest strain of its unbroken springs,
 // fraction of its springs broken) for the renderer; push: uint n, uint idCount.

@@ -21,12 +21,14 @@
 #include "common/clock.glsl"
 #include "common/tait.glsl"
 
-layout(std430, binding = HEMO_BPRESSURE_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_BPRESSURE_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+// Read-only inputs: uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_BPRESSURE_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_BPRESSURE_BINDING_VELOCITIES) uniform samplerBuffer velocities;
+layout(binding = HEMO_BPRESSURE_BINDING_FLUID_STATE) uniform samplerBuffer fluidState;
 HEMO_SPH_PARAMS_UNIFORM(HEMO_BPRESSURE_BINDING_PARAMS);
-layout(std430, binding = HEMO_BPRESSURE_BINDING_STATE) buffer State { vec4 state[]; };
-layout(std430, binding = HEMO_BPRESSURE_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
-layout(std430, binding = HEMO_BPRESSURE_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_STATE) writeonly buffer State { vec4 state[]; };
+layout(binding = HEMO_BPRESSURE_BINDING_NCOUNT) uniform usamplerBuffer neighbourCount;
+layout(binding = HEMO_BPRESSURE_BINDING_NLIST) uniform usamplerBuffer neighbourList;
 layout(std430, binding = HEMO_BPRESSURE_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std140, binding = HEMO_BPRESSURE_BINDING_CLOCK) uniform Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
@@ -40,31 +42,31 @@ void main() {
   if (b >= pc.n) {
     return;
   }
-  const vec4 vb = velocities[b];
+  const vec4 vb = texelFetch(velocities, int(b));
   if (uint(vb.w) == HEMO_KIND_FLUID) {
     return;
   }
-  const vec4 xb4 = positions[b];
+  const vec4 xb4 = texelFetch(positions, int(b));
   const vec3 xb = xb4.xyz;
   const HemoPairParams pp = hemo_pair_params();
   float sumW = 0.0;
   float sumP = 0.0;
   vec3 sumRhoR = vec3(0.0);
   vec3 sumV = vec3(0.0);
-  const uint count = neighbourCount[b];
+  const uint count = texelFetch(neighbourCount, int(b)).x;
   for (uint k = 0u; k < count; ++k) {
-    const uint f = neighbourList[hemo_list_slot(b, k, pp)];  // fluid neighbours only
-    const vec3 d = hemo_min_image(xb - positions[f].xyz, pp);
+    const int f = int(texelFetch(neighbourList, int(hemo_list_slot(b, k, pp))).x);  // fluid neighbours only
+    const vec3 d = hemo_min_image(xb - texelFetch(positions, f).xyz, pp);
     const float r2 = dot(d, d);
     if (r2 >= pp.support2) {
       continue;
     }
     const float w = hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
-    const vec2 sf = state[f].xy;
+    const vec2 sf = texelFetch(fluidState, f).xy;
     sumW += w;
     sumP += sf.y * w;
     sumRhoR += sf.x * d * w;
-    sumV += velocities[f].xyz * w;
+    sumV += texelFetch(velocities, f).xyz * w;
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   float rho = params.rho0;

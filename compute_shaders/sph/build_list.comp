@@ -14,13 +14,14 @@
 
 // The positions of this build with each particle's kind in w (grid/reorder.comp), so a
 // candidate's position and kind come in one load.
-layout(std430, binding = HEMO_BUILD_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_BUILD_BINDING_CELL_START) readonly buffer CellStart { uint cellStart[]; };
+// Read-only inputs are uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_BUILD_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_BUILD_BINDING_CELL_START) uniform usamplerBuffer cellStart;
 HEMO_SPH_PARAMS_UNIFORM(HEMO_BUILD_BINDING_PARAMS);
 layout(std430, binding = HEMO_BUILD_BINDING_NCOUNT) writeonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_NLIST) writeonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_STATUS) buffer Status { uint status[]; };
-layout(std430, binding = HEMO_BUILD_BINDING_FLUID_CELLS) readonly buffer FluidCells { uint fluidCells[]; };
+layout(binding = HEMO_BUILD_BINDING_FLUID_CELLS) uniform usamplerBuffer fluidCells;
 layout(push_constant) uniform Push { HemoGrid grid; } pc;
 
 // Distance in cell units from u to cell k along one axis; on a bounded axis the first and
@@ -40,7 +41,7 @@ void main() {
   if (i >= pc.grid.dimsN.w) {
     return;
   }
-  const vec4 xi4 = positions[i];
+  const vec4 xi4 = texelFetch(positions, int(i));
   const bool fluidI = uint(xi4.w) == HEMO_KIND_FLUID;
   const vec3 xi = xi4.xyz;
   const float list2 = params.listRadius * params.listRadius;
@@ -100,15 +101,15 @@ void main() {
         int x1 = xr[s].y;
         if (!fluidI) {
           // A boundary particle lists only fluid: drop the range's end cells that hold none.
-          while (x0 <= x1 && fluidCells[hemo_cell_linear(ivec3(x0, y, z), dims)] == 0u) ++x0;
-          while (x1 >= x0 && fluidCells[hemo_cell_linear(ivec3(x1, y, z), dims)] == 0u) --x1;
+          while (x0 <= x1 && texelFetch(fluidCells, int(hemo_cell_linear(ivec3(x0, y, z), dims))).x == 0u) ++x0;
+          while (x1 >= x0 && texelFetch(fluidCells, int(hemo_cell_linear(ivec3(x1, y, z), dims))).x == 0u) --x1;
         }
         if (x0 > x1) {
           continue;
         }
-        const uint jEnd = cellStart[hemo_cell_linear(ivec3(x1, y, z), dims) + 1u];
-        for (uint j = cellStart[hemo_cell_linear(ivec3(x0, y, z), dims)]; j < jEnd; ++j) {
-          const vec4 xj = positions[j];
+        const uint jEnd = texelFetch(cellStart, int(hemo_cell_linear(ivec3(x1, y, z), dims) + 1u)).x;
+        for (uint j = texelFetch(cellStart, int(hemo_cell_linear(ivec3(x0, y, z), dims))).x; j < jEnd; ++j) {
+          const vec4 xj = texelFetch(positions, int(j));
           const vec3 d = hemo_grid_min_image(xi - xj.xyz, pc.grid);
           // Every candidate is written to the next free slot, and the slot is kept (count
           // advances) only if the candidate is a neighbour: a store under a data-dependent

@@ -35,15 +35,16 @@
 #include "common/clock.glsl"
 #include "common/tait.glsl"
 
-layout(std430, binding = HEMO_DENSITY_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_DENSITY_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+// Read at neighbour indices: uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_DENSITY_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_DENSITY_BINDING_VELOCITIES) uniform samplerBuffer velocities;
 HEMO_SPH_PARAMS_UNIFORM(HEMO_DENSITY_BINDING_PARAMS);
 layout(std430, binding = HEMO_DENSITY_BINDING_STATE) writeonly buffer State { vec4 state[]; };
-layout(std430, binding = HEMO_DENSITY_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
-layout(std430, binding = HEMO_DENSITY_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(binding = HEMO_DENSITY_BINDING_NCOUNT) uniform usamplerBuffer neighbourCount;
+layout(binding = HEMO_DENSITY_BINDING_NLIST) uniform usamplerBuffer neighbourList;
 layout(std140, binding = HEMO_DENSITY_BINDING_CLOCK) uniform Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
-layout(std430, binding = HEMO_DENSITY_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
+layout(binding = HEMO_DENSITY_BINDING_NORMALS) uniform samplerBuffer normals;
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_COUNT) writeonly buffer PairCount { uint pairCount[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_LIST) writeonly buffer PairList { uint pairList[]; };
@@ -58,13 +59,13 @@ void main() {
   if (i >= pc.n) {
     return;
   }
-  const vec4 vi = velocities[i];
+  const vec4 vi = texelFetch(velocities, int(i));
   if (uint(vi.w) != HEMO_KIND_FLUID) {
     return;
   }
-  const vec4 pi = positions[i];
+  const vec4 pi = texelFetch(positions, int(i));
   const HemoPairParams pp = hemo_pair_params();
-  const uint count = neighbourCount[i];
+  const uint count = texelFetch(neighbourCount, int(i)).x;
   // Interacting pairs: every entry is stored at the next free slot and the slot advances only
   // for entries in range (no branch around the store; m <= k keeps it inside the list).
   const float cutoffReach = abs(params.repulsionCutoff) + params.wallSpacing;
@@ -73,7 +74,7 @@ void main() {
   float rho;
   float rate = 0.0;  // d rho / dt, for the RK2 stages (kContinuity = 2)
   if (kContinuity != 0u) {
-    rho = hemo_carried_density(normals[i].w, params.rho0);
+    rho = hemo_carried_density(texelFetch(normals, int(i)).w, params.rho0);
     const float invH = 1.0 / pp.h;
     const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
     const float diffusion = params.deltaSph * pp.h * params.c0;
@@ -81,17 +82,17 @@ void main() {
     const float rho0 = params.rho0, hydroScale = params.rho0 / params.taitB, etaSq = params.etaSq;  // registers
     float continuity = 0.0, diffused = 0.0;
     for (uint k = 0u; k < count; ++k) {
-      const uint j = neighbourList[hemo_list_slot(i, k, pp)];
-      const vec4 pj = positions[j];
+      const uint j = texelFetch(neighbourList, int(hemo_list_slot(i, k, pp))).x;
+      const vec4 pj = texelFetch(positions, int(j));
       const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);  // x_ij
       const float r2 = dot(d, d);
       pairList[hemo_list_slot(i, m, pp)] = j;
       m += r2 < keep2 ? 1u : 0u;
       const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // 0 beyond the support
-      const vec4 vj = velocities[j];
+      const vec4 vj = texelFetch(velocities, int(j));
       continuity += pj.w * dot(vi.xyz - vj.xyz, gradW);
       if (uint(vj.w) == HEMO_KIND_FLUID) {
-        const float rhoJ = hemo_carried_density(normals[j].w, rho0);
+        const float rhoJ = hemo_carried_density(texelFetch(normals, int(j)).w, rho0);
         const float hydro = rho0 * (pow(max(1.0 - hydroScale * dot(g, d), 1.0e-6), 1.0 / 7.0) - 1.0);
         diffused += 2.0 * ((rhoJ - rho) - hydro) * (-dot(d, gradW)) / (r2 + etaSq) * (pj.w / rhoJ);
       }
@@ -104,8 +105,8 @@ void main() {
   } else {
     rho = pi.w * hemo_kernel_w(0.0, pp.h, pp.kernelNorm);
     for (uint k = 0u; k < count; ++k) {
-      const uint j = neighbourList[hemo_list_slot(i, k, pp)];
-      const vec4 pj = positions[j];
+      const uint j = texelFetch(neighbourList, int(hemo_list_slot(i, k, pp))).x;
+      const vec4 pj = texelFetch(positions, int(j));
       const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);
       const float r2 = dot(d, d);
       pairList[hemo_list_slot(i, m, pp)] = j;

@@ -31,21 +31,22 @@
 #include "common/sph_params.glsl"
 #include "common/repulsion.glsl"
 
-layout(std430, binding = HEMO_FORCES_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_NORMALS) readonly buffer Normals { vec4 normals[]; };
+// Read-only inputs: uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_FORCES_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_FORCES_BINDING_VELOCITIES) uniform samplerBuffer velocities;
+layout(binding = HEMO_FORCES_BINDING_NORMALS) uniform samplerBuffer normals;
 HEMO_SPH_PARAMS_UNIFORM(HEMO_FORCES_BINDING_PARAMS);
-layout(std430, binding = HEMO_FORCES_BINDING_STATE) readonly buffer State { vec4 state[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(binding = HEMO_FORCES_BINDING_STATE) uniform samplerBuffer state;
+layout(binding = HEMO_FORCES_BINDING_NCOUNT) uniform usamplerBuffer neighbourCount;
+layout(binding = HEMO_FORCES_BINDING_NLIST) uniform usamplerBuffer neighbourList;
 layout(std430, binding = HEMO_FORCES_BINDING_ACCEL) writeonly buffer Accel { vec4 accel[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_DT_LIMIT) writeonly buffer DtLimit { float dtLimit[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_IDS) readonly buffer Ids { uint ids[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_STATUS) buffer Status { uint status[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_TAU_A) readonly buffer TauA { vec4 tauA[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_TAU_B) readonly buffer TauB { vec4 tauB[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_VISCOUS_VEL) readonly buffer ViscousVel { vec4 viscousVel[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_PAIR_POSITION) readonly buffer PairPosition { vec4 pairPosition[]; };
+layout(binding = HEMO_FORCES_BINDING_TAU_A) uniform samplerBuffer tauA;
+layout(binding = HEMO_FORCES_BINDING_TAU_B) uniform samplerBuffer tauB;
+layout(binding = HEMO_FORCES_BINDING_VISCOUS_VEL) uniform samplerBuffer viscousVel;
+layout(binding = HEMO_FORCES_BINDING_PAIR_POSITION) uniform samplerBuffer pairPosition;
 // 1 when the scene enables the SPS term. A specialization constant rather than a branch on
 // the parameter block: llvmpipe runs a branch's body under a lane mask even when no lane
 // takes it, and the dead SPS loads cost ~10% of the pass (dam break, docs/benchmarks.md).
@@ -53,8 +54,8 @@ layout(constant_id = 1) const uint kSps = 0u;
 
 // The SPS stress tau (Pa) of particle j as a symmetric matrix (sps_stress.comp).
 mat3 hemo_sps_tensor(uint j) {
-  const vec4 a = tauA[j];
-  const vec4 b = tauB[j];
+  const vec4 a = texelFetch(tauA, int(j));
+  const vec4 b = texelFetch(tauB, int(j));
   return mat3(a.x, a.w, b.x, a.w, a.y, b.y, b.x, b.y, a.z);
 }
 layout(push_constant) uniform Push { uint n; } pc;
@@ -66,14 +67,14 @@ void main() {
   if (i >= pc.n) {
     return;
   }
-  const vec4 vi = velocities[i];
+  const vec4 vi = texelFetch(velocities, int(i));
   if (uint(vi.w) != HEMO_KIND_FLUID) {
     accel[i] = vec4(0.0);
     dtLimit[i] = kNoLimit;
     return;
   }
-  const vec3 xi = positions[i].xyz;
-  const vec2 si = state[i].xy;  // rho, p
+  const vec3 xi = texelFetch(positions, int(i)).xyz;
+  const vec2 si = texelFetch(state, int(i)).xy;  // rho, p
   // Blow-up diagnosis, only until the first non-finite step has been recorded (after that
   // the NaNs have spread): which particle was non-finite first (its own state), or which
   // one's forces became non-finite from finite inputs.
@@ -101,17 +102,17 @@ void main() {
   vec3 viscous = vec3(0.0);  // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
   vec3 repulsion = vec3(0.0);
   float repulsionWeight = 0.0;
-  const uint count = neighbourCount[i];
+  const uint count = texelFetch(neighbourCount, int(i)).x;
   for (uint k = 0u; k < count; ++k) {
-    const uint j = neighbourList[hemo_list_slot(i, k, pp)];
-    const vec4 pj = pairPosition[j];  // (x_j, V_j p_j)
+    const uint j = texelFetch(neighbourList, int(hemo_list_slot(i, k, pp))).x;
+    const vec4 pj = texelFetch(pairPosition, int(j));  // (x_j, V_j p_j)
     const vec3 d = hemo_min_image(xi - pj.xyz, pp);
     const float r2 = dot(d, d);
     // grad W vanishes beyond the support (the list's skin) and for a coincident pair (no
     // defined direction), so neither needs a branch: llvmpipe runs both ways of a branch under
     // a lane mask, and the branch itself cost ~5% of the pass.
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);
-    const vec4 vj = viscousVel[j];  // (fluid: own velocity, boundary: no-slip velocity; +-V_j)
+    const vec4 vj = texelFetch(viscousVel, int(j));  // (fluid: own velocity, boundary: no-slip velocity; +-V_j)
     const float volumeJ = abs(vj.w);
     stress -= (volumeJ * pI + pj.w) * gradW;
     viscous += (volumeJ * dot(d, gradW) / (r2 + etaSq)) * (vi.xyz - vj.xyz);
@@ -120,7 +121,7 @@ void main() {
       stress += volumeJ * ((spsI + hemo_sps_tensor(j)) * gradW);
     }
     if (vj.w < 0.0 && r2 > 0.0) {  // boundary and wall particles; detached ones (V = 0) do not repel
-      const vec3 nrm = normals[j].xyz;
+      const vec3 nrm = texelFetch(normals, int(j)).xyz;
       const float x = dot(d, nrm);
       float w;
       const float push = hemo_repulsion(x, length(d - x * nrm), h, psi, cutoff, wallSpacing, w);

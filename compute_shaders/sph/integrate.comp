@@ -24,7 +24,9 @@
 
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POSITIONS) buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_VELOCITIES) buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_ACCEL) readonly buffer Accel { vec4 accel[]; };
+// Read-only per-particle inputs are uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_INTEGRATE_BINDING_ACCEL) uniform samplerBuffer accelT;
+#define accel(k) texelFetch(accelT, int(k))
 HEMO_SPH_PARAMS_UNIFORM(HEMO_INTEGRATE_BINDING_PARAMS);
 // Values every invocation reads at the same address are uniform buffers (common/sph_params.glsl
 // says why).
@@ -38,10 +40,11 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_LOG) writeonly buffer Log { vec2
 layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_POS) buffer SavedPos { vec4 savedPos[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec4 savedVel[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) readonly buffer PosAtBuild { vec4 posAtBuild[]; };
+layout(binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) uniform samplerBuffer posAtBuildT;
 layout(std430, binding = HEMO_INTEGRATE_BINDING_DRIFT_X) writeonly buffer DriftX { float driftX[]; };
 layout(std140, binding = HEMO_INTEGRATE_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_STATE) readonly buffer State { vec4 state[]; };
+layout(binding = HEMO_INTEGRATE_BINDING_STATE) uniform samplerBuffer stateT;
+#define state(k) texelFetch(stateT, int(k))
 layout(std430, binding = HEMO_INTEGRATE_BINDING_NORMALS) buffer Normals { vec4 normals[]; };
 // Continuity density (sph/density.comp): fluid particles carry their density in normals[i].w.
 // 1 (symplectic Euler): the density pass advanced it (state.x); it is stored back for the next
@@ -73,7 +76,7 @@ bool hemo_moves(float kind) {
 
 // The x displacement since the list build, for the rebuild test (sph/reach.comp).
 void writeDriftX(uint i, vec3 x) {
-  driftX[i] = hemo_min_image(x - posAtBuild[i].xyz, hemo_pair_params()).x;
+  driftX[i] = hemo_min_image(x - texelFetch(posAtBuildT, int(i)).xyz, hemo_pair_params()).x;
 }
 
 // Mean inflow speed u(t) = U w(t) ramp(t) (m/s).
@@ -134,9 +137,9 @@ void main() {
       if (kContinuity == 2u && uint(v.w) == HEMO_KIND_FLUID) {
         const float rho = hemo_carried_density(normals[i].w, params.rho0);
         savedVel[i].w = rho;  // the second stage reads only savedVel.xyz as a velocity
-        normals[i].w = rho + state[i].z * (0.5 * dt);
+        normals[i].w = rho + state(i).z * (0.5 * dt);
       }
-      const vec4 a = accel[i];
+      const vec4 a = accel(i);
       vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
       vec3 drift = v.xyz;
       vec3 u;
@@ -177,9 +180,9 @@ void main() {
     // midpoint rule: x1 = x0 + dt v(mid), v1 = v0 + dt a(mid)
     const vec4 v0 = savedVel[i];
     x.xyz = savedPos[i].xyz + v.xyz * dt;  // wrapped below: the saved position may be across the seam
-    v.xyz = v0.xyz + accel[i].xyz * dt;
+    v.xyz = v0.xyz + accel(i).xyz * dt;
   } else {
-    v.xyz += accel[i].xyz * dt;
+    v.xyz += accel(i).xyz * dt;
   }
   if (clock.time < params.dampingUntil) {
     v.xyz /= 1.0 + params.dampingRate * dt;  // settling phase only (implicit, so never unstable)
@@ -206,7 +209,7 @@ void main() {
       // wall's two layers do not fill the kernel's support), and the outer ring took up to
       // 2.6 times its mass while the zone's middle ended 7% dense.
       const float inner = 1.0 - params.wallSpacing / inflow.radius;  // R - dp, over R
-      const float rho = state[i].x;
+      const float rho = state(i).x;
       if (rho > 0.0 && s2 < inner * inner) {
         x.w = clamp(x.w * (1.0 + 0.1 * (inflow.restDensity / rho - 1.0)), inflow.baseMass, inflow.maxMass);
       }
@@ -221,10 +224,10 @@ void main() {
   }
   if (kContinuity != 0u && uint(v.w) == HEMO_KIND_FLUID) {
     // (non-finite densities show in the next force pass's blow-up diagnosis)
-    normals[i].w = kContinuity == 1u ? state[i].x : savedVel[i].w + state[i].z * dt;
+    normals[i].w = kContinuity == 1u ? state(i).x : savedVel[i].w + state(i).z * dt;
   }
   velocities[i] = v;
-  x.w = hemo_sph_mass(x.w, accel[i].w);
+  x.w = hemo_sph_mass(x.w, accel(i).w);
   positions[i] = x;
   writeDriftX(i, x.xyz);
 }

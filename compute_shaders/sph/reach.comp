@@ -14,9 +14,10 @@
 #include "common/index.glsl"
 #include "common/sph_params.glsl"
 
-layout(std430, binding = HEMO_REACH_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_REACH_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_REACH_BINDING_POS_AT_BUILD) readonly buffer PosAtBuild { vec4 posAtBuild[]; };
+// Read-only inputs are uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_REACH_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_REACH_BINDING_VELOCITIES) uniform samplerBuffer velocities;
+layout(binding = HEMO_REACH_BINDING_POS_AT_BUILD) uniform samplerBuffer posAtBuild;
 HEMO_SPH_PARAMS_UNIFORM(HEMO_REACH_BINDING_PARAMS);
 layout(std140, binding = HEMO_REACH_BINDING_DRIFT_RANGE) uniform DriftRange { vec2 driftRange; };
 layout(std430, binding = HEMO_REACH_BINDING_REACH) writeonly buffer Reach { float reach[]; };
@@ -34,10 +35,10 @@ void main() {
   if (!(abs(c) < 1.0e30)) {
     c = 0.0;  // NaN (a non-finite particle, whose own reach is NaN and opens the gate) or none
   }
-  const vec3 d = hemo_min_image(positions[i].xyz - posAtBuild[i].xyz, hemo_pair_params());
+  const vec3 d = hemo_min_image(texelFetch(positions, int(i)).xyz - texelFetch(posAtBuild, int(i)).xyz, hemo_pair_params());
   float r = length(d - vec3(c, 0.0, 0.0));
   if (pc.midpointLookahead != 0u) {
-    const float speed = length(velocities[i].xyz);
+    const float speed = length(texelFetch(velocities, int(i)).xyz);
     r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / (params.c0 + speed));
   }
   reach[i] = r;

@@ -13,12 +13,13 @@
 #include "common/kernel.glsl"
 #include "common/sph_params.glsl"
 
-layout(std430, binding = HEMO_SPS_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_SPS_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+// Read-only inputs are uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_SPS_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_SPS_BINDING_VELOCITIES) uniform samplerBuffer velocities;
 HEMO_SPH_PARAMS_UNIFORM(HEMO_SPS_BINDING_PARAMS);
-layout(std430, binding = HEMO_SPS_BINDING_STATE) readonly buffer State { vec4 state[]; };
-layout(std430, binding = HEMO_SPS_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
-layout(std430, binding = HEMO_SPS_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(binding = HEMO_SPS_BINDING_STATE) uniform samplerBuffer state;
+layout(binding = HEMO_SPS_BINDING_NCOUNT) uniform usamplerBuffer neighbourCount;
+layout(binding = HEMO_SPS_BINDING_NLIST) uniform usamplerBuffer neighbourList;
 layout(std430, binding = HEMO_SPS_BINDING_TAU_A) writeonly buffer TauA { vec4 tauA[]; };
 layout(std430, binding = HEMO_SPS_BINDING_TAU_B) writeonly buffer TauB { vec4 tauB[]; };
 layout(push_constant) uniform Push { uint n; } pc;
@@ -28,25 +29,25 @@ void main() {
   if (i >= pc.n) {
     return;
   }
-  const vec4 vi = velocities[i];
+  const vec4 vi = texelFetch(velocities, int(i));
   if (uint(vi.w) != HEMO_KIND_FLUID) {
     tauA[i] = vec4(0.0);
     tauB[i] = vec4(0.0);
     return;
   }
-  const vec3 xi = positions[i].xyz;
+  const vec3 xi = texelFetch(positions, int(i)).xyz;
   const HemoPairParams pp = hemo_pair_params();
   const float invH = 1.0 / pp.h;
   const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
   mat3 g = mat3(0.0);  // g[b][a] = d u_a / d x_b (column b)
-  const uint count = neighbourCount[i];
+  const uint count = texelFetch(neighbourCount, int(i)).x;
   for (uint k = 0u; k < count; ++k) {
-    const uint j = neighbourList[hemo_list_slot(i, k, pp)];
-    const vec4 pj = positions[j];
+    const int j = int(texelFetch(neighbourList, int(hemo_list_slot(i, k, pp))).x);
+    const vec4 pj = texelFetch(positions, j);
     const vec3 d = hemo_min_image(xi - pj.xyz, pp);
     // grad W is 0 beyond the support and for a coincident pair (common/kernel.glsl)
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(dot(d, d)), invH, gradNorm);
-    const vec3 du = (velocities[j].xyz - vi.xyz) * (pj.w / state[j].x);
+    const vec3 du = (texelFetch(velocities, j).xyz - vi.xyz) * (pj.w / texelFetch(state, j).x);
     g += outerProduct(du, gradW);
   }
   const float sxx = g[0][0], syy = g[1][1], szz = g[2][2];
@@ -55,7 +56,7 @@ void main() {
   const float syz = 0.5 * (g[2][1] + g[1][2]);
   const float s2 = 2.0 * (sxx * sxx + syy * syy + szz * szz + 2.0 * (sxy * sxy + sxz * sxz + syz * syz));  // |S|^2
   const float magnitude = sqrt(s2);
-  const float rho = state[i].x;
+  const float rho = texelFetch(state, int(i)).x;
   const float twoMuT = 2.0 * rho * params.spsSmagorinsky * magnitude;  // 2 rho nu_t
   const float trace3 = (sxx + syy + szz) / 3.0;
   const float iso = rho * (2.0 / 3.0) * params.spsBlinn * s2;

@@ -14,25 +14,43 @@
 #include "common/sph_params.glsl"
 #include "common/repulsion.glsl"
 
-layout(std430, binding = HEMO_SPRINGF_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_IDS) readonly buffer Ids { uint ids[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_SLOT_OF_ID) readonly buffer SlotOfId { uint slotOfId[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS) readonly buffer Springs { Spring springs[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_FIRST) readonly buffer First { uint first[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS_OF) readonly buffer SpringsOf { uint springsOf[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_INFO) readonly buffer WallInfo { vec4 wallInfo[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_ACCEL) buffer Accel { vec4 accel[]; };  // fluid's read, wall's written
+// Read-only inputs are uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_SPRINGF_BINDING_POSITIONS) uniform samplerBuffer positionsT;
+layout(binding = HEMO_SPRINGF_BINDING_VELOCITIES) uniform samplerBuffer velocitiesT;
+layout(binding = HEMO_SPRINGF_BINDING_IDS) uniform usamplerBuffer idsT;
+layout(binding = HEMO_SPRINGF_BINDING_SLOT_OF_ID) uniform usamplerBuffer slotOfIdT;
+layout(binding = HEMO_SPRINGF_BINDING_SPRINGS) uniform usamplerBuffer springsT;  // two uvec4 per Spring
+layout(binding = HEMO_SPRINGF_BINDING_FIRST) uniform usamplerBuffer firstT;
+layout(binding = HEMO_SPRINGF_BINDING_SPRINGS_OF) uniform usamplerBuffer springsOfT;
+layout(binding = HEMO_SPRINGF_BINDING_WALL_INFO) uniform samplerBuffer wallInfoT;
+layout(binding = HEMO_SPRINGF_BINDING_FLUID_ACCEL) uniform samplerBuffer fluidAccelT;  // read at fluid slots
+layout(std430, binding = HEMO_SPRINGF_BINDING_ACCEL) writeonly buffer Accel { vec4 accel[]; };  // wall slots written
 layout(std430, binding = HEMO_SPRINGF_BINDING_DT_LIMIT) writeonly buffer DtLimit { float dtLimit[]; };
 HEMO_SPH_PARAMS_UNIFORM(HEMO_SPRINGF_BINDING_PARAMS);
-layout(std430, binding = HEMO_SPRINGF_BINDING_STATE) readonly buffer State { vec4 state[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_NCOUNT) readonly buffer Counts { uint neighbourCount[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_NLIST) readonly buffer List { uint neighbourList[]; };
+layout(binding = HEMO_SPRINGF_BINDING_STATE) uniform samplerBuffer stateT;
+layout(binding = HEMO_SPRINGF_BINDING_NCOUNT) uniform usamplerBuffer neighbourCountT;
+layout(binding = HEMO_SPRINGF_BINDING_NLIST) uniform usamplerBuffer neighbourListT;
 layout(std430, binding = HEMO_SPRINGF_BINDING_NORMALS) buffer Normals { vec4 normals[]; };  // own slot only
 layout(std430, binding = HEMO_SPRINGF_BINDING_COUNTERS) buffer Counters { uint counters[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_FRAMES) readonly buffer Frames { uvec2 frames[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_WALL_VEL) readonly buffer ViscousVel { vec4 viscousVel[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_PAIR_POSITION) readonly buffer PairPosition { vec4 pairPosition[]; };
+layout(binding = HEMO_SPRINGF_BINDING_FRAMES) uniform usamplerBuffer framesT;  // R32G32 texels
+layout(binding = HEMO_SPRINGF_BINDING_WALL_VEL) uniform samplerBuffer viscousVelT;
+layout(binding = HEMO_SPRINGF_BINDING_PAIR_POSITION) uniform samplerBuffer pairPositionT;
+
+#define positions(k) texelFetch(positionsT, int(k))
+#define velocities(k) texelFetch(velocitiesT, int(k))
+#define slotOfId(k) texelFetch(slotOfIdT, int(k)).x
+#define first(k) texelFetch(firstT, int(k)).x
+#define state(k) texelFetch(stateT, int(k))
+#define viscousVel(k) texelFetch(viscousVelT, int(k))
+#define pairPosition(k) texelFetch(pairPositionT, int(k))
+
+// Spring record k of interface/wall.h, read as its two uvec4 texels.
+Spring hemo_spring(uint k) {
+  const uvec4 t0 = texelFetch(springsT, int(2u * k));
+  const uvec4 t1 = texelFetch(springsT, int(2u * k + 1u));
+  return Spring(t0.x, t0.y, uintBitsToFloat(t0.z), uintBitsToFloat(t0.w), uintBitsToFloat(t1.x),
+                uintBitsToFloat(t1.y), t1.z, t1.w);
+}
 
 // The force (N) the fluid exerts on wall particle w: minus the sum, over its fluid neighbours
 // f, of m_f times the pair terms sph/forces.comp gave f for w (same formulas, same inputs),
@@ -49,33 +67,33 @@ vec3 hemo_fluid_reaction(uint w) {
   const float cutoff = params.repulsionCutoff;
   const float wallSpacing = params.wallSpacing;
   const float psi = params.psi;
-  const vec4 xw = positions[w];  // w: SPH mass
-  const vec2 sw = state[w].xy;
+  const vec4 xw = positions(w);  // w: SPH mass
+  const vec2 sw = state(w).xy;
   const float volumeW = xw.w / sw.x;
   const float pW = sw.y;
-  const vec3 vw = viscousVel[w].xyz;
+  const vec3 vw = viscousVel(w).xyz;
   const vec3 nrm = normals[w].xyz;
   const bool repels = xw.w > 0.0;  // detached particles (no SPH mass) do not repel
   vec3 sum = vec3(0.0);            // sum of V_f [ ... ] above, times V_w at the end
   vec3 repulsion = vec3(0.0);      // sum of m_f a_repulsion
-  const uint count = neighbourCount[w];
+  const uint count = texelFetch(neighbourCountT, int(w)).x;
   for (uint k = 0u; k < count; ++k) {
-    const uint f = neighbourList[hemo_list_slot(w, k, pp)];
-    const vec4 pf = pairPosition[f];  // (x_f, V_f p_f)
+    const uint f = texelFetch(neighbourListT, int(hemo_list_slot(w, k, pp))).x;
+    const vec4 pf = pairPosition(f);  // (x_f, V_f p_f)
     const vec3 d = hemo_min_image(pf.xyz - xw.xyz, pp);  // from w to f, as f sees it
     const float r2 = dot(d, d);
     if (r2 >= pp.support2 || r2 == 0.0) {
       continue;
     }
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // as sph/forces.comp
-    const vec4 vf = viscousVel[f];  // (v_f, V_f)
+    const vec4 vf = viscousVel(f);  // (v_f, V_f)
     sum += -(pf.w + vf.w * pW) * gradW + (vf.w * twoMu * dot(d, gradW) / (r2 + etaSq)) * (vf.xyz - vw);
     if (repels) {
       const float x = dot(d, nrm);
       float weight;
       const float push = hemo_repulsion(x, length(d - x * nrm), pp.h, psi, cutoff, wallSpacing, weight);
       if (weight > 0.0) {
-        repulsion += nrm * (positions[f].w * push * accel[f].w);
+        repulsion += nrm * (positions(f).w * push * texelFetch(fluidAccelT, int(f)).w);
       }
     }
   }
@@ -86,14 +104,14 @@ vec3 hemo_fluid_reaction(uint w) {
 // evaluation (this one, and the reaction, used the previous normal). Detached particles and
 // particles without a frame keep theirs.
 void updateNormal(uint slot, uint id) {
-  const uvec2 frame = frames[id];
-  if (positions[slot].w == 0.0 || frame.x == HEMO_NO_FRAME) {
+  const uvec2 frame = texelFetch(framesT, int(id)).xy;
+  if (positions(slot).w == 0.0 || frame.x == HEMO_NO_FRAME) {
     return;
   }
-  const vec3 x = positions[slot].xyz;
+  const vec3 x = positions(slot).xyz;
   const HemoPairParams pp = hemo_pair_params();
-  const vec3 n = cross(hemo_min_image(positions[slotOfId[frame.x]].xyz - x, pp),
-                       hemo_min_image(positions[slotOfId[frame.y]].xyz - x, pp));
+  const vec3 n = cross(hemo_min_image(positions(slotOfId(frame.x)).xyz - x, pp),
+                       hemo_min_image(positions(slotOfId(frame.y)).xyz - x, pp));
   const float len = length(n);
   if (len > 0.0) {
     normals[slot] = vec4(n / len, 0.0);
@@ -111,14 +129,14 @@ layout(push_constant) uniform Push {
 
 void main() {
   const uint slot = hemo_global_index();
-  if (slot >= pc.n || uint(velocities[slot].w) != HEMO_KIND_WALL) {
+  if (slot >= pc.n || uint(velocities(slot).w) != HEMO_KIND_WALL) {
     return;
   }
-  const uint id = ids[slot];
+  const uint id = texelFetch(idsT, int(slot)).x;
   if (id >= pc.idCount) {
     return;  // not part of the spring network
   }
-  const vec4 info = wallInfo[id];
+  const vec4 info = texelFetch(wallInfoT, int(id));
   if (info.y != 0.0) {
     accel[slot] = vec4(0.0);  // anchored
     dtLimit[slot] = 3.0e38;
@@ -130,20 +148,20 @@ void main() {
   float stiffness = 0.0;
   uint intact = 0u;
   float marker = 0.0;
-  const vec3 xSelf = positions[slot].xyz;
-  const vec3 vSelf = velocities[slot].xyz;
-  const uint end = first[id + 1u];
-  for (uint e = first[id]; e < end; ++e) {
-    const Spring s = springs[springsOf[e]];
+  const vec3 xSelf = positions(slot).xyz;
+  const vec3 vSelf = velocities(slot).xyz;
+  const uint end = first(id + 1u);
+  for (uint e = first(id); e < end; ++e) {
+    const Spring s = hemo_spring(texelFetch(springsOfT, int(e)).x);
     if (s.broken != 0u) {
       continue;
     }
     // Only the other end is gathered; the force is computed from (a, b) in the spring's own
     // order either way, so both ends get exactly opposite forces.
     const bool selfIsA = id == s.a;
-    const uint other = slotOfId[selfIsA ? s.b : s.a];
-    const vec3 xOther = positions[other].xyz;
-    const vec3 vOther = velocities[other].xyz;
+    const uint other = slotOfId(selfIsA ? s.b : s.a);
+    const vec3 xOther = positions(other).xyz;
+    const vec3 vOther = velocities(other).xyz;
     float tension;
     const vec3 delta = hemo_min_image(selfIsA ? xOther - xSelf : xSelf - xOther, pp);
     const vec3 fa = hemo_spring_force_on_a(delta, selfIsA ? vSelf : vOther, selfIsA ? vOther : vSelf, s.restLength,
@@ -152,7 +170,7 @@ void main() {
     stiffness += s.stiffness;
     ++intact;
   }
-  if (intact == 0u && end > first[id] && positions[slot].w != 0.0) {
+  if (intact == 0u && end > first(id) && positions(slot).w != 0.0) {
     // All its springs are broken: the particle detaches from the wall for good. The integrator
     // sets its SPH mass to zero (marker accel.w < 0), so it no longer counts in the fluid's
     // density, pressure, viscosity or repulsion (the wall stops holding the fluid there); it
@@ -163,6 +181,6 @@ void main() {
     updateNormal(slot, id);
   }
   accel[slot] = vec4(force / info.x + pc.gravity.xyz, marker);
-  const float acoustic = pc.acousticLength / (pc.c0 + length(velocities[slot].xyz));
+  const float acoustic = pc.acousticLength / (pc.c0 + length(vSelf));
   dtLimit[slot] = stiffness > 0.0 ? min(acoustic, pc.timeStepFactor * sqrt(info.x / stiffness)) : acoustic;
 }

@@ -19,12 +19,15 @@ DescriptorSet& DescriptorSet::operator=(DescriptorSet&& other) noexcept {
     device_ = std::exchange(other.device_, VK_NULL_HANDLE);
     pool_ = std::exchange(other.pool_, VK_NULL_HANDLE);
     set_ = std::exchange(other.set_, VK_NULL_HANDLE);
+    views_ = std::exchange(other.views_, {});
   }
   return *this;
 }
 
 void DescriptorSet::release() {
   if (pool_) vkDestroyDescriptorPool(device_, pool_, nullptr);  // frees the set too
+  for (VkBufferView view : views_) vkDestroyBufferView(device_, view, nullptr);
+  views_.clear();
   pool_ = VK_NULL_HANDLE;
   set_ = VK_NULL_HANDLE;
 }
@@ -33,6 +36,7 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
     : context_(&context),
       bindingCount_(desc.bindingCount),
       uniformSlots_(desc.uniformSlots),
+      texelSlots_(desc.texelSlots),
       pushBytes_(desc.pushConstantBytes),
       workgroupSize_(desc.workgroupSize),
       name_(desc.shader) {
@@ -43,9 +47,12 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
                    "' is outside the device's limits (max " +
                    std::to_string(limits.maxComputeWorkGroupSize[0]) + ")");
   }
-  if (bindingCount_ < 32 && (uniformSlots_ >> bindingCount_) != 0) {
-    throw GpuError("uniform slots of '" + name_ + "' name a slot beyond its " +
+  if (bindingCount_ < 32 && ((uniformSlots_ | texelSlots_) >> bindingCount_) != 0) {
+    throw GpuError("uniform or texel slots of '" + name_ + "' name a slot beyond its " +
                    std::to_string(bindingCount_) + " bindings");
+  }
+  if ((uniformSlots_ & texelSlots_) != 0) {
+    throw GpuError("'" + name_ + "' declares a slot both uniform and texel");
   }
   if (pushBytes_ > limits.maxPushConstantsSize) {
     throw GpuError("push constants of '" + name_ + "' exceed the device's " +
@@ -123,6 +130,7 @@ ComputePipeline& ComputePipeline::operator=(ComputePipeline&& other) noexcept {
     pipeline_ = std::exchange(other.pipeline_, VK_NULL_HANDLE);
     bindingCount_ = other.bindingCount_;
     uniformSlots_ = other.uniformSlots_;
+    texelSlots_ = other.texelSlots_;
     pushBytes_ = other.pushBytes_;
     workgroupSize_ = other.workgroupSize_;
     name_ = std::move(other.name_);
@@ -160,8 +168,33 @@ Groups ComputePipeline::groupsFor(std::uint64_t items, std::uint32_t itemsPerInv
 }
 
 VkDescriptorType ComputePipeline::descriptorType(std::uint32_t slot) const {
+  if ((texelSlots_ >> slot) & 1u) return VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
   return (uniformSlots_ >> slot) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
 }
+
+namespace {
+
+// Bytes per texel of the formats texel slots take (4-byte channels).
+VkDeviceSize texelBytes(VkFormat format) {
+  switch (format) {
+    case VK_FORMAT_R32_UINT:
+    case VK_FORMAT_R32_SINT:
+    case VK_FORMAT_R32_SFLOAT:
+      return 4;
+    case VK_FORMAT_R32G32_UINT:
+    case VK_FORMAT_R32G32_SINT:
+    case VK_FORMAT_R32G32_SFLOAT:
+      return 8;
+    case VK_FORMAT_R32G32B32A32_UINT:
+    case VK_FORMAT_R32G32B32A32_SINT:
+    case VK_FORMAT_R32G32B32A32_SFLOAT:
+      return 16;
+    default:
+      return 0;
+  }
+}
+
+}  // namespace
 
 DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) const {
   const auto& limits = context_->limits();
@@ -179,6 +212,35 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
     if (b.buffer->use() != MemoryUse::Device) {
       throw std::invalid_argument("'" + name_ + "' binding slot " + std::to_string(b.slot) +
                                   ": buffer '" + b.buffer->name() + "' is not a device buffer");
+    }
+    const std::string where = "'" + name_ + "' binding slot " + std::to_string(b.slot);
+    if (descriptorType(b.slot) == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+      const VkDeviceSize bytes = texelBytes(b.format);
+      if (bytes == 0) {
+        throw std::invalid_argument(where + " is a texel slot and needs a 32-bit-channel format (R32, R32G32 or R32G32B32A32)");
+      }
+      VkFormatProperties props{};
+      vkGetPhysicalDeviceFormatProperties(context_->physicalDevice(), b.format, &props);
+      if (!(props.bufferFeatures & VK_FORMAT_FEATURE_UNIFORM_TEXEL_BUFFER_BIT)) {
+        throw std::invalid_argument(where + ": the device cannot read format " + std::to_string(b.format) +
+                                    " as a uniform texel buffer");
+      }
+      if (b.offset % std::max<VkDeviceSize>(limits.minTexelBufferOffsetAlignment, 1) != 0) {
+        throw std::invalid_argument(where + ": offset " + std::to_string(b.offset) +
+                                    " is not a multiple of the device's minTexelBufferOffsetAlignment " +
+                                    std::to_string(limits.minTexelBufferOffsetAlignment));
+      }
+      const VkDeviceSize range = b.range == VK_WHOLE_SIZE ? b.buffer->size() - std::min(b.offset, b.buffer->size()) : b.range;
+      if (range < bytes || range / bytes > limits.maxTexelBufferElements) {
+        throw std::invalid_argument(where + ": buffer '" + b.buffer->name() + "' binds " + std::to_string(range / bytes) +
+                                    " texels; the device's maxTexelBufferElements is " +
+                                    std::to_string(limits.maxTexelBufferElements));
+      }
+      bySlot[b.slot] = &b;
+      continue;
+    }
+    if (b.format != VK_FORMAT_UNDEFINED) {
+      throw std::invalid_argument(where + " is not a texel slot and takes no format");
     }
     const bool uniform = descriptorType(b.slot) == VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
     const VkDeviceSize alignment =
@@ -208,12 +270,14 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
   DescriptorSet set;
   set.device_ = context_->device();
   const auto uniformCount = static_cast<std::uint32_t>(std::popcount(uniformSlots_));
-  const VkDescriptorPoolSize sizes[2] = {
-      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(bindingCount_ - uniformCount, 1u)},
-      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, std::max(uniformCount, 1u)}};
+  const auto texelCount = static_cast<std::uint32_t>(std::popcount(texelSlots_));
+  const VkDescriptorPoolSize sizes[3] = {
+      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(bindingCount_ - uniformCount - texelCount, 1u)},
+      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, std::max(uniformCount, 1u)},
+      {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, std::max(texelCount, 1u)}};
   VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   poolInfo.maxSets = 1;
-  poolInfo.poolSizeCount = 2;
+  poolInfo.poolSizeCount = 3;
   poolInfo.pPoolSizes = sizes;
   check(vkCreateDescriptorPool(set.device_, &poolInfo, nullptr, &set.pool_), "vkCreateDescriptorPool");
   VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
@@ -223,16 +287,31 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
   check(vkAllocateDescriptorSets(set.device_, &alloc, &set.set_), "vkAllocateDescriptorSets");
 
   std::vector<VkDescriptorBufferInfo> infos(bindingCount_);
+  std::vector<VkBufferView> views(bindingCount_, VK_NULL_HANDLE);
   std::vector<VkWriteDescriptorSet> writes(bindingCount_);
   for (std::uint32_t i = 0; i < bindingCount_; ++i) {
     const Binding& b = *bySlot[i];
-    infos[i] = {b.buffer->handle(), b.offset, b.range};
     writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     writes[i].dstSet = set.set_;
     writes[i].dstBinding = i;
     writes[i].descriptorCount = 1;
     writes[i].descriptorType = descriptorType(i);
-    writes[i].pBufferInfo = &infos[i];
+    if (writes[i].descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+      // Whole texels only: a range that is not a multiple of the texel size is cut down.
+      const VkDeviceSize bytes = texelBytes(b.format);
+      const VkDeviceSize range = b.range == VK_WHOLE_SIZE ? b.buffer->size() - b.offset : b.range;
+      VkBufferViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+      viewInfo.buffer = b.buffer->handle();
+      viewInfo.format = b.format;
+      viewInfo.offset = b.offset;
+      viewInfo.range = range / bytes * bytes;
+      check(vkCreateBufferView(set.device_, &viewInfo, nullptr, &views[i]), "vkCreateBufferView");
+      set.views_.push_back(views[i]);
+      writes[i].pTexelBufferView = &views[i];
+    } else {
+      infos[i] = {b.buffer->handle(), b.offset, b.range};
+      writes[i].pBufferInfo = &infos[i];
+    }
   }
   vkUpdateDescriptorSets(set.device_, bindingCount_, writes.data(), 0, nullptr);
   return set;

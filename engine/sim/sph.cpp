@@ -13,6 +13,9 @@ namespace hemo::sim {
 
 namespace {
 constexpr std::uint32_t kWorkgroup = 256;
+// Formats of the texel slots: per-particle vec4 records and list indices.
+constexpr VkFormat kVec4Texels = VK_FORMAT_R32G32B32A32_SFLOAT;
+constexpr VkFormat kIndexTexels = VK_FORMAT_R32_UINT;
 
 struct CountPush {
   std::uint32_t n;
@@ -205,83 +208,102 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   inflow_.upload(std::vector<InflowParams>{disabledInflowParams()});
   auto& cache = context.pipelines();
   markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
-  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}, 1u << HEMO_BUILD_BINDING_PARAMS});
+  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}, 1u << HEMO_BUILD_BINDING_PARAMS,
+                             1u << HEMO_BUILD_BINDING_POSITIONS | 1u << HEMO_BUILD_BINDING_CELL_START |
+                                 1u << HEMO_BUILD_BINDING_FLUID_CELLS});
   // Constant 1 of the density pass and the integrator: summation density (0), or continuity
   // density advanced by the density pass (1, symplectic Euler) or by the RK2 stages (2).
   const std::uint32_t continuity = settings.densityMethod == DensityMethod::Summation ? 0u
                                    : settings.integrator == Integrator::Rk2Midpoint  ? 2u
                                                                                      : 1u;
   density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {continuity},
-                         1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK});
+                         1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK,
+                         1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
+                             1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
+                             1u << HEMO_DENSITY_BINDING_NORMALS});
   boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {},
-                                  1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK});
-  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 1u << HEMO_SPS_BINDING_PARAMS});
+                                  1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK,
+                                  1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
+                                      1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
+                                      1u << HEMO_BPRESSURE_BINDING_FLUID_STATE});
+  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 1u << HEMO_SPS_BINDING_PARAMS,
+                           1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
+                               1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
   // constant 1: the SPS term compiled in or out
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup,
-                        {settings.sps ? 1u : 0u}, 1u << HEMO_FORCES_BINDING_PARAMS});
+                        {settings.sps ? 1u : 0u}, 1u << HEMO_FORCES_BINDING_PARAMS,
+                        1u << HEMO_FORCES_BINDING_POSITIONS | 1u << HEMO_FORCES_BINDING_VELOCITIES | 1u << HEMO_FORCES_BINDING_STATE |
+                            1u << HEMO_FORCES_BINDING_NCOUNT | 1u << HEMO_FORCES_BINDING_NORMALS | 1u << HEMO_FORCES_BINDING_NLIST | 1u << HEMO_FORCES_BINDING_TAU_A |
+                            1u << HEMO_FORCES_BINDING_TAU_B | 1u << HEMO_FORCES_BINDING_VISCOUS_VEL |
+                            1u << HEMO_FORCES_BINDING_PAIR_POSITION});
   integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity},
                            1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW |
-                               1u << HEMO_INTEGRATE_BINDING_DT});
+                               1u << HEMO_INTEGRATE_BINDING_DT,
+                           1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD |
+                               1u << HEMO_INTEGRATE_BINDING_STATE});
   reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {},
-                           1u << HEMO_REACH_BINDING_PARAMS | 1u << HEMO_REACH_BINDING_DRIFT_RANGE});
+                           1u << HEMO_REACH_BINDING_PARAMS | 1u << HEMO_REACH_BINDING_DRIFT_RANGE,
+                           1u << HEMO_REACH_BINDING_POSITIONS | 1u << HEMO_REACH_BINDING_VELOCITIES |
+                               1u << HEMO_REACH_BINDING_POS_AT_BUILD});
   const ParticleArrays& a = particles.live();
   markSet_ = markFluid_->makeSet({{HEMO_MARK_BINDING_CELL_START, &grid_.cellStart()},
                                   {HEMO_MARK_BINDING_VELOCITIES, &a.velocities},
                                   {HEMO_MARK_BINDING_FLAGS, &fluidCells_}});
-  buildListSet_ = buildList_->makeSet({{HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild()},
-                                       {HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart()},
+  buildListSet_ = buildList_->makeSet({gpu::texelBinding(HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), kVec4Texels),
+                                       gpu::texelBinding(HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart(), kIndexTexels),
                                        {HEMO_BUILD_BINDING_PARAMS, &paramsBuffer_},
                                        {HEMO_BUILD_BINDING_NCOUNT, &ncount_},
                                        {HEMO_BUILD_BINDING_NLIST, &nlist_},
                                        {HEMO_BUILD_BINDING_STATUS, &status_},
-                                       {HEMO_BUILD_BINDING_FLUID_CELLS, &fluidCells_}});
-  densitySet_ = density_->makeSet({{HEMO_DENSITY_BINDING_POSITIONS, &a.positions},
-                                   {HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities},
+                                       gpu::texelBinding(HEMO_BUILD_BINDING_FLUID_CELLS, &fluidCells_, kIndexTexels)});
+  densitySet_ = density_->makeSet({gpu::texelBinding(HEMO_DENSITY_BINDING_POSITIONS, &a.positions, kVec4Texels),
+                                   gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, kVec4Texels),
                                    {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
                                    {HEMO_DENSITY_BINDING_STATE, &state_},
-                                   {HEMO_DENSITY_BINDING_NCOUNT, &ncount_},
-                                   {HEMO_DENSITY_BINDING_NLIST, &nlist_},
+                                   gpu::texelBinding(HEMO_DENSITY_BINDING_NCOUNT, &ncount_, kIndexTexels),
+                                   gpu::texelBinding(HEMO_DENSITY_BINDING_NLIST, &nlist_, kIndexTexels),
                                    {HEMO_DENSITY_BINDING_CLOCK, &clock_},
                                    {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
-                                   {HEMO_DENSITY_BINDING_NORMALS, &a.normals},
+                                   gpu::texelBinding(HEMO_DENSITY_BINDING_NORMALS, &a.normals, kVec4Texels),
                                    {HEMO_DENSITY_BINDING_PAIR_POSITION, &pairPosition_},
                                    {HEMO_DENSITY_BINDING_PAIR_COUNT, &pairCount_},
                                    {HEMO_DENSITY_BINDING_PAIR_LIST, &pairList_}});
-  boundarySet_ = boundaryPressure_->makeSet({{HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions},
-                                             {HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities},
+  boundarySet_ = boundaryPressure_->makeSet({gpu::texelBinding(HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions, kVec4Texels),
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities, kVec4Texels),
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_FLUID_STATE, &state_, kVec4Texels),
                                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
                                              {HEMO_BPRESSURE_BINDING_STATE, &state_},
-                                             {HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_},
-                                             {HEMO_BPRESSURE_BINDING_NLIST, &nlist_},
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_, kIndexTexels),
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, &nlist_, kIndexTexels),
                                              {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
                                              {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
                                              {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_}});
-  spsSet_ = spsStress_->makeSet({{HEMO_SPS_BINDING_POSITIONS, &a.positions},
-                                 {HEMO_SPS_BINDING_VELOCITIES, &a.velocities},
+  spsSet_ = spsStress_->makeSet({gpu::texelBinding(HEMO_SPS_BINDING_POSITIONS, &a.positions, kVec4Texels),
+                                 gpu::texelBinding(HEMO_SPS_BINDING_VELOCITIES, &a.velocities, kVec4Texels),
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
-                                 {HEMO_SPS_BINDING_STATE, &state_},
-                                 {HEMO_SPS_BINDING_NCOUNT, &pairCount_},
-                                 {HEMO_SPS_BINDING_NLIST, &pairList_},
+                                 gpu::texelBinding(HEMO_SPS_BINDING_STATE, &state_, kVec4Texels),
+                                 gpu::texelBinding(HEMO_SPS_BINDING_NCOUNT, &pairCount_, kIndexTexels),
+                                 gpu::texelBinding(HEMO_SPS_BINDING_NLIST, &pairList_, kIndexTexels),
                                  {HEMO_SPS_BINDING_TAU_A, &tauA_},
                                  {HEMO_SPS_BINDING_TAU_B, &tauB_}});
-  forcesSet_ = forces_->makeSet({{HEMO_FORCES_BINDING_POSITIONS, &a.positions},
-                                 {HEMO_FORCES_BINDING_VELOCITIES, &a.velocities},
-                                 {HEMO_FORCES_BINDING_NORMALS, &a.normals},
+  forcesSet_ = forces_->makeSet({gpu::texelBinding(HEMO_FORCES_BINDING_POSITIONS, &a.positions, kVec4Texels),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_VELOCITIES, &a.velocities, kVec4Texels),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_NORMALS, &a.normals, kVec4Texels),
                                  {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
-                                 {HEMO_FORCES_BINDING_STATE, &state_},
-                                 {HEMO_FORCES_BINDING_NCOUNT, &pairCount_},
-                                 {HEMO_FORCES_BINDING_NLIST, &pairList_},
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_STATE, &state_, kVec4Texels),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_NCOUNT, &pairCount_, kIndexTexels),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_, kIndexTexels),
                                  {HEMO_FORCES_BINDING_ACCEL, &accel_},
                                  {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
                                  {HEMO_FORCES_BINDING_IDS, &a.ids},
                                  {HEMO_FORCES_BINDING_STATUS, &status_},
-                                 {HEMO_FORCES_BINDING_TAU_A, &tauA_},
-                                 {HEMO_FORCES_BINDING_TAU_B, &tauB_},
-                                 {HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_},
-                                 {HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_}});
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_TAU_A, &tauA_, kVec4Texels),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_TAU_B, &tauB_, kVec4Texels),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_, kVec4Texels),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, kVec4Texels)});
   integrateSet_ = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
-                                       {HEMO_INTEGRATE_BINDING_ACCEL, &accel_},
+                                       gpu::texelBinding(HEMO_INTEGRATE_BINDING_ACCEL, &accel_, kVec4Texels),
                                        {HEMO_INTEGRATE_BINDING_PARAMS, &paramsBuffer_},
                                        {HEMO_INTEGRATE_BINDING_DT, &dtReduce_.result()},
                                        {HEMO_INTEGRATE_BINDING_CLOCK, &clock_},
@@ -290,14 +312,14 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_SAVED_POS, &savedPos_},
                                        {HEMO_INTEGRATE_BINDING_SAVED_VEL, &savedVel_},
                                        {HEMO_INTEGRATE_BINDING_STEP_DT, &stepDt_},
-                                       {HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild()},
+                                       gpu::texelBinding(HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild(), kVec4Texels),
                                        {HEMO_INTEGRATE_BINDING_DRIFT_X, &driftX_},
                                        {HEMO_INTEGRATE_BINDING_INFLOW, &inflow_},
-                                       {HEMO_INTEGRATE_BINDING_STATE, &state_},
+                                       gpu::texelBinding(HEMO_INTEGRATE_BINDING_STATE, &state_, kVec4Texels),
                                        {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals}});
-  reachSet_ = reachPass_->makeSet({{HEMO_REACH_BINDING_POSITIONS, &a.positions},
-                                   {HEMO_REACH_BINDING_VELOCITIES, &a.velocities},
-                                   {HEMO_REACH_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild()},
+  reachSet_ = reachPass_->makeSet({gpu::texelBinding(HEMO_REACH_BINDING_POSITIONS, &a.positions, kVec4Texels),
+                                   gpu::texelBinding(HEMO_REACH_BINDING_VELOCITIES, &a.velocities, kVec4Texels),
+                                   gpu::texelBinding(HEMO_REACH_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild(), kVec4Texels),
                                    {HEMO_REACH_BINDING_PARAMS, &paramsBuffer_},
                                    {HEMO_REACH_BINDING_DRIFT_RANGE, &driftReduce_.result()},
                                    {HEMO_REACH_BINDING_REACH, &reach_}});

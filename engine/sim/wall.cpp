@@ -120,7 +120,15 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
 
   auto& cache = context.pipelines();
   rupture_ = &cache.get({"wall/rupture", HEMO_RUPTURE_BINDING_COUNT, sizeof(RupturePush), kWorkgroup, {}, 1u << HEMO_RUPTURE_BINDING_PARAMS});
-  forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, {}, 1u << HEMO_SPRINGF_BINDING_PARAMS});
+  // Every read-only input of the spring pass is a texel slot (gpu/pipeline.hpp, texelSlots).
+  const std::uint32_t springTexels =
+      1u << HEMO_SPRINGF_BINDING_POSITIONS | 1u << HEMO_SPRINGF_BINDING_VELOCITIES | 1u << HEMO_SPRINGF_BINDING_IDS |
+      1u << HEMO_SPRINGF_BINDING_SLOT_OF_ID | 1u << HEMO_SPRINGF_BINDING_SPRINGS | 1u << HEMO_SPRINGF_BINDING_FIRST |
+      1u << HEMO_SPRINGF_BINDING_SPRINGS_OF | 1u << HEMO_SPRINGF_BINDING_WALL_INFO | 1u << HEMO_SPRINGF_BINDING_STATE |
+      1u << HEMO_SPRINGF_BINDING_NCOUNT | 1u << HEMO_SPRINGF_BINDING_NLIST | 1u << HEMO_SPRINGF_BINDING_FRAMES |
+      1u << HEMO_SPRINGF_BINDING_WALL_VEL | 1u << HEMO_SPRINGF_BINDING_PAIR_POSITION | 1u << HEMO_SPRINGF_BINDING_FLUID_ACCEL;
+  forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, {},
+                        1u << HEMO_SPRINGF_BINDING_PARAMS, springTexels});
   shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}, 1u << HEMO_SHADE_BINDING_PARAMS});
   const ParticleArrays& a = particles.live();
   ruptureSet_ = rupture_->makeSet({{HEMO_RUPTURE_BINDING_POSITIONS, &a.positions},
@@ -129,25 +137,29 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                    {HEMO_RUPTURE_BINDING_SPRINGS, &springs_},
                                    {HEMO_RUPTURE_BINDING_COUNTERS, &counters_},
                                    {HEMO_RUPTURE_BINDING_PARAMS, fluid.params}});
-  forcesSet_ = forces_->makeSet({{HEMO_SPRINGF_BINDING_POSITIONS, &a.positions},
-                                 {HEMO_SPRINGF_BINDING_VELOCITIES, &a.velocities},
-                                 {HEMO_SPRINGF_BINDING_IDS, &a.ids},
-                                 {HEMO_SPRINGF_BINDING_SLOT_OF_ID, fluid.slotOfId},
-                                 {HEMO_SPRINGF_BINDING_SPRINGS, &springs_},
-                                 {HEMO_SPRINGF_BINDING_FIRST, &first_},
-                                 {HEMO_SPRINGF_BINDING_SPRINGS_OF, &springsOf_},
-                                 {HEMO_SPRINGF_BINDING_WALL_INFO, &wallInfo_},
+  using gpu::texelBinding;
+  constexpr VkFormat vec4s = VK_FORMAT_R32G32B32A32_SFLOAT, uvec4s = VK_FORMAT_R32G32B32A32_UINT,
+                     uvec2s = VK_FORMAT_R32G32_UINT, uints = VK_FORMAT_R32_UINT;
+  forcesSet_ = forces_->makeSet({texelBinding(HEMO_SPRINGF_BINDING_POSITIONS, &a.positions, vec4s),
+                                 texelBinding(HEMO_SPRINGF_BINDING_VELOCITIES, &a.velocities, vec4s),
+                                 texelBinding(HEMO_SPRINGF_BINDING_IDS, &a.ids, uints),
+                                 texelBinding(HEMO_SPRINGF_BINDING_SLOT_OF_ID, fluid.slotOfId, uints),
+                                 texelBinding(HEMO_SPRINGF_BINDING_SPRINGS, &springs_, uvec4s),
+                                 texelBinding(HEMO_SPRINGF_BINDING_FIRST, &first_, uints),
+                                 texelBinding(HEMO_SPRINGF_BINDING_SPRINGS_OF, &springsOf_, uints),
+                                 texelBinding(HEMO_SPRINGF_BINDING_WALL_INFO, &wallInfo_, vec4s),
                                  {HEMO_SPRINGF_BINDING_ACCEL, fluid.accel},
+                                 texelBinding(HEMO_SPRINGF_BINDING_FLUID_ACCEL, fluid.accel, vec4s),
                                  {HEMO_SPRINGF_BINDING_DT_LIMIT, fluid.dtLimit},
                                  {HEMO_SPRINGF_BINDING_PARAMS, fluid.params},
-                                 {HEMO_SPRINGF_BINDING_STATE, fluid.state},
-                                 {HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts},
-                                 {HEMO_SPRINGF_BINDING_NLIST, fluid.neighbourList},
+                                 texelBinding(HEMO_SPRINGF_BINDING_STATE, fluid.state, vec4s),
+                                 texelBinding(HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts, uints),
+                                 texelBinding(HEMO_SPRINGF_BINDING_NLIST, fluid.neighbourList, uints),
                                  {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
-                                 {HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities},
+                                 texelBinding(HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities, vec4s),
                                  {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
-                                 {HEMO_SPRINGF_BINDING_FRAMES, &frames_},
-                                 {HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions}});
+                                 texelBinding(HEMO_SPRINGF_BINDING_FRAMES, &frames_, uvec2s),
+                                 texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, vec4s)});
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
                                     {HEMO_SHADE_BINDING_IDS, &a.ids},

@@ -173,6 +173,99 @@ TEST_F(GpuLayerTest, UniformSlotsReadTheBoundBuffer) {
                gpu::GpuError);
 }
 
+// Texel slots: the pair loop of bench/pair_gather_texel.comp reads a list (R32_UINT texels)
+// and four vec4 arrays (R32G32B32A32_SFLOAT texels) through buffer views, in both list
+// layouts; against a CPU double reference on random inputs. Then the checks of makeSet.
+TEST_F(GpuLayerTest, TexelSlotsGatherTheBoundBuffers) {
+  struct Push {
+    std::uint32_t n, entries;
+  };
+  const std::uint32_t n = 300, entries = 9;
+  std::srand(7);
+  auto unit = [] { return float(std::rand() % 2001 - 1000) * 1e-3f; };
+  std::vector<std::uint32_t> list(std::size_t(n) * entries);
+  for (auto& j : list) j = std::uint32_t(std::rand()) % n;
+  std::vector<std::vector<glm::vec4>> values(4, std::vector<glm::vec4>(n));
+  for (auto& v : values)
+    for (auto& x : v) x = glm::vec4(unit(), unit(), unit(), 0.25f + 0.5f * std::abs(unit()));
+  gpu::Buffer listBuffer(ctx(), list.size() * 4, gpu::MemoryUse::Device, "list");
+  listBuffer.upload(list);
+  std::vector<gpu::Buffer> data;
+  for (int b = 0; b < 4; ++b) {
+    data.emplace_back(ctx(), std::uint64_t(n) * 16, gpu::MemoryUse::Device, "data");
+    data.back().upload(values[b]);
+  }
+  gpu::Buffer out(ctx(), std::uint64_t(n) * 16, gpu::MemoryUse::Device, "out");
+  const std::uint32_t texels = 0x1fu;  // LIST and A..D
+  for (std::uint32_t contiguous = 0; contiguous <= 1; ++contiguous) {
+    SCOPED_TRACE("contiguous " + std::to_string(contiguous));
+    const auto& p = ctx().pipelines().get(
+        {"bench/pair_gather_texel", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {4u, contiguous}, 0u, texels});
+    const auto set = p.makeSet({gpu::texelBinding(HEMO_BENCH_BINDING_LIST, &listBuffer, VK_FORMAT_R32_UINT),
+                                gpu::texelBinding(HEMO_BENCH_BINDING_A, &data[0], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                gpu::texelBinding(HEMO_BENCH_BINDING_B, &data[1], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                gpu::texelBinding(HEMO_BENCH_BINDING_C, &data[2], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                gpu::texelBinding(HEMO_BENCH_BINDING_D, &data[3], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                {HEMO_BENCH_BINDING_OUT, &out}});
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    rec.dispatch(p, set, Push{n, entries}, p.groupsFor(n));
+    rec.end();
+    rec.submitAndWait();
+    const auto got = out.readback<glm::vec4>(n);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      glm::dvec4 sum(0.0);
+      const glm::dvec3 self(double(float(i) * 1e-3f), 0.5, 0.25);
+      for (std::uint32_t k = 0; k < entries; ++k) {
+        const std::uint32_t j = list[contiguous ? std::size_t(i) * entries + k : std::size_t(k) * n + i];
+        glm::dvec4 x(0.0);
+        for (int b = 0; b < 4; ++b) x += glm::dvec4(values[b][j]);
+        const glm::dvec3 r = self - glm::dvec3(x);
+        const double r2 = glm::dot(r, r) + 1e-6;
+        sum += glm::dvec4(r * (x.w / std::sqrt(r2)), r2);
+      }
+      for (int c = 0; c < 4; ++c) {
+        ASSERT_NEAR(got[i][c], sum[c], 1e-4 * (1.0 + std::abs(sum[c]))) << "invocation " << i;
+      }
+    }
+  }
+  const auto& p = ctx().pipelines().get(
+      {"bench/pair_gather_texel", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {4u, 0u}, 0u, texels});
+  auto expectRefused = [&](std::initializer_list<gpu::Binding> bindings, const std::string& phrase) {
+    try {
+      p.makeSet(bindings);
+      ADD_FAILURE() << "accepted; expected an error naming '" << phrase << "'";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(phrase), std::string::npos) << e.what();
+    }
+  };
+  const auto vec4s = VK_FORMAT_R32G32B32A32_SFLOAT;
+  // A texel slot without a format.
+  expectRefused({{HEMO_BENCH_BINDING_LIST, &listBuffer}, gpu::texelBinding(HEMO_BENCH_BINDING_A, &data[0], vec4s),
+                 gpu::texelBinding(HEMO_BENCH_BINDING_B, &data[1], vec4s), gpu::texelBinding(HEMO_BENCH_BINDING_C, &data[2], vec4s),
+                 gpu::texelBinding(HEMO_BENCH_BINDING_D, &data[3], vec4s), {HEMO_BENCH_BINDING_OUT, &out}},
+                "slot 0 is a texel slot");
+  // A storage slot given a format.
+  expectRefused({gpu::texelBinding(HEMO_BENCH_BINDING_LIST, &listBuffer, VK_FORMAT_R32_UINT),
+                 gpu::texelBinding(HEMO_BENCH_BINDING_A, &data[0], vec4s), gpu::texelBinding(HEMO_BENCH_BINDING_B, &data[1], vec4s),
+                 gpu::texelBinding(HEMO_BENCH_BINDING_C, &data[2], vec4s), gpu::texelBinding(HEMO_BENCH_BINDING_D, &data[3], vec4s),
+                 gpu::texelBinding(HEMO_BENCH_BINDING_OUT, &out, vec4s)},
+                "slot 5 is not a texel slot");
+  // A texel offset that breaks the device's alignment.
+  const VkDeviceSize align = ctx().limits().minTexelBufferOffsetAlignment;
+  if (align > 1) {
+    expectRefused({gpu::texelBinding(HEMO_BENCH_BINDING_LIST, &listBuffer, VK_FORMAT_R32_UINT),
+                   {HEMO_BENCH_BINDING_A, &data[0], align / 2, 256, vec4s}, gpu::texelBinding(HEMO_BENCH_BINDING_B, &data[1], vec4s),
+                   gpu::texelBinding(HEMO_BENCH_BINDING_C, &data[2], vec4s), gpu::texelBinding(HEMO_BENCH_BINDING_D, &data[3], vec4s),
+                   {HEMO_BENCH_BINDING_OUT, &out}},
+                  "minTexelBufferOffsetAlignment");
+  }
+  // A slot declared both uniform and texel.
+  EXPECT_THROW(ctx().pipelines().get({"bench/pair_gather_texel", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {4u, 1u},
+                                      1u << HEMO_BENCH_BINDING_A, texels}),
+               gpu::GpuError);
+}
+
 TEST_F(GpuLayerTest, PushConstantSizeMismatchIsRejected) {
   const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
   gpu::Buffer a(ctx(), 64, gpu::MemoryUse::Device, "a");

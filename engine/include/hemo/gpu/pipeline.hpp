@@ -21,14 +21,21 @@ struct Groups {
   std::uint64_t total() const { return std::uint64_t(x) * y; }
 };
 
-// A buffer (or a byte range of one) bound to one slot (storage or uniform, as the pipeline
-// declares it).
+// A buffer (or a byte range of one) bound to one slot (storage, uniform or uniform texel
+// buffer, as the pipeline declares it). A texel slot reads the range as an array of
+// `format` texels (a buffer view); the other slots take no format.
 struct Binding {
   std::uint32_t slot = 0;
   const Buffer* buffer = nullptr;
   VkDeviceSize offset = 0;
   VkDeviceSize range = VK_WHOLE_SIZE;
+  VkFormat format = VK_FORMAT_UNDEFINED;
 };
+
+// A whole buffer bound to a texel slot as `format` texels.
+inline Binding texelBinding(std::uint32_t slot, const Buffer* buffer, VkFormat format) {
+  return {slot, buffer, 0, VK_WHOLE_SIZE, format};
+}
 
 class DescriptorSet {
  public:
@@ -46,6 +53,7 @@ class DescriptorSet {
   VkDevice device_ = VK_NULL_HANDLE;
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
+  std::vector<VkBufferView> views_;  // of the texel slots
 };
 
 struct PipelineDesc {
@@ -58,6 +66,11 @@ struct PipelineDesc {
   // same address across a dispatch, such as parameters: devices read those once per
   // subgroup, see docs/benchmarks.md "uniform parameters"); otherwise a storage buffer.
   std::uint32_t uniformSlots = 0;
+  // Bit i set: slot i is a uniform texel buffer (GLSL samplerBuffer / usamplerBuffer, read
+  // with texelFetch): read-only per-particle data gathered at a different index by every
+  // invocation. llvmpipe fetches texels as one unrolled vector gather, where a storage-buffer
+  // load walks the SIMD lanes one by one (docs/benchmarks.md, "texel gathers").
+  std::uint32_t texelSlots = 0;
 };
 
 class ComputePipeline {
@@ -84,7 +97,9 @@ class ComputePipeline {
 
   // Binds every slot exactly once; throws std::invalid_argument naming the slot otherwise,
   // and when a uniform slot's range exceeds maxUniformBufferRange or its offset is not a
-  // multiple of minUniformBufferOffsetAlignment (storage slots likewise with theirs).
+  // multiple of minUniformBufferOffsetAlignment (storage slots likewise with theirs), and
+  // when a texel slot has no format, a format the device cannot read as a uniform texel
+  // buffer, a misaligned offset or more texels than maxTexelBufferElements.
   DescriptorSet makeSet(std::initializer_list<Binding> bindings) const;
 
  private:
@@ -96,6 +111,7 @@ class ComputePipeline {
   VkPipeline pipeline_ = VK_NULL_HANDLE;
   std::uint32_t bindingCount_ = 0;
   std::uint32_t uniformSlots_ = 0;
+  std::uint32_t texelSlots_ = 0;
   std::uint32_t pushBytes_ = 0;
   std::uint32_t workgroupSize_ = 0;
   std::string name_;
