@@ -14,7 +14,9 @@
 #include "interface/scan.h"
 #include "common/index.glsl"
 
-layout(std430, binding = HEMO_REDUCE_BINDING_VALUES) readonly buffer Values { float values[]; };
+// The input is a texel slot (R32_SFLOAT): llvmpipe loads texels as one vector gather, storage
+// values lane by lane (interface/sph.h, "texel slots").
+layout(binding = HEMO_REDUCE_BINDING_VALUES) uniform samplerBuffer values;
 // Written by every workgroup, read by the last: coherent, and published before the count.
 layout(std430, binding = HEMO_REDUCE_BINDING_PARTIALS) coherent buffer Partials { vec2 partials[]; };
 layout(std430, binding = HEMO_REDUCE_BINDING_COUNTER) coherent buffer Counter { uint finished; };
@@ -58,7 +60,7 @@ void main() {
   for (uint k = 0u; k < HEMO_REDUCE_ITEMS; ++k) {
     const uint idx = base + k;
     if (idx < pc.n) {
-      const float v = values[idx];
+      const float v = texelFetch(values, int(idx)).x;
       nan = nan || isnan(v);
       mm = vec2(min(mm.x, v), max(mm.y, v));
     }

@@ -194,6 +194,16 @@ VkDeviceSize texelBytes(VkFormat format) {
   }
 }
 
+// Bytes a texel slot's view covers. A whole-buffer binding of an empty buffer (a stage built
+// for zero items, which never reads it) views the first texel of its allocation, as a view
+// cannot be empty.
+VkDeviceSize texelRange(const Binding& b, VkDeviceSize texelBytes) {
+  if (b.range != VK_WHOLE_SIZE) return b.range;
+  const VkDeviceSize size = b.buffer->size() - std::min(b.offset, b.buffer->size());
+  if (size == 0 && b.offset + texelBytes <= b.buffer->allocatedSize()) return texelBytes;
+  return size;
+}
+
 }  // namespace
 
 DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) const {
@@ -230,10 +240,14 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
                                     " is not a multiple of the device's minTexelBufferOffsetAlignment " +
                                     std::to_string(limits.minTexelBufferOffsetAlignment));
       }
-      const VkDeviceSize range = b.range == VK_WHOLE_SIZE ? b.buffer->size() - std::min(b.offset, b.buffer->size()) : b.range;
-      if (range < bytes || range / bytes > limits.maxTexelBufferElements) {
+      const VkDeviceSize range = texelRange(b, bytes);
+      if (range < bytes) {
+        throw std::invalid_argument(where + ": buffer '" + b.buffer->name() + "' binds " + std::to_string(range) +
+                                    " bytes, less than one " + std::to_string(bytes) + "-byte texel");
+      }
+      if (range / bytes > limits.maxTexelBufferElements) {
         throw std::invalid_argument(where + ": buffer '" + b.buffer->name() + "' binds " + std::to_string(range / bytes) +
-                                    " texels; the device's maxTexelBufferElements is " +
+                                    " texels, more than the device's maxTexelBufferElements " +
                                     std::to_string(limits.maxTexelBufferElements));
       }
       bySlot[b.slot] = &b;
@@ -299,7 +313,7 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
     if (writes[i].descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
       // Whole texels only: a range that is not a multiple of the texel size is cut down.
       const VkDeviceSize bytes = texelBytes(b.format);
-      const VkDeviceSize range = b.range == VK_WHOLE_SIZE ? b.buffer->size() - b.offset : b.range;
+      const VkDeviceSize range = texelRange(b, bytes);
       VkBufferViewCreateInfo viewInfo{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
       viewInfo.buffer = b.buffer->handle();
       viewInfo.format = b.format;
