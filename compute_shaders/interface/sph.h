@@ -188,7 +188,12 @@
 #define HEMO_INTEGRATE_BINDING_INFLOW 13  // InflowParams (common/inflow.glsl): the driven inflow zone
 #define HEMO_INTEGRATE_BINDING_STATE 14  // vec4 (rho, p, rate, 0): the inflow zone's mass supply reads rho; continuity density rho or its rate
 #define HEMO_INTEGRATE_BINDING_NORMALS 15  // w: where a fluid particle carries its density (continuity)
-#define HEMO_INTEGRATE_BINDING_COUNT 16
+// POSITIONS and VELOCITIES again as texel slots: each invocation reads its own record through
+// these and then writes it through the storage bindings (a texel read costs llvmpipe a
+// fraction of a storage read; no record is read after it is written in the pass).
+#define HEMO_INTEGRATE_BINDING_POSITIONS_IN 16
+#define HEMO_INTEGRATE_BINDING_VELOCITIES_IN 17
+#define HEMO_INTEGRATE_BINDING_COUNT 18
 
 // sph/reach.comp: each slot's reach for the rebuild test, |d - (c, 0, 0)| (+ the midpoint
 // look-ahead), d its displacement since the list build and c the middle of the x

@@ -24,6 +24,10 @@
 
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POSITIONS) buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_VELOCITIES) buffer Velocities { vec4 velocities[]; };
+// The same records as texels, for the reads (each invocation reads its own record before it
+// writes it; interface/sph.h).
+layout(binding = HEMO_INTEGRATE_BINDING_POSITIONS_IN) uniform samplerBuffer positionsIn;
+layout(binding = HEMO_INTEGRATE_BINDING_VELOCITIES_IN) uniform samplerBuffer velocitiesIn;
 // Read-only per-particle inputs are uniform texel buffers (interface/sph.h, "texel slots").
 layout(binding = HEMO_INTEGRATE_BINDING_ACCEL) uniform samplerBuffer accelT;
 #define accel(k) texelFetch(accelT, int(k))
@@ -129,9 +133,9 @@ void main() {
     if (i == 0u) {
       stepDt = dt;  // read by the second stage (a later dispatch)
     }
-    if (running && i < pc.n && hemo_moves(velocities[i].w)) {
-      const vec4 v = velocities[i];
-      const vec4 x = positions[i];
+    if (running && i < pc.n && hemo_moves(texelFetch(velocitiesIn, int(i)).w)) {
+      const vec4 v = texelFetch(velocitiesIn, int(i));
+      const vec4 x = texelFetch(positionsIn, int(i));
       savedPos[i] = x;
       savedVel[i] = v;
       if (kContinuity == 2u && uint(v.w) == HEMO_KIND_FLUID) {
@@ -168,8 +172,8 @@ void main() {
   if (i >= pc.n) {
     return;
   }
-  vec4 v = velocities[i];
-  vec4 x = positions[i];
+  vec4 v = texelFetch(velocitiesIn, int(i));
+  vec4 x = texelFetch(positionsIn, int(i));
   if (!running || !hemo_moves(v.w)) {
     writeDriftX(i, x.xyz);
     return;

@@ -240,7 +240,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                            1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW |
                                1u << HEMO_INTEGRATE_BINDING_DT,
                            1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD |
-                               1u << HEMO_INTEGRATE_BINDING_STATE});
+                               1u << HEMO_INTEGRATE_BINDING_STATE | 1u << HEMO_INTEGRATE_BINDING_POSITIONS_IN |
+                               1u << HEMO_INTEGRATE_BINDING_VELOCITIES_IN});
   reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {},
                            1u << HEMO_REACH_BINDING_PARAMS | 1u << HEMO_REACH_BINDING_DRIFT_RANGE,
                            1u << HEMO_REACH_BINDING_POSITIONS | 1u << HEMO_REACH_BINDING_VELOCITIES |
@@ -316,6 +317,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_DRIFT_X, &driftX_},
                                        {HEMO_INTEGRATE_BINDING_INFLOW, &inflow_},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_STATE, &state_, kVec4Texels),
+                                       gpu::texelBinding(HEMO_INTEGRATE_BINDING_POSITIONS_IN, &a.positions, kVec4Texels),
+                                       gpu::texelBinding(HEMO_INTEGRATE_BINDING_VELOCITIES_IN, &a.velocities, kVec4Texels),
                                        {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals}});
   reachSet_ = reachPass_->makeSet({gpu::texelBinding(HEMO_REACH_BINDING_POSITIONS, &a.positions, kVec4Texels),
                                    gpu::texelBinding(HEMO_REACH_BINDING_VELOCITIES, &a.velocities, kVec4Texels),
