@@ -16,8 +16,9 @@
 #include "common/index.glsl"
 #include "common/mc.glsl"
 
-layout(std430, binding = HEMO_MC_BOUNDS_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_MC_BOUNDS_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+// Read-only inputs are uniform texel buffers (see interface/sph.h, "texel slots").
+layout(binding = HEMO_MC_BOUNDS_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_MC_BOUNDS_BINDING_VELOCITIES) uniform samplerBuffer velocities;
 layout(std430, binding = HEMO_MC_BOUNDS_BINDING_GRID) writeonly buffer Grid { McGrid grid; };
 layout(std430, binding = HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS) writeonly buffer SplatArgs { uint splatArgs[4]; };
 layout(std430, binding = HEMO_MC_BOUNDS_BINDING_SPLAT_GRID) writeonly buffer SplatGrid { McGrid splatGrid; };
@@ -56,10 +57,10 @@ void main() {
   const uint lane = gl_LocalInvocationID.x;
   vec3 lo = vec3(3.0e38), hi = vec3(-3.0e38);
   for (uint i = lane; i < pc.n; i += gl_WorkGroupSize.x) {
-    if (uint(velocities[i].w) != HEMO_KIND_FLUID) {
+    if (uint(texelFetch(velocities, int(i)).w) != HEMO_KIND_FLUID) {
       continue;
     }
-    const vec3 p = positions[i].xyz;
+    const vec3 p = texelFetch(positions, int(i)).xyz;
     if (any(isnan(p)) || any(isinf(p))) {
       continue;
     }

@@ -10,11 +10,12 @@
 #include "common/mc.glsl"
 
 layout(std140, binding = HEMO_MC_CLASSIFY_BINDING_GRID) uniform Grid { McGrid grid; };
-layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_FIELD) readonly buffer Field { ivec4 field4[]; };
+// Read-only inputs are uniform texel buffers (see interface/sph.h, "texel slots").
+layout(binding = HEMO_MC_CLASSIFY_BINDING_FIELD) uniform isamplerBuffer field4;  // R32G32B32A32_SINT
 // x of each entry: the case's triangle count. (A table of specialization constants in a
 // local array was 2.7x slower on llvmpipe: dynamically indexed local arrays go through
 // memory, one copy per invocation.)
-layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_TABLE) readonly buffer Table { uvec4 table[256]; };
+layout(binding = HEMO_MC_CLASSIFY_BINDING_TABLE) uniform usamplerBuffer table;  // R32G32B32A32_UINT
 layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_RUN_TRIANGLES) writeonly buffer RunTriangles { uint runTriangles[]; };
 layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE) writeonly buffer RunActive { uint runActive[]; };
 layout(std430, binding = HEMO_MC_CLASSIFY_BINDING_RUN_CASES) writeonly buffer RunCases { uint runCases[]; };
@@ -38,9 +39,9 @@ void main() {
   uint rows[4];
   for (uint row = 0u; row < 4u; ++row) {
     const uint base = hemo_mc_point(uvec3(x0, vy + (row & 1u), vz + (row >> 1u)), g) / 4u;
-    const ivec4 v = field4[base];
+    const ivec4 v = texelFetch(field4, int(base));
     // The fifth corner value lies in the row only when the run is full.
-    const int last = count == 4u ? field4[base + 1u].x : 0;
+    const int last = count == 4u ? texelFetch(field4, int(base + 1u)).x : 0;
     const vec4 f = vec4(v) * (1.0 / HEMO_MC_FIXED_SCALE);
     const uint bits = (f.x > iso ? 1u : 0u) | (f.y > iso ? 2u : 0u) | (f.z > iso ? 4u : 0u) | (f.w > iso ? 8u : 0u) |
                       (float(last) * (1.0 / HEMO_MC_FIXED_SCALE) > iso ? 16u : 0u);
@@ -53,7 +54,7 @@ void main() {
     const uint cube = ((rows[0] >> k) & 3u) | (((rows[1] >> k) & 3u) << 2u) | (((rows[2] >> k) & 3u) << 4u) |
                       (((rows[3] >> k) & 3u) << 6u);
     cases |= cube << (8u * k);
-    triangles += table[cube].x;
+    triangles += texelFetch(table, int(cube)).x;
   }
   runTriangles[r] = triangles;
   runActive[r] = triangles > 0u ? 1u : 0u;

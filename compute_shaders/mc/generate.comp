@@ -15,11 +15,12 @@
 #include "common/mc.glsl"
 
 layout(std140, binding = HEMO_MC_GENERATE_BINDING_GRID) uniform Grid { McGrid grid; };
-layout(std430, binding = HEMO_MC_GENERATE_BINDING_FIELD) readonly buffer Field { int field[]; };
-layout(std430, binding = HEMO_MC_GENERATE_BINDING_TABLE) readonly buffer Table { uvec4 table[256]; };
-layout(std430, binding = HEMO_MC_GENERATE_BINDING_RUN_TRIANGLES) readonly buffer RunTriangles { uint runTriangles[]; };
-layout(std430, binding = HEMO_MC_GENERATE_BINDING_RUN_CASES) readonly buffer RunCases { uint runCases[]; };
-layout(std430, binding = HEMO_MC_GENERATE_BINDING_ACTIVE_RUNS) readonly buffer ActiveRuns { uint activeRuns[]; };
+// Read-only inputs are uniform texel buffers (see interface/sph.h, "texel slots").
+layout(binding = HEMO_MC_GENERATE_BINDING_FIELD) uniform isamplerBuffer field;  // R32_SINT
+layout(binding = HEMO_MC_GENERATE_BINDING_TABLE) uniform usamplerBuffer table;  // R32G32B32A32_UINT
+layout(binding = HEMO_MC_GENERATE_BINDING_RUN_TRIANGLES) uniform usamplerBuffer runTriangles;
+layout(binding = HEMO_MC_GENERATE_BINDING_RUN_CASES) uniform usamplerBuffer runCases;
+layout(binding = HEMO_MC_GENERATE_BINDING_ACTIVE_RUNS) uniform usamplerBuffer activeRuns;
 layout(std430, binding = HEMO_MC_GENERATE_BINDING_ARGS) readonly buffer Args { uint args[16]; };
 layout(std430, binding = HEMO_MC_GENERATE_BINDING_VERTICES) writeonly buffer Vertices { vec4 vertices[]; };
 layout(push_constant) uniform Push { uint maxTriangles; } pc;
@@ -27,7 +28,7 @@ layout(push_constant) uniform Push { uint maxTriangles; } pc;
 McGrid g;
 
 float value(uvec3 p) {
-  return float(field[hemo_mc_point(p, g)]) * (1.0 / HEMO_MC_FIXED_SCALE);
+  return float(texelFetch(field, int(hemo_mc_point(p, g))).x) * (1.0 / HEMO_MC_FIXED_SCALE);
 }
 
 // Central difference at point p (one-sided on the grid's faces), in field units per m.
@@ -84,8 +85,8 @@ void main() {
   if (a >= args[HEMO_MC_ARGS_ACTIVE_RUNS]) {
     return;
   }
-  const uint r = activeRuns[a];
-  const uint cases = runCases[r];
+  const uint r = texelFetch(activeRuns, int(a)).x;
+  const uint cases = texelFetch(runCases, int(r)).x;
   const uint cube = (cases >> (8u * k)) & 255u;
   if (cube == 0u || cube == 255u) {
     return;
@@ -96,11 +97,11 @@ void main() {
   const uvec3 voxel = uvec3(rx * HEMO_MC_RUN + k, rest % g.runs.y, rest / g.runs.y);
   const float iso = g.level.x;
   // This voxel's first triangle: the run's offset plus the voxels before it in the run.
-  uint tri = runTriangles[r];
+  uint tri = texelFetch(runTriangles, int(r)).x;
   for (uint j = 0u; j < k; ++j) {
-    tri += table[(cases >> (8u * j)) & 255u].x;
+    tri += texelFetch(table, int((cases >> (8u * j)) & 255u)).x;
   }
-  const uvec4 entry = table[cube];
+  const uvec4 entry = texelFetch(table, int(cube));
   for (uint t = 0u; t < entry.x; ++t, ++tri) {
     if (tri >= pc.maxTriangles) {
       return;

@@ -16,9 +16,10 @@
 #include "common/kernel.glsl"
 #include "common/mc.glsl"
 
-layout(std430, binding = HEMO_MC_SPLAT_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_MC_SPLAT_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_MC_SPLAT_BINDING_STATE) readonly buffer State { vec4 state[]; };
+// Read-only inputs are uniform texel buffers (see interface/sph.h, "texel slots").
+layout(binding = HEMO_MC_SPLAT_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_MC_SPLAT_BINDING_VELOCITIES) uniform samplerBuffer velocities;
+layout(binding = HEMO_MC_SPLAT_BINDING_STATE) uniform samplerBuffer state;
 layout(std140, binding = HEMO_MC_SPLAT_BINDING_GRID) uniform Grid { McGrid grid; };
 layout(std430, binding = HEMO_MC_SPLAT_BINDING_FIELD) buffer Field { int field[]; };
 layout(push_constant) uniform Push {
@@ -32,10 +33,10 @@ void main() {
   const uint planes = uint(grid.level.y);
   const uint invocation = hemo_global_index();
   const uint i = invocation / max(planes, 1u);
-  if (i >= pc.n || uint(velocities[i].w) != HEMO_KIND_FLUID) {
+  if (i >= pc.n || uint(texelFetch(velocities, int(i)).w) != HEMO_KIND_FLUID) {
     return;
   }
-  const vec4 p = positions[i];
+  const vec4 p = texelFetch(positions, int(i));
   if (any(isnan(p.xyz)) || any(isinf(p.xyz))) {
     return;
   }
@@ -43,7 +44,7 @@ void main() {
   if (g.points.x == 0u) {
     return;
   }
-  const float rho = state[i].x;
+  const float rho = texelFetch(state, int(i)).x;
   const float volume = p.w / (rho > 0.0 ? rho : pc.rho0);
   const float support = 2.0 * pc.h;
   const float voxel = g.origin.w;

@@ -10,7 +10,9 @@
 
 layout(std140, binding = HEMO_MC_UPSAMPLE_BINDING_GRID) uniform Grid { McGrid grid; };
 layout(std140, binding = HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID) uniform SplatGrid { McGrid splatGrid; };
-layout(std430, binding = HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD) readonly buffer SplatField { int coarse[]; };
+// Read-only inputs are uniform texel buffers (see interface/sph.h, "texel slots").
+layout(binding = HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD) uniform isamplerBuffer coarseT;  // R32_SINT
+#define coarse(k) texelFetch(coarseT, int(k)).x
 layout(std430, binding = HEMO_MC_UPSAMPLE_BINDING_FIELD) writeonly buffer Field { int field[]; };
 
 void main() {
@@ -30,10 +32,10 @@ void main() {
   const uint row10 = row00 + s.points.w;                  // y + 1
   const uint row01 = row00 + s.points.w * s.points.y;     // z + 1
   const uint row11 = row01 + s.points.w;                  // y + 1, z + 1
-  const float x00 = mix(float(coarse[row00]), float(coarse[row00 + 1u]), t.x);
-  const float x10 = mix(float(coarse[row10]), float(coarse[row10 + 1u]), t.x);
-  const float x01 = mix(float(coarse[row01]), float(coarse[row01 + 1u]), t.x);
-  const float x11 = mix(float(coarse[row11]), float(coarse[row11 + 1u]), t.x);
+  const float x00 = mix(float(coarse(row00)), float(coarse(row00 + 1u)), t.x);
+  const float x10 = mix(float(coarse(row10)), float(coarse(row10 + 1u)), t.x);
+  const float x01 = mix(float(coarse(row01)), float(coarse(row01 + 1u)), t.x);
+  const float x11 = mix(float(coarse(row11)), float(coarse(row11 + 1u)), t.x);
   const float value = mix(mix(x00, x10, t.y), mix(x01, x11, t.y), t.z);
   field[hemo_mc_point(p, g)] = int(round(value));
 }

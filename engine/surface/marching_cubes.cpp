@@ -96,14 +96,18 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
   auto& cache = context.pipelines();
   prepare_ = &cache.get({"mc/prepare", HEMO_MC_PREPARE_BINDING_COUNT, sizeof(PreparePush), 64, {}});
   classify_ = &cache.get({"mc/classify", HEMO_MC_CLASSIFY_BINDING_COUNT, 0, kWorkgroup, {},
-                          1u << HEMO_MC_CLASSIFY_BINDING_GRID});
+                          1u << HEMO_MC_CLASSIFY_BINDING_GRID,
+                          1u << HEMO_MC_CLASSIFY_BINDING_FIELD | 1u << HEMO_MC_CLASSIFY_BINDING_TABLE});
   compact_ = &cache.get({"mc/compact", HEMO_MC_COMPACT_BINDING_COUNT, sizeof(CompactPush), kWorkgroup, {}});
   generate_ = &cache.get({"mc/generate", HEMO_MC_GENERATE_BINDING_COUNT, sizeof(GeneratePush), kWorkgroup, {},
-                          1u << HEMO_MC_GENERATE_BINDING_GRID});
+                          1u << HEMO_MC_GENERATE_BINDING_GRID,
+                          1u << HEMO_MC_GENERATE_BINDING_FIELD | 1u << HEMO_MC_GENERATE_BINDING_TABLE |
+                              1u << HEMO_MC_GENERATE_BINDING_RUN_TRIANGLES | 1u << HEMO_MC_GENERATE_BINDING_RUN_CASES |
+                              1u << HEMO_MC_GENERATE_BINDING_ACTIVE_RUNS});
   prepareSet_ = prepare_->makeSet({{HEMO_MC_PREPARE_BINDING_GRID, &grid_}, {HEMO_MC_PREPARE_BINDING_ARGS, &args_}});
   classifySet_ = classify_->makeSet({{HEMO_MC_CLASSIFY_BINDING_GRID, &grid_},
-                                     {HEMO_MC_CLASSIFY_BINDING_FIELD, &field_},
-                                     {HEMO_MC_CLASSIFY_BINDING_TABLE, &table_},
+                                     gpu::texelBinding(HEMO_MC_CLASSIFY_BINDING_FIELD, &field_, VK_FORMAT_R32G32B32A32_SINT),
+                                     gpu::texelBinding(HEMO_MC_CLASSIFY_BINDING_TABLE, &table_, VK_FORMAT_R32G32B32A32_UINT),
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_TRIANGLES, &runTriangles_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE, &runActive_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_CASES, &runCases_},
@@ -113,11 +117,11 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
                                    {HEMO_MC_COMPACT_BINDING_ACTIVE_RUNS, &activeRuns_},
                                    {HEMO_MC_COMPACT_BINDING_ARGS, &args_}});
   generateSet_ = generate_->makeSet({{HEMO_MC_GENERATE_BINDING_GRID, &grid_},
-                                     {HEMO_MC_GENERATE_BINDING_FIELD, &field_},
-                                     {HEMO_MC_GENERATE_BINDING_TABLE, &table_},
-                                     {HEMO_MC_GENERATE_BINDING_RUN_TRIANGLES, &runTriangles_},
-                                     {HEMO_MC_GENERATE_BINDING_RUN_CASES, &runCases_},
-                                     {HEMO_MC_GENERATE_BINDING_ACTIVE_RUNS, &activeRuns_},
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_FIELD, &field_, VK_FORMAT_R32_SINT),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_TABLE, &table_, VK_FORMAT_R32G32B32A32_UINT),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_RUN_TRIANGLES, &runTriangles_, VK_FORMAT_R32_UINT),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_RUN_CASES, &runCases_, VK_FORMAT_R32_UINT),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_ACTIVE_RUNS, &activeRuns_, VK_FORMAT_R32_UINT),
                                      {HEMO_MC_GENERATE_BINDING_ARGS, &args_},
                                      {HEMO_MC_GENERATE_BINDING_VERTICES, &vertices_}});
 }
@@ -237,26 +241,31 @@ ParticleField::ParticleField(gpu::Context& context, MarchingCubes& target, const
     if (!(settings.clipLo[a] < settings.clipHi[a])) throw std::invalid_argument("surface: an empty clip box");
   }
   auto& cache = context.pipelines();
-  bounds_ = &cache.get({"mc/bounds", HEMO_MC_BOUNDS_BINDING_COUNT, sizeof(BoundsPush), kBoundsWorkgroup, {}});
+  bounds_ = &cache.get({"mc/bounds", HEMO_MC_BOUNDS_BINDING_COUNT, sizeof(BoundsPush), kBoundsWorkgroup, {}, 0u,
+                        1u << HEMO_MC_BOUNDS_BINDING_POSITIONS | 1u << HEMO_MC_BOUNDS_BINDING_VELOCITIES});
   splat_ = &cache.get({"mc/splat", HEMO_MC_SPLAT_BINDING_COUNT, sizeof(SplatPush), kWorkgroup, {},
-                        1u << HEMO_MC_SPLAT_BINDING_GRID});
+                        1u << HEMO_MC_SPLAT_BINDING_GRID,
+                        1u << HEMO_MC_SPLAT_BINDING_POSITIONS | 1u << HEMO_MC_SPLAT_BINDING_VELOCITIES |
+                            1u << HEMO_MC_SPLAT_BINDING_STATE});
   upsample_ = &cache.get({"mc/upsample", HEMO_MC_UPSAMPLE_BINDING_COUNT, 0, kBoundsWorkgroup, {},
-                           1u << HEMO_MC_UPSAMPLE_BINDING_GRID | 1u << HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID});
+                           1u << HEMO_MC_UPSAMPLE_BINDING_GRID | 1u << HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID,
+                           1u << HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD});
   const bool coarse = settings.splatVoxelOverH > 0.0f;
-  boundsSet_ = bounds_->makeSet({{HEMO_MC_BOUNDS_BINDING_POSITIONS, &particles.live().positions},
-                                 {HEMO_MC_BOUNDS_BINDING_VELOCITIES, &particles.live().velocities},
+  constexpr VkFormat vec4s = VK_FORMAT_R32G32B32A32_SFLOAT;
+  boundsSet_ = bounds_->makeSet({gpu::texelBinding(HEMO_MC_BOUNDS_BINDING_POSITIONS, &particles.live().positions, vec4s),
+                                 gpu::texelBinding(HEMO_MC_BOUNDS_BINDING_VELOCITIES, &particles.live().velocities, vec4s),
                                  {HEMO_MC_BOUNDS_BINDING_GRID, &target.grid()},
                                  {HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS, &splatArgs_},
                                  {HEMO_MC_BOUNDS_BINDING_SPLAT_GRID, &splatGrid_},
                                  {HEMO_MC_BOUNDS_BINDING_UPSAMPLE_ARGS, &upsampleArgs_}});
-  splatSet_ = splat_->makeSet({{HEMO_MC_SPLAT_BINDING_POSITIONS, &particles.live().positions},
-                               {HEMO_MC_SPLAT_BINDING_VELOCITIES, &particles.live().velocities},
-                               {HEMO_MC_SPLAT_BINDING_STATE, &state},
+  splatSet_ = splat_->makeSet({gpu::texelBinding(HEMO_MC_SPLAT_BINDING_POSITIONS, &particles.live().positions, vec4s),
+                               gpu::texelBinding(HEMO_MC_SPLAT_BINDING_VELOCITIES, &particles.live().velocities, vec4s),
+                               gpu::texelBinding(HEMO_MC_SPLAT_BINDING_STATE, &state, vec4s),
                                {HEMO_MC_SPLAT_BINDING_GRID, coarse ? &splatGrid_ : &target.grid()},
                                {HEMO_MC_SPLAT_BINDING_FIELD, coarse ? &splatField_ : &target.field()}});
   upsampleSet_ = upsample_->makeSet({{HEMO_MC_UPSAMPLE_BINDING_GRID, &target.grid()},
                                      {HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID, &splatGrid_},
-                                     {HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD, &splatField_},
+                                     gpu::texelBinding(HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD, &splatField_, VK_FORMAT_R32_SINT),
                                      {HEMO_MC_UPSAMPLE_BINDING_FIELD, &target.field()}});
 }
 
