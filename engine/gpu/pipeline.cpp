@@ -241,6 +241,11 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
                                     std::to_string(limits.minTexelBufferOffsetAlignment));
       }
       const VkDeviceSize range = texelRange(b, bytes);
+      if (b.offset + range > b.buffer->allocatedSize()) {
+        throw std::invalid_argument(where + ": bytes " + std::to_string(b.offset) + " to " + std::to_string(b.offset + range) +
+                                    " lie beyond buffer '" + b.buffer->name() + "' (" +
+                                    std::to_string(b.buffer->allocatedSize()) + " bytes)");
+      }
       if (range < bytes) {
         throw std::invalid_argument(where + ": buffer '" + b.buffer->name() + "' binds " + std::to_string(range) +
                                     " bytes, less than one " + std::to_string(bytes) + "-byte texel");

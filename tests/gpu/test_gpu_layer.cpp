@@ -260,6 +260,12 @@ TEST_F(GpuLayerTest, TexelSlotsGatherTheBoundBuffers) {
                    {HEMO_BENCH_BINDING_OUT, &out}},
                   "minTexelBufferOffsetAlignment");
   }
+  // A texel range past the end of its buffer.
+  expectRefused({gpu::texelBinding(HEMO_BENCH_BINDING_LIST, &listBuffer, VK_FORMAT_R32_UINT),
+                 {HEMO_BENCH_BINDING_A, &data[0], 0, std::uint64_t(n) * 16 + 64, vec4s},
+                 gpu::texelBinding(HEMO_BENCH_BINDING_B, &data[1], vec4s), gpu::texelBinding(HEMO_BENCH_BINDING_C, &data[2], vec4s),
+                 gpu::texelBinding(HEMO_BENCH_BINDING_D, &data[3], vec4s), {HEMO_BENCH_BINDING_OUT, &out}},
+                "lie beyond buffer");
   // A slot declared both uniform and texel.
   EXPECT_THROW(ctx().pipelines().get({"bench/pair_gather_texel", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {4u, 1u},
                                       1u << HEMO_BENCH_BINDING_A, texels}),
