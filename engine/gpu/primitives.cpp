@@ -124,7 +124,7 @@ MinMaxReduce::MinMaxReduce(Context& context, const Buffer& values, std::uint64_t
   checkCount(capacity, 0xffffffffull, "MinMaxReduce");
   reduce_ = &context.pipelines().get(
       {"scan/reduce_minmax", HEMO_REDUCE_BINDING_COUNT, sizeof(ReducePush), kWorkgroup, {}, 0u, 1u << HEMO_REDUCE_BINDING_VALUES});
-  set_ = reduce_->makeSet({texelBinding(HEMO_REDUCE_BINDING_VALUES, &values, VK_FORMAT_R32_SFLOAT),
+  set_ = reduce_->makeSet({texelBinding(HEMO_REDUCE_BINDING_VALUES, &values, texel::kFloat),
                            {HEMO_REDUCE_BINDING_PARTIALS, &partials_},
                            {HEMO_REDUCE_BINDING_COUNTER, &counter_},
                            {HEMO_REDUCE_BINDING_RESULT, &result_}});

@@ -106,8 +106,8 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
                               1u << HEMO_MC_GENERATE_BINDING_ACTIVE_RUNS});
   prepareSet_ = prepare_->makeSet({{HEMO_MC_PREPARE_BINDING_GRID, &grid_}, {HEMO_MC_PREPARE_BINDING_ARGS, &args_}});
   classifySet_ = classify_->makeSet({{HEMO_MC_CLASSIFY_BINDING_GRID, &grid_},
-                                     gpu::texelBinding(HEMO_MC_CLASSIFY_BINDING_FIELD, &field_, VK_FORMAT_R32G32B32A32_SINT),
-                                     gpu::texelBinding(HEMO_MC_CLASSIFY_BINDING_TABLE, &table_, VK_FORMAT_R32G32B32A32_UINT),
+                                     gpu::texelBinding(HEMO_MC_CLASSIFY_BINDING_FIELD, &field_, gpu::texel::kIvec4),
+                                     gpu::texelBinding(HEMO_MC_CLASSIFY_BINDING_TABLE, &table_, gpu::texel::kUvec4),
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_TRIANGLES, &runTriangles_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_ACTIVE, &runActive_},
                                      {HEMO_MC_CLASSIFY_BINDING_RUN_CASES, &runCases_},
@@ -117,11 +117,11 @@ MarchingCubes::MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAx
                                    {HEMO_MC_COMPACT_BINDING_ACTIVE_RUNS, &activeRuns_},
                                    {HEMO_MC_COMPACT_BINDING_ARGS, &args_}});
   generateSet_ = generate_->makeSet({{HEMO_MC_GENERATE_BINDING_GRID, &grid_},
-                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_FIELD, &field_, VK_FORMAT_R32_SINT),
-                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_TABLE, &table_, VK_FORMAT_R32G32B32A32_UINT),
-                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_RUN_TRIANGLES, &runTriangles_, VK_FORMAT_R32_UINT),
-                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_RUN_CASES, &runCases_, VK_FORMAT_R32_UINT),
-                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_ACTIVE_RUNS, &activeRuns_, VK_FORMAT_R32_UINT),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_FIELD, &field_, gpu::texel::kInt),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_TABLE, &table_, gpu::texel::kUvec4),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_RUN_TRIANGLES, &runTriangles_, gpu::texel::kUint),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_RUN_CASES, &runCases_, gpu::texel::kUint),
+                                     gpu::texelBinding(HEMO_MC_GENERATE_BINDING_ACTIVE_RUNS, &activeRuns_, gpu::texel::kUint),
                                      {HEMO_MC_GENERATE_BINDING_ARGS, &args_},
                                      {HEMO_MC_GENERATE_BINDING_VERTICES, &vertices_}});
 }
@@ -251,21 +251,20 @@ ParticleField::ParticleField(gpu::Context& context, MarchingCubes& target, const
                            1u << HEMO_MC_UPSAMPLE_BINDING_GRID | 1u << HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID,
                            1u << HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD});
   const bool coarse = settings.splatVoxelOverH > 0.0f;
-  constexpr VkFormat vec4s = VK_FORMAT_R32G32B32A32_SFLOAT;
-  boundsSet_ = bounds_->makeSet({gpu::texelBinding(HEMO_MC_BOUNDS_BINDING_POSITIONS, &particles.live().positions, vec4s),
-                                 gpu::texelBinding(HEMO_MC_BOUNDS_BINDING_VELOCITIES, &particles.live().velocities, vec4s),
+  boundsSet_ = bounds_->makeSet({gpu::texelBinding(HEMO_MC_BOUNDS_BINDING_POSITIONS, &particles.live().positions, gpu::texel::kVec4),
+                                 gpu::texelBinding(HEMO_MC_BOUNDS_BINDING_VELOCITIES, &particles.live().velocities, gpu::texel::kVec4),
                                  {HEMO_MC_BOUNDS_BINDING_GRID, &target.grid()},
                                  {HEMO_MC_BOUNDS_BINDING_SPLAT_ARGS, &splatArgs_},
                                  {HEMO_MC_BOUNDS_BINDING_SPLAT_GRID, &splatGrid_},
                                  {HEMO_MC_BOUNDS_BINDING_UPSAMPLE_ARGS, &upsampleArgs_}});
-  splatSet_ = splat_->makeSet({gpu::texelBinding(HEMO_MC_SPLAT_BINDING_POSITIONS, &particles.live().positions, vec4s),
-                               gpu::texelBinding(HEMO_MC_SPLAT_BINDING_VELOCITIES, &particles.live().velocities, vec4s),
-                               gpu::texelBinding(HEMO_MC_SPLAT_BINDING_STATE, &state, vec4s),
+  splatSet_ = splat_->makeSet({gpu::texelBinding(HEMO_MC_SPLAT_BINDING_POSITIONS, &particles.live().positions, gpu::texel::kVec4),
+                               gpu::texelBinding(HEMO_MC_SPLAT_BINDING_VELOCITIES, &particles.live().velocities, gpu::texel::kVec4),
+                               gpu::texelBinding(HEMO_MC_SPLAT_BINDING_STATE, &state, gpu::texel::kVec4),
                                {HEMO_MC_SPLAT_BINDING_GRID, coarse ? &splatGrid_ : &target.grid()},
                                {HEMO_MC_SPLAT_BINDING_FIELD, coarse ? &splatField_ : &target.field()}});
   upsampleSet_ = upsample_->makeSet({{HEMO_MC_UPSAMPLE_BINDING_GRID, &target.grid()},
                                      {HEMO_MC_UPSAMPLE_BINDING_SPLAT_GRID, &splatGrid_},
-                                     gpu::texelBinding(HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD, &splatField_, VK_FORMAT_R32_SINT),
+                                     gpu::texelBinding(HEMO_MC_UPSAMPLE_BINDING_SPLAT_FIELD, &splatField_, gpu::texel::kInt),
                                      {HEMO_MC_UPSAMPLE_BINDING_FIELD, &target.field()}});
 }
 

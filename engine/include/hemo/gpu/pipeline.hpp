@@ -32,6 +32,17 @@ struct Binding {
   VkFormat format = VK_FORMAT_UNDEFINED;
 };
 
+// Texel formats of the engine's per-item records (one 32-bit value per channel).
+namespace texel {
+inline constexpr VkFormat kVec4 = VK_FORMAT_R32G32B32A32_SFLOAT;
+inline constexpr VkFormat kUvec4 = VK_FORMAT_R32G32B32A32_UINT;
+inline constexpr VkFormat kIvec4 = VK_FORMAT_R32G32B32A32_SINT;
+inline constexpr VkFormat kUvec2 = VK_FORMAT_R32G32_UINT;
+inline constexpr VkFormat kUint = VK_FORMAT_R32_UINT;
+inline constexpr VkFormat kInt = VK_FORMAT_R32_SINT;
+inline constexpr VkFormat kFloat = VK_FORMAT_R32_SFLOAT;
+}  // namespace texel
+
 // A whole buffer bound to a texel slot as `format` texels.
 inline Binding texelBinding(std::uint32_t slot, const Buffer* buffer, VkFormat format) {
   return {slot, buffer, 0, VK_WHOLE_SIZE, format};
