@@ -125,8 +125,8 @@
 // term and the SPS term need (sph/forces.comp). v_j is what the viscous term sees: a fluid
 // particle's own velocity, a boundary particle's no-slip velocity. The sign of the volume
 // tells the kind: positive for fluid, negative for boundary and wall particles, zero for
-// detached wall particles (no SPH mass). On llvmpipe a gather costs by its components (a float
-// a third of a vec4, a vec2 nearly a vec4; docs/benchmarks.md); Monaghan's pressure form, which
+// detached wall particles (no SPH mass). On llvmpipe a storage-buffer gather cost by its components
+// (a float a third of a vec4, a vec2 nearly a vec4; sessions 11-12, docs/benchmarks.md); Monaghan's pressure form, which
 // also needs m_j, took a third gather and 12% more time in the force pass (session 12).
 #define HEMO_BPRESSURE_BINDING_VISCOUS_VEL 6
 #define HEMO_BPRESSURE_BINDING_CLOCK 7

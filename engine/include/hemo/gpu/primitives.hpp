@@ -40,7 +40,8 @@ class PrefixScan {
 };
 
 // (min, max) of values[0, n) as a vec2 in result() (+inf, -inf for n = 0; NaN, NaN if any
-// value is NaN), in one dispatch (scan/reduce_minmax.comp). Recordings of one reducer must
+// value is NaN), in one dispatch (scan/reduce_minmax.comp). The values are read as R32_SFLOAT
+// texels, so `capacity` must stay within the device's maxTexelBufferElements. Recordings of one reducer must
 // not run concurrently (they share the partials and the finished-workgroup counter); the
 // barrier after each recording sees to that within a command buffer.
 class MinMaxReduce {
