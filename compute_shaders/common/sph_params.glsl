@@ -66,6 +66,19 @@ uint hemo_list_slot(uint i, uint k, HemoPairParams pp) {
   return i * pp.listParticleStride + k * pp.listStride;
 }
 
+// A list read four entries per texel. With the contiguous layout and a capacity that is a
+// multiple of 4 (listParticleStride % 4 == 0), entries k .. k+3 of particle i, k a multiple of
+// 4, are one RGBA32UI texel of the list's buffer; a pass with specialization constant
+// kListWidth = 4 binds the list in that format and walks it a texel at a time. On lavapipe a
+// one-component texel fetch is a hardware gather (vpgatherdd), the costliest instruction of
+// the pair loops (perf, docs/benchmarks.md "Session 15"); a four-component fetch is eight plain
+// loads, once per four entries. The interleaved layout (GPUs) reads one entry per texel.
+// Entries past the count in the last texel are not valid: the passes substitute the particle
+// itself (a pair at zero distance, which adds exactly nothing to a force sum) or skip them.
+uint hemo_list_texel(uint i, uint k, HemoPairParams pp) {
+  return hemo_list_slot(i, k, pp) >> 2u;
+}
+
 // Minimum-image separation (unchanged on non-periodic axes).
 vec3 hemo_min_image(vec3 d, HemoPairParams pp) {
   return d - pp.period * round(d * pp.invPeriod);

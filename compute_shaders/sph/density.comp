@@ -49,78 +49,102 @@ layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_POSITION) writeonly buffer Pa
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_COUNT) writeonly buffer PairCount { uint pairCount[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_LIST) writeonly buffer PairList { uint pairList[]; };
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
+// 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
+layout(constant_id = 2) const uint kListWidth = 1u;
 layout(push_constant) uniform Push {
   uint n;
   uint clockIn;  // the record this step reads
 } pc;
+
+// The pair loop's state, shared by its body (pair()) whichever way the list is read.
+uint gI;
+vec4 gPi, gVi;
+HemoPairParams gPp;
+float gKeep2;   // squared interaction range: entries within it are kept as interacting pairs
+uint gM;        // interacting pairs kept so far
+float gRho;     // summation: the sum; continuity: the carried density
+float gContinuity, gDiffused;
+float gInvH, gGradNorm, gRho0, gHydroScale, gEtaSq;
+vec3 gG;
+
+// One list entry j; `valid` is false for the padding of the last texel (j is then this
+// particle), which adds nothing and is not kept.
+void pair(uint j, bool valid) {
+  const vec4 pj = texelFetch(positions, int(j));
+  const vec3 d = hemo_min_image(gPi.xyz - pj.xyz, gPp);  // x_ij
+  const float r2 = dot(d, d);
+  // Interacting pairs: every entry is stored at the next free slot and the slot advances only
+  // for entries in range (no branch around the store; m <= k keeps it inside the list).
+  pairList[hemo_list_slot(gI, gM, gPp)] = j;
+  gM += valid && r2 < gKeep2 ? 1u : 0u;
+  if (kContinuity != 0u) {
+    const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm);  // 0 beyond the support and for j = i
+    const vec4 vj = texelFetch(velocities, int(j));
+    gContinuity += pj.w * dot(gVi.xyz - vj.xyz, gradW);
+    if (valid && uint(vj.w) == HEMO_KIND_FLUID) {
+      const float rhoJ = hemo_carried_density(texelFetch(normals, int(j)).w, gRho0);
+      const float hydro = gRho0 * (pow(max(1.0 - gHydroScale * dot(gG, d), 1.0e-6), 1.0 / 7.0) - 1.0);
+      gDiffused += 2.0 * ((rhoJ - gRho) - hydro) * (-dot(d, gradW)) / (r2 + gEtaSq) * (pj.w / rhoJ);
+    }
+  } else if (valid && r2 < gPp.support2) {
+    gRho += pj.w * hemo_kernel_w(sqrt(r2), gPp.h, gPp.kernelNorm);
+  }
+}
 
 void main() {
   const uint i = hemo_global_index();
   if (i >= pc.n) {
     return;
   }
-  const vec4 vi = texelFetch(velocities, int(i));
-  if (uint(vi.w) != HEMO_KIND_FLUID) {
+  gI = i;
+  gVi = texelFetch(velocities, int(i));
+  if (uint(gVi.w) != HEMO_KIND_FLUID) {
     return;
   }
-  const vec4 pi = texelFetch(positions, int(i));
-  const HemoPairParams pp = hemo_pair_params();
+  gPi = texelFetch(positions, int(i));
+  gPp = hemo_pair_params();
   const uint count = texelFetch(neighbourCount, int(i)).x;
-  // Interacting pairs: every entry is stored at the next free slot and the slot advances only
-  // for entries in range (no branch around the store; m <= k keeps it inside the list).
   const float cutoffReach = abs(params.repulsionCutoff) + params.wallSpacing;
-  const float keep2 = max(pp.support2, cutoffReach * cutoffReach + params.wallSpacing * params.wallSpacing);
-  uint m = 0u;
-  float rho;
+  gKeep2 = max(gPp.support2, cutoffReach * cutoffReach + params.wallSpacing * params.wallSpacing);
+  gM = 0u;
+  gContinuity = 0.0;
+  gDiffused = 0.0;
+  if (kContinuity != 0u) {
+    gRho = hemo_carried_density(texelFetch(normals, int(i)).w, params.rho0);
+    gInvH = 1.0 / gPp.h;
+    gGradNorm = hemo_kernel_grad_norm(gPp.h, gPp.kernelNorm);
+    gG = params.gravityOnly.xyz;
+    gRho0 = params.rho0;
+    gHydroScale = params.rho0 / params.taitB;
+    gEtaSq = params.etaSq;  // registers
+  } else {
+    gRho = gPi.w * hemo_kernel_w(0.0, gPp.h, gPp.kernelNorm);
+  }
+  for (uint k = 0u; k < count; k += kListWidth) {
+    if (kListWidth == 4u) {
+      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
+      pair(js.x, true);
+      pair(k + 1u < count ? js.y : i, k + 1u < count);
+      pair(k + 2u < count ? js.z : i, k + 2u < count);
+      pair(k + 3u < count ? js.w : i, k + 3u < count);
+    } else {
+      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x, true);
+    }
+  }
+  float rho = gRho;
   float rate = 0.0;  // d rho / dt, for the RK2 stages (kContinuity = 2)
   if (kContinuity != 0u) {
-    rho = hemo_carried_density(texelFetch(normals, int(i)).w, params.rho0);
-    const float invH = 1.0 / pp.h;
-    const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
-    const float diffusion = params.deltaSph * pp.h * params.c0;
-    const vec3 g = params.gravityOnly.xyz;
-    const float rho0 = params.rho0, hydroScale = params.rho0 / params.taitB, etaSq = params.etaSq;  // registers
-    float continuity = 0.0, diffused = 0.0;
-    for (uint k = 0u; k < count; ++k) {
-      const uint j = texelFetch(neighbourList, int(hemo_list_slot(i, k, pp))).x;
-      const vec4 pj = texelFetch(positions, int(j));
-      const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);  // x_ij
-      const float r2 = dot(d, d);
-      pairList[hemo_list_slot(i, m, pp)] = j;
-      m += r2 < keep2 ? 1u : 0u;
-      const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // 0 beyond the support
-      const vec4 vj = texelFetch(velocities, int(j));
-      continuity += pj.w * dot(vi.xyz - vj.xyz, gradW);
-      if (uint(vj.w) == HEMO_KIND_FLUID) {
-        const float rhoJ = hemo_carried_density(texelFetch(normals, int(j)).w, rho0);
-        const float hydro = rho0 * (pow(max(1.0 - hydroScale * dot(g, d), 1.0e-6), 1.0 / 7.0) - 1.0);
-        diffused += 2.0 * ((rhoJ - rho) - hydro) * (-dot(d, gradW)) / (r2 + etaSq) * (pj.w / rhoJ);
-      }
-    }
-    rate = continuity + diffusion * diffused;
+    rate = gContinuity + params.deltaSph * gPp.h * params.c0 * gDiffused;
     if (kContinuity == 1u) {
       rho += clocks[pc.clockIn].lastDt * rate;
       rate = 0.0;
     }
-  } else {
-    rho = pi.w * hemo_kernel_w(0.0, pp.h, pp.kernelNorm);
-    for (uint k = 0u; k < count; ++k) {
-      const uint j = texelFetch(neighbourList, int(hemo_list_slot(i, k, pp))).x;
-      const vec4 pj = texelFetch(positions, int(j));
-      const vec3 d = hemo_min_image(pi.xyz - pj.xyz, pp);
-      const float r2 = dot(d, d);
-      pairList[hemo_list_slot(i, m, pp)] = j;
-      m += r2 < keep2 ? 1u : 0u;
-      if (r2 < pp.support2) {
-        rho += pj.w * hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
-      }
-    }
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   const float p = hemo_tait_pressure(rho, background, params);
-  pairCount[i] = m;
+  pairCount[i] = gM;
   state[i] = vec4(rho, p, rate, 0.0);
-  const float volume = pi.w / rho;
-  pairPosition[i] = vec4(pi.xyz, volume * p);
-  viscousVel[i] = vec4(vi.xyz, volume);  // > 0: fluid
+  const float volume = gPi.w / rho;
+  pairPosition[i] = vec4(gPi.xyz, volume * p);
+  viscousVel[i] = vec4(gVi.xyz, volume);  // > 0: fluid
 }

@@ -51,6 +51,8 @@ layout(binding = HEMO_FORCES_BINDING_PAIR_POSITION) uniform samplerBuffer pairPo
 // the parameter block: llvmpipe runs a branch's body under a lane mask even when no lane
 // takes it, and the dead SPS loads cost ~10% of the pass (dam break, docs/benchmarks.md).
 layout(constant_id = 1) const uint kSps = 0u;
+// 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
+layout(constant_id = 2) const uint kListWidth = 1u;
 
 // The SPS stress tau (Pa) of particle j as a symmetric matrix (sps_stress.comp).
 mat3 hemo_sps_tensor(uint j) {
@@ -61,6 +63,47 @@ mat3 hemo_sps_tensor(uint j) {
 layout(push_constant) uniform Push { uint n; } pc;
 
 const float kNoLimit = 3.0e38;
+
+// The pair loop's state, shared by its body (pair()) whichever way the list is read.
+vec3 gXi, gVi;
+float gPI;
+mat3 gSpsI;
+HemoPairParams gPp;
+float gInvH, gGradNorm, gEtaSq, gCutoff, gWallSpacing, gPsi;
+vec3 gStress;     // sum V_j [ -(p_i + p_j) I + tau_i + tau_j ] . gradW
+vec3 gViscous;    // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
+vec3 gRepulsion;
+float gRepulsionWeight;
+
+// One interacting pair (i, j). The padding of the list's last texel passes j = i: a pair at
+// zero distance, whose terms are all exactly 0 (grad W = 0, and no repulsion at r = 0).
+void pair(uint j) {
+  const vec4 pj = texelFetch(pairPosition, int(j));  // (x_j, V_j p_j)
+  const vec3 d = hemo_min_image(gXi - pj.xyz, gPp);
+  const float r2 = dot(d, d);
+  // grad W vanishes beyond the support (the list's skin) and for a coincident pair (no
+  // defined direction), so neither needs a branch: llvmpipe runs both ways of a branch under
+  // a lane mask, and the branch itself cost ~5% of the pass.
+  const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm);
+  const vec4 vj = texelFetch(viscousVel, int(j));  // (fluid: own velocity, boundary: no-slip velocity; +-V_j)
+  const float volumeJ = abs(vj.w);
+  gStress -= (volumeJ * gPI + pj.w) * gradW;
+  gViscous += (volumeJ * dot(d, gradW) / (r2 + gEtaSq)) * (gVi - vj.xyz);
+  if (kSps != 0u && vj.w > 0.0) {
+    // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
+    gStress += volumeJ * ((gSpsI + hemo_sps_tensor(j)) * gradW);
+  }
+  if (vj.w < 0.0 && r2 > 0.0) {  // boundary and wall particles; detached ones (V = 0) do not repel
+    const vec3 nrm = texelFetch(normals, int(j)).xyz;
+    const float x = dot(d, nrm);
+    float w;
+    const float push = hemo_repulsion(x, length(d - x * nrm), gPp.h, gPsi, gCutoff, gWallSpacing, w);
+    if (w > 0.0) {
+      gRepulsion += nrm * push;
+      gRepulsionWeight += w;
+    }
+  }
+}
 
 void main() {
   const uint i = hemo_global_index();
@@ -85,52 +128,37 @@ void main() {
     atomicMin(status[HEMO_STATUS_BAD_INPUT_ID], ids[i]);
   }
   // Parameters read once into registers (see HemoPairParams).
-  const HemoPairParams pp = hemo_pair_params();
-  const float h = pp.h;
-  const float invH = 1.0 / h;
-  const float gradNorm = hemo_kernel_grad_norm(h, pp.kernelNorm);
+  gPp = hemo_pair_params();
+  const float h = gPp.h;
+  gInvH = 1.0 / h;
+  gGradNorm = hemo_kernel_grad_norm(h, gPp.kernelNorm);
   const float twoMu = 2.0 * params.mu;
-  const float etaSq = params.etaSq;
-  const float cutoff = params.repulsionCutoff;
-  const float wallSpacing = params.wallSpacing;
-  const float psi = params.psi;
-
-  const bool sps = kSps != 0u;
-  const mat3 spsI = sps ? hemo_sps_tensor(i) : mat3(0.0);
-  const float pI = si.y;
-  vec3 stress = vec3(0.0);   // sum V_j [ -(p_i + p_j) I + tau_i + tau_j ] . gradW
-  vec3 viscous = vec3(0.0);  // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
-  vec3 repulsion = vec3(0.0);
-  float repulsionWeight = 0.0;
+  gEtaSq = params.etaSq;
+  gCutoff = params.repulsionCutoff;
+  gWallSpacing = params.wallSpacing;
+  gPsi = params.psi;
+  gXi = xi;
+  gVi = vi.xyz;
+  gSpsI = kSps != 0u ? hemo_sps_tensor(i) : mat3(0.0);
+  gPI = si.y;
+  gStress = vec3(0.0);
+  gViscous = vec3(0.0);
+  gRepulsion = vec3(0.0);
+  gRepulsionWeight = 0.0;
   const uint count = texelFetch(neighbourCount, int(i)).x;
-  for (uint k = 0u; k < count; ++k) {
-    const uint j = texelFetch(neighbourList, int(hemo_list_slot(i, k, pp))).x;
-    const vec4 pj = texelFetch(pairPosition, int(j));  // (x_j, V_j p_j)
-    const vec3 d = hemo_min_image(xi - pj.xyz, pp);
-    const float r2 = dot(d, d);
-    // grad W vanishes beyond the support (the list's skin) and for a coincident pair (no
-    // defined direction), so neither needs a branch: llvmpipe runs both ways of a branch under
-    // a lane mask, and the branch itself cost ~5% of the pass.
-    const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);
-    const vec4 vj = texelFetch(viscousVel, int(j));  // (fluid: own velocity, boundary: no-slip velocity; +-V_j)
-    const float volumeJ = abs(vj.w);
-    stress -= (volumeJ * pI + pj.w) * gradW;
-    viscous += (volumeJ * dot(d, gradW) / (r2 + etaSq)) * (vi.xyz - vj.xyz);
-    if (sps && vj.w > 0.0) {
-      // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
-      stress += volumeJ * ((spsI + hemo_sps_tensor(j)) * gradW);
-    }
-    if (vj.w < 0.0 && r2 > 0.0) {  // boundary and wall particles; detached ones (V = 0) do not repel
-      const vec3 nrm = texelFetch(normals, int(j)).xyz;
-      const float x = dot(d, nrm);
-      float w;
-      const float push = hemo_repulsion(x, length(d - x * nrm), h, psi, cutoff, wallSpacing, w);
-      if (w > 0.0) {
-        repulsion += nrm * push;
-        repulsionWeight += w;
-      }
+  for (uint k = 0u; k < count; k += kListWidth) {
+    if (kListWidth == 4u) {
+      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
+      pair(js.x);
+      pair(k + 1u < count ? js.y : i);
+      pair(k + 2u < count ? js.z : i);
+      pair(k + 3u < count ? js.w : i);
+    } else {
+      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x);
     }
   }
+  const vec3 stress = gStress, viscous = gViscous, repulsion = gRepulsion;
+  const float repulsionWeight = gRepulsionWeight;
   vec3 a = (stress + twoMu * viscous) / si.x;
   const float repulsionScale = 1.0 / max(repulsionWeight, 1.0);
   a += repulsion * repulsionScale;

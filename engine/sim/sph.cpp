@@ -195,6 +195,10 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                           (settings.listLayout == ListLayout::Auto && context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU);
   params_.listStride = contiguous ? 1u : std::max(particles.capacity(), 1u);
   params_.listParticleStride = contiguous ? settings.neighbourCapacity : 1u;
+  // Contiguous lists whose capacity is a multiple of 4 are read four entries per texel
+  // (common/sph_params.glsl, hemo_list_texel): specialization constant 2 of the pair passes.
+  listWidth_ = contiguous && settings.neighbourCapacity % 4u == 0u ? 4u : 1u;
+  const VkFormat listFormat = listWidth_ == 4u ? gpu::texel::kUvec4 : gpu::texel::kUint;
   const GridSpec& spec = grid_.spec();
   for (int a = 0; a < 3; ++a) {
     params_.origin[a] = spec.origin[a];
@@ -213,7 +217,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   const std::uint32_t continuity = settings.densityMethod == DensityMethod::Summation ? 0u
                                    : settings.integrator == Integrator::Rk2Midpoint  ? 2u
                                                                                      : 1u;
-  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {continuity},
+  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {continuity, listWidth_},
                          1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK,
                          1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
                              1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
@@ -226,9 +230,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 1u << HEMO_SPS_BINDING_PARAMS,
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
                                1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
-  // constant 1: the SPS term compiled in or out
+  // constant 1: the SPS term compiled in or out; 2: the list's read width
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup,
-                        {settings.sps ? 1u : 0u}, 1u << HEMO_FORCES_BINDING_PARAMS,
+                        {settings.sps ? 1u : 0u, listWidth_}, 1u << HEMO_FORCES_BINDING_PARAMS,
                         1u << HEMO_FORCES_BINDING_POSITIONS | 1u << HEMO_FORCES_BINDING_VELOCITIES | 1u << HEMO_FORCES_BINDING_STATE |
                             1u << HEMO_FORCES_BINDING_NCOUNT | 1u << HEMO_FORCES_BINDING_NORMALS | 1u << HEMO_FORCES_BINDING_NLIST | 1u << HEMO_FORCES_BINDING_TAU_A |
                             1u << HEMO_FORCES_BINDING_TAU_B | 1u << HEMO_FORCES_BINDING_VISCOUS_VEL |
@@ -259,7 +263,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
                                    {HEMO_DENSITY_BINDING_STATE, &state_},
                                    gpu::texelBinding(HEMO_DENSITY_BINDING_NCOUNT, &ncount_, gpu::texel::kUint),
-                                   gpu::texelBinding(HEMO_DENSITY_BINDING_NLIST, &nlist_, gpu::texel::kUint),
+                                   gpu::texelBinding(HEMO_DENSITY_BINDING_NLIST, &nlist_, listFormat),
                                    {HEMO_DENSITY_BINDING_CLOCK, &clock_},
                                    {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
                                    gpu::texelBinding(HEMO_DENSITY_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
@@ -290,7 +294,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
                                  gpu::texelBinding(HEMO_FORCES_BINDING_STATE, &state_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_, gpu::texel::kUint),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_, listFormat),
                                  {HEMO_FORCES_BINDING_ACCEL, &accel_},
                                  {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
                                  {HEMO_FORCES_BINDING_IDS, &a.ids},

@@ -114,21 +114,34 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
   auto rng = rngFor();
   // Clamped, unclamped, and clamped with a background pressure (a vessel's lumen pressure) of
   // about 5% of B, so the clamp cuts at a negative Tait pressure.
+  // The list is read four entries per texel (contiguous layout, capacity a multiple of 4) or
+  // one (a capacity that is not, or the interleaved layout): each read, each variant.
   struct Variant {
     bool clamp;
     float background;
+    sim::ListLayout layout;
+    std::uint32_t capacity;
+    std::uint32_t readWidth;
   };
-  for (const Variant variant : {Variant{true, 0.0f}, Variant{false, 0.0f}, Variant{true, 3000.0f}}) {
+  for (const Variant variant : {Variant{true, 0.0f, sim::ListLayout::Contiguous, 128, 4},
+                                Variant{false, 0.0f, sim::ListLayout::Contiguous, 128, 4},
+                                Variant{true, 3000.0f, sim::ListLayout::Contiguous, 128, 4},
+                                Variant{false, 3000.0f, sim::ListLayout::Contiguous, 130, 1},
+                                Variant{false, 3000.0f, sim::ListLayout::Interleaved, 128, 1}}) {
     const bool clamp = variant.clamp;
     sim::SphSettings s = settings();
     s.clampNegativePressure = clamp;
     s.backgroundPressure = variant.background;
-    SCOPED_TRACE(testing::Message() << "clamp " << clamp << ", background " << variant.background << " Pa");
+    s.listLayout = variant.layout;
+    s.neighbourCapacity = variant.capacity;
+    SCOPED_TRACE(testing::Message() << "clamp " << clamp << ", background " << variant.background << " Pa, list read "
+                                    << variant.readWidth << " per texel");
     const Case c = makeCase(rng, s, 9, 8, 7);
     const auto n = static_cast<std::uint32_t>(c.pos.size());
     const Stages st = runStages(c, s, glm::vec3(0.15f));
     const sim::ParticleStore& store = *st.store;
     const sim::SphSolver& solver = *st.solver;
+    ASSERT_EQ(solver.listReadWidth(), variant.readWidth);
 
     const auto slotIds = store.readIds();
     const auto state = solver.state().readback<glm::vec4>(n);
@@ -185,6 +198,10 @@ TEST_F(SphStageTest, ContinuityDensityMatchesReference) {
     SCOPED_TRACE(rk2 ? "rk2_midpoint" : "symplectic_euler");
     auto rng = rngFor();
     sim::SphSettings s = settings();
+    // symplectic Euler reads the list four entries per texel, RK2 one (a capacity not a
+    // multiple of 4)
+    s.listLayout = sim::ListLayout::Contiguous;
+    s.neighbourCapacity = rk2 ? 130u : 128u;
     s.densityMethod = sim::DensityMethod::Continuity;
     s.deltaSph = 0.1f;
     s.integrator = integrator;
@@ -198,6 +215,7 @@ TEST_F(SphStageTest, ContinuityDensityMatchesReference) {
     const auto n = static_cast<std::uint32_t>(c.pos.size());
     const float dt = 2e-4f;
     const Stages st = runStages(c, s, glm::vec3(0.15f), glm::vec3(-0.05f), false, dt);
+    ASSERT_EQ(st.solver->listReadWidth(), rk2 ? 1u : 4u);
     const auto slotIds = st.store->readIds();
     const auto state = st.solver->state().readback<glm::vec4>(n);
     const auto accel = st.solver->accel().readback<glm::vec4>(n);

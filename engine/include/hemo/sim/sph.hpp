@@ -173,6 +173,9 @@ class SphSolver {
   const gpu::Buffer& dtLimits() const { return dtLimit_; }
   const gpu::Buffer& neighbourCounts() const { return ncount_; }
   const gpu::Buffer& neighbourList() const { return nlist_; }
+  // List entries the pair passes read per texel: 4 with the contiguous layout and a capacity
+  // that is a multiple of 4, else 1 (common/sph_params.glsl, hemo_list_texel).
+  std::uint32_t listReadWidth() const { return listWidth_; }
   // A fluid particle's list entries within interaction range at the last density pass, in
   // list order and layout (interface/sph.h, HEMO_DENSITY_BINDING_PAIR_LIST), and their number.
   const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
@@ -202,6 +205,7 @@ class SphSolver {
                            std::uint32_t mode);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
+  std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, driftX_, reach_, viscousVel_;
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   gpu::Buffer clock_, status_, log_;
