@@ -9,12 +9,27 @@
 // wall, such as the blade between a bifurcation's branches, is not pushed through it).
 // q = x / 2h is kept >= 1e-3, so a particle at (or just behind) the plane is pushed out with a
 // large but finite force.
-float hemo_repulsion(float x, float y, float h, float psi, float cutoff, float wallSpacing, out float weight) {
+// The parameters with their reciprocals, computed once per invocation: the pair loops then
+// multiply where they would divide (a vector division or square root is the costliest
+// arithmetic of the force pass on lavapipe; docs/benchmarks.md, "Session 15").
+struct HemoRepulsionParams {
+  float psi;             // Psi (m/s^2)
+  float cutoff;          // D (m)
+  float wallSpacing;     // dp (m)
+  float invWallSpacing;  // 1 / dp
+  float invTwoH;         // 1 / 2h
+};
+
+HemoRepulsionParams hemo_repulsion_params(float h, float psi, float cutoff, float wallSpacing) {
+  return HemoRepulsionParams(psi, cutoff, wallSpacing, 1.0 / wallSpacing, 0.5 / h);
+}
+
+float hemo_repulsion(float x, float y, HemoRepulsionParams rp, out float weight) {
   weight = 0.0;
-  if (!(x < cutoff && x > cutoff - wallSpacing && y < wallSpacing)) {
+  if (!(x < rp.cutoff && x > rp.cutoff - rp.wallSpacing && y < rp.wallSpacing)) {
     return 0.0;
   }
-  weight = 1.0 - y / wallSpacing;
-  const float q = max(x / (2.0 * h), 1.0e-3);
-  return psi * (1.0 - q) / sqrt(q) * weight;
+  weight = 1.0 - y * rp.invWallSpacing;
+  const float q = max(x * rp.invTwoH, 1.0e-3);
+  return rp.psi * (1.0 - q) * inversesqrt(q) * weight;
 }

@@ -69,7 +69,8 @@ vec3 gXi, gVi;
 float gPI;
 mat3 gSpsI;
 HemoPairParams gPp;
-float gInvH, gGradNorm, gEtaSq, gCutoff, gWallSpacing, gPsi;
+float gInvH, gGradNorm, gEtaSq;
+HemoRepulsionParams gRp;
 vec3 gStress;     // sum V_j [ -(p_i + p_j) I + tau_i + tau_j ] . gradW
 vec3 gViscous;    // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
 vec3 gRepulsion;
@@ -97,7 +98,7 @@ void pair(uint j) {
     const vec3 nrm = texelFetch(normals, int(j)).xyz;
     const float x = dot(d, nrm);
     float w;
-    const float push = hemo_repulsion(x, length(d - x * nrm), gPp.h, gPsi, gCutoff, gWallSpacing, w);
+    const float push = hemo_repulsion(x, length(d - x * nrm), gRp, w);
     if (w > 0.0) {
       gRepulsion += nrm * push;
       gRepulsionWeight += w;
@@ -134,9 +135,7 @@ void main() {
   gGradNorm = hemo_kernel_grad_norm(h, gPp.kernelNorm);
   const float twoMu = 2.0 * params.mu;
   gEtaSq = params.etaSq;
-  gCutoff = params.repulsionCutoff;
-  gWallSpacing = params.wallSpacing;
-  gPsi = params.psi;
+  gRp = hemo_repulsion_params(h, params.psi, params.repulsionCutoff, params.wallSpacing);
   gXi = xi;
   gVi = vi.xyz;
   gSpsI = kSps != 0u ? hemo_sps_tensor(i) : mat3(0.0);

@@ -64,9 +64,7 @@ vec3 hemo_fluid_reaction(uint w) {
   const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
   const float twoMu = 2.0 * params.mu;
   const float etaSq = params.etaSq;
-  const float cutoff = params.repulsionCutoff;
-  const float wallSpacing = params.wallSpacing;
-  const float psi = params.psi;
+  const HemoRepulsionParams rp = hemo_repulsion_params(pp.h, params.psi, params.repulsionCutoff, params.wallSpacing);
   const vec4 xw = positions(w);  // w: SPH mass
   const vec2 sw = state(w).xy;
   const float volumeW = xw.w / sw.x;
@@ -91,7 +89,7 @@ vec3 hemo_fluid_reaction(uint w) {
     if (repels) {
       const float x = dot(d, nrm);
       float weight;
-      const float push = hemo_repulsion(x, length(d - x * nrm), pp.h, psi, cutoff, wallSpacing, weight);
+      const float push = hemo_repulsion(x, length(d - x * nrm), rp, weight);
       if (weight > 0.0) {
         repulsion += nrm * (positions(f).w * push * texelFetch(fluidAccelT, int(f)).w);
       }
