@@ -168,7 +168,7 @@
 #define HEMO_FORCES_BINDING_COUNT 15
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
-// step, clock, status. Push constant `mode`:
+// step, clock, status. Specialization constant 2, the stage:
 #define HEMO_INTEGRATE_SYMPLECTIC_EULER 0
 #define HEMO_INTEGRATE_RK2_HALF 1  // save (x, v), move to the midpoint with dt / 2
 #define HEMO_INTEGRATE_RK2_FULL 2  // from the saved (x, v) with the midpoint's v and a

@@ -1,5 +1,5 @@
 #version 450
-// Time integration of fluid and wall particles (mode in the push constants):
+// Time integration of fluid and wall particles (the stage is specialization constant 2):
 //  symplectic Euler ... v += a dt, x += v dt
 //  RK2 midpoint ....... stage 1 saves (x0, v0) and moves to x0 + v0 dt/2, v0 + a0 dt/2;
 //                       stage 2 (after new forces at the midpoint) sets x = x0 + v dt,
@@ -55,13 +55,16 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_NORMALS) buffer Normals { vec4 n
 // step. 2 (RK2 midpoint): the stages advance it with the rate in state.z, the first stage
 // keeping rho(t) in savedVel.w. 0: summation density, nothing to carry.
 layout(constant_id = 1) const uint kContinuity = 0u;
+// The stage (HEMO_INTEGRATE_*): a constant, so each pipeline holds only its own stage's code.
+// llvmpipe runs the body of a branch under a lane mask even when no lane takes it, and the
+// stores of the RK2 stages cost the symplectic step about a third of this pass.
+layout(constant_id = 2) const uint kMode = 0u;
 layout(push_constant) uniform Push {
   uint n;
   uint step;
   uint logIndex;
   float endTime;
   uint clockIn;
-  uint mode;
 } pc;
 
 // A wall particle whose springs all broke is marked by the wall stage with accel.w < 0 (fluid
@@ -122,14 +125,14 @@ void main() {
   // The step's dt: from the reduction (Euler, RK2 first stage), or the one the first stage
   // stored (RK2 second stage, so both stages use the same dt).
   float dt;
-  if (pc.mode == HEMO_INTEGRATE_RK2_FULL) {
+  if (kMode == HEMO_INTEGRATE_RK2_FULL) {
     dt = stepDt;
   } else {
     const float remaining = pc.endTime - (clock.time - clock.compensation);
     dt = min(min(dtMinMax.x, params.dtMax), max(remaining, 0.0));
   }
   const bool running = dt > 0.0 || isnan(dt);  // false once the end time is reached
-  if (pc.mode == HEMO_INTEGRATE_RK2_HALF) {
+  if (kMode == HEMO_INTEGRATE_RK2_HALF) {
     if (i == 0u) {
       stepDt = dt;  // read by the second stage (a later dispatch)
     }
@@ -179,8 +182,8 @@ void main() {
     return;
   }
   // Where the step started (the inflow zone is judged there).
-  const vec3 start = pc.mode == HEMO_INTEGRATE_RK2_FULL ? savedPos[i].xyz : x.xyz;
-  if (pc.mode == HEMO_INTEGRATE_RK2_FULL) {
+  const vec3 start = kMode == HEMO_INTEGRATE_RK2_FULL ? savedPos[i].xyz : x.xyz;
+  if (kMode == HEMO_INTEGRATE_RK2_FULL) {
     // midpoint rule: x1 = x0 + dt v(mid), v1 = v0 + dt a(mid)
     const vec4 v0 = savedVel[i];
     x.xyz = savedPos[i].xyz + v.xyz * dt;  // wrapped below: the saved position may be across the seam
@@ -198,7 +201,7 @@ void main() {
     // particles that enter the zone too close can still part (a fully kinematic zone froze
     // such pairs together: 6-13 kPa at its far end and an emptied slice after it).
     v.x = u.x;
-    if (pc.mode == HEMO_INTEGRATE_RK2_FULL) {
+    if (kMode == HEMO_INTEGRATE_RK2_FULL) {
       x.x = start.x + u.x * dt;  // across the section: the midpoint rule as everywhere
     } else {
       x.xyz += v.xyz * dt;
@@ -218,7 +221,7 @@ void main() {
         x.w = clamp(x.w * (1.0 + 0.1 * (inflow.restDensity / rho - 1.0)), inflow.baseMass, inflow.maxMass);
       }
     }
-  } else if (pc.mode != HEMO_INTEGRATE_RK2_FULL) {
+  } else if (kMode != HEMO_INTEGRATE_RK2_FULL) {
     x.xyz += v.xyz * dt;
   }
   x.xyz = hemo_wrap_position(x.xyz);

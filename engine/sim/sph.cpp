@@ -23,9 +23,9 @@ struct ClockedPush {
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
-  std::uint32_t clockIn, mode;
+  std::uint32_t clockIn;
 };
-static_assert(sizeof(IntegratePush) == 24);
+static_assert(sizeof(IntegratePush) == 20);
 struct ReachPush {
   std::uint32_t n, midpointLookahead;
 };
@@ -237,12 +237,16 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                             1u << HEMO_FORCES_BINDING_NCOUNT | 1u << HEMO_FORCES_BINDING_NORMALS | 1u << HEMO_FORCES_BINDING_NLIST | 1u << HEMO_FORCES_BINDING_TAU_A |
                             1u << HEMO_FORCES_BINDING_TAU_B | 1u << HEMO_FORCES_BINDING_VISCOUS_VEL |
                             1u << HEMO_FORCES_BINDING_PAIR_POSITION});
-  integrate_ = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity},
+  // constant 2: the stage (symplectic Euler, or RK2's two), one pipeline each; their sets'
+  // layouts are identical, so one descriptor set serves all three.
+  for (std::uint32_t mode = 0; mode < 3; ++mode) {
+    integrate_[mode] = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity, mode},
                            1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW |
                                1u << HEMO_INTEGRATE_BINDING_DT,
                            1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD |
                                1u << HEMO_INTEGRATE_BINDING_STATE | 1u << HEMO_INTEGRATE_BINDING_POSITIONS_IN |
                                1u << HEMO_INTEGRATE_BINDING_VELOCITIES_IN});
+  }
   reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {},
                            1u << HEMO_REACH_BINDING_PARAMS | 1u << HEMO_REACH_BINDING_DRIFT_RANGE,
                            1u << HEMO_REACH_BINDING_POSITIONS | 1u << HEMO_REACH_BINDING_VELOCITIES |
@@ -303,7 +307,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  gpu::texelBinding(HEMO_FORCES_BINDING_TAU_B, &tauB_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)});
-  integrateSet_ = integrate_->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
+  integrateSet_ = integrate_[HEMO_INTEGRATE_SYMPLECTIC_EULER]->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_ACCEL, &accel_, gpu::texel::kVec4),
                                        {HEMO_INTEGRATE_BINDING_PARAMS, &paramsBuffer_},
@@ -404,8 +408,8 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, n);  // the second stage reuses the step's dt
   const std::uint32_t lookahead = settings_.integrator == Integrator::Rk2Midpoint ? 1u : 0u;
   // At least one workgroup: invocation 0 advances the clock even with no particles.
-  rec.dispatch(*integrate_, integrateSet_, IntegratePush{n, step, logIndex, endTime, clockParity_, mode},
-               integrate_->groupsFor(std::max(n, 1u)));
+  rec.dispatch(*integrate_[mode], integrateSet_, IntegratePush{n, step, logIndex, endTime, clockParity_},
+               integrate_[mode]->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone

@@ -222,7 +222,7 @@ class SphSolver {
   const gpu::ComputePipeline* boundaryPressure_;
   const gpu::ComputePipeline* spsStress_;
   const gpu::ComputePipeline* forces_;
-  const gpu::ComputePipeline* integrate_;
+  const gpu::ComputePipeline* integrate_[3];  // by stage (HEMO_INTEGRATE_*)
   const gpu::ComputePipeline* reachPass_;
   gpu::DescriptorSet markSet_, buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_, reachSet_;
 };
