@@ -32,10 +32,33 @@ layout(binding = HEMO_BPRESSURE_BINDING_NLIST) uniform usamplerBuffer neighbourL
 layout(std430, binding = HEMO_BPRESSURE_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std140, binding = HEMO_BPRESSURE_BINDING_CLOCK) uniform Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
+// 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
+layout(constant_id = 1) const uint kListWidth = 1u;
 layout(push_constant) uniform Push {
   uint n;
   uint clockIn;
 } pc;
+
+// The loop's state, shared by its body (pair()) whichever way the list is read.
+vec3 gXb;
+HemoPairParams gPp;
+float gSumW, gSumP;
+vec3 gSumRhoR, gSumV;
+
+// One fluid neighbour f; `valid` is false for the padding of the list's last texel.
+void pair(uint f, bool valid) {
+  const vec3 d = hemo_min_image(gXb - texelFetch(positions, int(f)).xyz, gPp);
+  const float r2 = dot(d, d);
+  if (!valid || r2 >= gPp.support2) {
+    return;
+  }
+  const float w = hemo_kernel_w(sqrt(r2), gPp.h, gPp.kernelNorm);
+  const vec2 sf = texelFetch(fluidState, int(f)).xy;
+  gSumW += w;
+  gSumP += sf.y * w;
+  gSumRhoR += sf.x * d * w;
+  gSumV += texelFetch(velocities, int(f)).xyz * w;
+}
 
 void main() {
   const uint b = hemo_global_index();
@@ -48,26 +71,26 @@ void main() {
   }
   const vec4 xb4 = texelFetch(positions, int(b));
   const vec3 xb = xb4.xyz;
-  const HemoPairParams pp = hemo_pair_params();
-  float sumW = 0.0;
-  float sumP = 0.0;
-  vec3 sumRhoR = vec3(0.0);
-  vec3 sumV = vec3(0.0);
-  const uint count = texelFetch(neighbourCount, int(b)).x;
-  for (uint k = 0u; k < count; ++k) {
-    const int f = int(texelFetch(neighbourList, int(hemo_list_slot(b, k, pp))).x);  // fluid neighbours only
-    const vec3 d = hemo_min_image(xb - texelFetch(positions, f).xyz, pp);
-    const float r2 = dot(d, d);
-    if (r2 >= pp.support2) {
-      continue;
+  gXb = xb;
+  gPp = hemo_pair_params();
+  gSumW = 0.0;
+  gSumP = 0.0;
+  gSumRhoR = vec3(0.0);
+  gSumV = vec3(0.0);
+  const uint count = texelFetch(neighbourCount, int(b)).x;  // fluid neighbours only
+  for (uint k = 0u; k < count; k += kListWidth) {
+    if (kListWidth == 4u) {
+      const uvec4 fs = texelFetch(neighbourList, int(hemo_list_texel(b, k, gPp)));
+      pair(fs.x, true);
+      pair(fs.y, k + 1u < count);
+      pair(fs.z, k + 2u < count);
+      pair(fs.w, k + 3u < count);
+    } else {
+      pair(texelFetch(neighbourList, int(hemo_list_slot(b, k, gPp))).x, true);
     }
-    const float w = hemo_kernel_w(sqrt(r2), pp.h, pp.kernelNorm);
-    const vec2 sf = texelFetch(fluidState, f).xy;
-    sumW += w;
-    sumP += sf.y * w;
-    sumRhoR += sf.x * d * w;
-    sumV += texelFetch(velocities, f).xyz * w;
   }
+  const float sumW = gSumW, sumP = gSumP;
+  const vec3 sumRhoR = gSumRhoR, sumV = gSumV;
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   float rho = params.rho0;
   float p = background;

@@ -22,7 +22,25 @@ layout(binding = HEMO_SPS_BINDING_NCOUNT) uniform usamplerBuffer neighbourCount;
 layout(binding = HEMO_SPS_BINDING_NLIST) uniform usamplerBuffer neighbourList;
 layout(std430, binding = HEMO_SPS_BINDING_TAU_A) writeonly buffer TauA { vec4 tauA[]; };
 layout(std430, binding = HEMO_SPS_BINDING_TAU_B) writeonly buffer TauB { vec4 tauB[]; };
+// 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
+layout(constant_id = 1) const uint kListWidth = 1u;
 layout(push_constant) uniform Push { uint n; } pc;
+
+// The loop's state, shared by its body (pair()) whichever way the list is read.
+vec3 gXi, gVi;
+HemoPairParams gPp;
+float gInvH, gGradNorm;
+mat3 gG;  // g[b][a] = d u_a / d x_b (column b)
+
+// One interacting pair; the padding of the list's last texel passes j = i, whose grad W is 0.
+void pair(uint j) {
+  const vec4 pj = texelFetch(positions, int(j));
+  const vec3 d = hemo_min_image(gXi - pj.xyz, gPp);
+  // grad W is 0 beyond the support and for a coincident pair (common/kernel.glsl)
+  const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(dot(d, d)), gInvH, gGradNorm);
+  const vec3 du = (texelFetch(velocities, int(j)).xyz - gVi) * (pj.w / texelFetch(state, int(j)).x);
+  gG += outerProduct(du, gradW);
+}
 
 void main() {
   const uint i = hemo_global_index();
@@ -35,21 +53,25 @@ void main() {
     tauB[i] = vec4(0.0);
     return;
   }
-  const vec3 xi = texelFetch(positions, int(i)).xyz;
-  const HemoPairParams pp = hemo_pair_params();
-  const float invH = 1.0 / pp.h;
-  const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
-  mat3 g = mat3(0.0);  // g[b][a] = d u_a / d x_b (column b)
+  gXi = texelFetch(positions, int(i)).xyz;
+  gVi = vi.xyz;
+  gPp = hemo_pair_params();
+  gInvH = 1.0 / gPp.h;
+  gGradNorm = hemo_kernel_grad_norm(gPp.h, gPp.kernelNorm);
+  gG = mat3(0.0);
   const uint count = texelFetch(neighbourCount, int(i)).x;
-  for (uint k = 0u; k < count; ++k) {
-    const int j = int(texelFetch(neighbourList, int(hemo_list_slot(i, k, pp))).x);
-    const vec4 pj = texelFetch(positions, j);
-    const vec3 d = hemo_min_image(xi - pj.xyz, pp);
-    // grad W is 0 beyond the support and for a coincident pair (common/kernel.glsl)
-    const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(dot(d, d)), invH, gradNorm);
-    const vec3 du = (texelFetch(velocities, j).xyz - vi.xyz) * (pj.w / texelFetch(state, j).x);
-    g += outerProduct(du, gradW);
+  for (uint k = 0u; k < count; k += kListWidth) {
+    if (kListWidth == 4u) {
+      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
+      pair(js.x);
+      pair(k + 1u < count ? js.y : i);
+      pair(k + 2u < count ? js.z : i);
+      pair(k + 3u < count ? js.w : i);
+    } else {
+      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x);
+    }
   }
+  const mat3 g = gG;
   const float sxx = g[0][0], syy = g[1][1], szz = g[2][2];
   const float sxy = 0.5 * (g[1][0] + g[0][1]);
   const float sxz = 0.5 * (g[2][0] + g[0][2]);

@@ -44,6 +44,9 @@ layout(binding = HEMO_SPRINGF_BINDING_PAIR_POSITION) uniform samplerBuffer pairP
 #define viscousVel(k) texelFetch(viscousVelT, int(k))
 #define pairPosition(k) texelFetch(pairPositionT, int(k))
 
+// 4: the fluid's list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
+layout(constant_id = 1) const uint kListWidth = 1u;
+
 // Spring record k of interface/wall.h, read as its two uvec4 texels.
 Spring hemo_spring(uint k) {
   const uvec4 t0 = texelFetch(springsT, int(2u * k));
@@ -58,43 +61,67 @@ Spring hemo_spring(uint k) {
 // m_f (V_w / rho_f) = V_w V_f, so the pressure and viscous terms come from f's pair data
 // alone (two vec4, as in the force pass): m_f a = V_w [ -(V_f p_f + V_f p_w) gradW
 // + 2 mu V_f (x . gradW) / (r^2 + eta^2) (v_f - v_w) ].
+// The reaction loop's state, shared by its body (reactionPair()) whichever way the list is read.
+HemoPairParams gPp;
+HemoRepulsionParams gRp;
+float gInvH, gGradNorm, gTwoMu, gEtaSq, gPW;
+vec3 gXw, gVw, gNrm;
+bool gRepels;
+vec3 gSum;        // sum of V_f [ ... ] above, times V_w at the end
+vec3 gRepulsion;  // sum of m_f a_repulsion
+
+// One fluid neighbour f of the wall particle; `valid` is false for the padding of the list's
+// last texel.
+void reactionPair(uint f, bool valid) {
+  const vec4 pf = pairPosition(f);  // (x_f, V_f p_f)
+  const vec3 d = hemo_min_image(pf.xyz - gXw, gPp);  // from w to f, as f sees it
+  const float r2 = dot(d, d);
+  if (!valid || r2 >= gPp.support2 || r2 == 0.0) {
+    return;
+  }
+  const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm);  // as sph/forces.comp
+  const vec4 vf = viscousVel(f);  // (v_f, V_f)
+  gSum += -(pf.w + vf.w * gPW) * gradW + (vf.w * gTwoMu * dot(d, gradW) / (r2 + gEtaSq)) * (vf.xyz - gVw);
+  if (gRepels) {
+    const float x = dot(d, gNrm);
+    float weight;
+    const float push = hemo_repulsion(x, length(d - x * gNrm), gRp, weight);
+    if (weight > 0.0) {
+      gRepulsion += gNrm * (positions(f).w * push * texelFetch(fluidAccelT, int(f)).w);
+    }
+  }
+}
+
 vec3 hemo_fluid_reaction(uint w) {
-  const HemoPairParams pp = hemo_pair_params();
-  const float invH = 1.0 / pp.h;
-  const float gradNorm = hemo_kernel_grad_norm(pp.h, pp.kernelNorm);
-  const float twoMu = 2.0 * params.mu;
-  const float etaSq = params.etaSq;
-  const HemoRepulsionParams rp = hemo_repulsion_params(pp.h, params.psi, params.repulsionCutoff, params.wallSpacing);
+  gPp = hemo_pair_params();
+  gInvH = 1.0 / gPp.h;
+  gGradNorm = hemo_kernel_grad_norm(gPp.h, gPp.kernelNorm);
+  gTwoMu = 2.0 * params.mu;
+  gEtaSq = params.etaSq;
+  gRp = hemo_repulsion_params(gPp.h, params.psi, params.repulsionCutoff, params.wallSpacing);
   const vec4 xw = positions(w);  // w: SPH mass
   const vec2 sw = state(w).xy;
   const float volumeW = xw.w / sw.x;
-  const float pW = sw.y;
-  const vec3 vw = viscousVel(w).xyz;
-  const vec3 nrm = normals[w].xyz;
-  const bool repels = xw.w > 0.0;  // detached particles (no SPH mass) do not repel
-  vec3 sum = vec3(0.0);            // sum of V_f [ ... ] above, times V_w at the end
-  vec3 repulsion = vec3(0.0);      // sum of m_f a_repulsion
+  gPW = sw.y;
+  gXw = xw.xyz;
+  gVw = viscousVel(w).xyz;
+  gNrm = normals[w].xyz;
+  gRepels = xw.w > 0.0;  // detached particles (no SPH mass) do not repel
+  gSum = vec3(0.0);
+  gRepulsion = vec3(0.0);
   const uint count = texelFetch(neighbourCountT, int(w)).x;
-  for (uint k = 0u; k < count; ++k) {
-    const uint f = texelFetch(neighbourListT, int(hemo_list_slot(w, k, pp))).x;
-    const vec4 pf = pairPosition(f);  // (x_f, V_f p_f)
-    const vec3 d = hemo_min_image(pf.xyz - xw.xyz, pp);  // from w to f, as f sees it
-    const float r2 = dot(d, d);
-    if (r2 >= pp.support2 || r2 == 0.0) {
-      continue;
-    }
-    const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), invH, gradNorm);  // as sph/forces.comp
-    const vec4 vf = viscousVel(f);  // (v_f, V_f)
-    sum += -(pf.w + vf.w * pW) * gradW + (vf.w * twoMu * dot(d, gradW) / (r2 + etaSq)) * (vf.xyz - vw);
-    if (repels) {
-      const float x = dot(d, nrm);
-      float weight;
-      const float push = hemo_repulsion(x, length(d - x * nrm), rp, weight);
-      if (weight > 0.0) {
-        repulsion += nrm * (positions(f).w * push * texelFetch(fluidAccelT, int(f)).w);
-      }
+  for (uint k = 0u; k < count; k += kListWidth) {
+    if (kListWidth == 4u) {
+      const uvec4 fs = texelFetch(neighbourListT, int(hemo_list_texel(w, k, gPp)));
+      reactionPair(fs.x, true);
+      reactionPair(fs.y, k + 1u < count);
+      reactionPair(fs.z, k + 2u < count);
+      reactionPair(fs.w, k + 3u < count);
+    } else {
+      reactionPair(texelFetch(neighbourListT, int(hemo_list_slot(w, k, gPp))).x, true);
     }
   }
+  const vec3 sum = gSum, repulsion = gRepulsion;
   return -(volumeW * sum + repulsion);
 }
 

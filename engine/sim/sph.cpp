@@ -222,12 +222,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                          1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
                              1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
                              1u << HEMO_DENSITY_BINDING_NORMALS});
-  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {},
+  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {listWidth_},
                                   1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK,
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
                                       1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
                                       1u << HEMO_BPRESSURE_BINDING_FLUID_STATE});
-  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 1u << HEMO_SPS_BINDING_PARAMS,
+  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {listWidth_}, 1u << HEMO_SPS_BINDING_PARAMS,
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
                                1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
   // constant 1: the SPS term compiled in or out; 2: the list's read width
@@ -280,7 +280,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
                                              {HEMO_BPRESSURE_BINDING_STATE, &state_},
                                              gpu::texelBinding(HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_, gpu::texel::kUint),
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, &nlist_, gpu::texel::kUint),
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, &nlist_, listFormat),
                                              {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
                                              {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
                                              {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_}});
@@ -289,7 +289,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
                                  gpu::texelBinding(HEMO_SPS_BINDING_STATE, &state_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_SPS_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
-                                 gpu::texelBinding(HEMO_SPS_BINDING_NLIST, &pairList_, gpu::texel::kUint),
+                                 gpu::texelBinding(HEMO_SPS_BINDING_NLIST, &pairList_, listFormat),
                                  {HEMO_SPS_BINDING_TAU_A, &tauA_},
                                  {HEMO_SPS_BINDING_TAU_B, &tauB_}});
   forcesSet_ = forces_->makeSet({gpu::texelBinding(HEMO_FORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
@@ -337,7 +337,7 @@ float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - 
 
 void SphSolver::attachWall(const SpringNetwork& network) {
   const FluidBuffers fluid{&grid_.slotOfId(), &accel_,  &dtLimit_, &paramsBuffer_,       &state_,
-                           &ncount_,           &nlist_,  &viscousVel_, &pairPosition_};
+                           &ncount_,           &nlist_,  &viscousVel_, &pairPosition_, listWidth_};
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }

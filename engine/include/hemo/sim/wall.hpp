@@ -74,6 +74,7 @@ struct FluidBuffers {
   const gpu::Buffer* neighbourList;
   const gpu::Buffer* viscousVelocities;  // a wall particle's entry: the no-slip velocity the fluid saw
   const gpu::Buffer* pairPositions;      // (x, V p) per slot (interface/sph.h, the pair data)
+  std::uint32_t listReadWidth;           // list entries per texel read (SphSolver::listReadWidth)
 };
 
 class MassSpring {
