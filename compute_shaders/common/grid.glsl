@@ -63,3 +63,20 @@ vec3 hemo_grid_min_image(vec3 d, HemoGrid g) {
   const vec3 period = vec3(g.dimsN.xyz) / g.invCell.xyz;
   return mix(d, d - period * round(d / period), notEqual(g.periodic.xyz, uvec3(0u)));
 }
+
+// The same for a loop over many d: the period (m, 0 on bounded axes) and its reciprocal (0
+// on bounded axes) computed once, so each separation costs multiplications, not divisions.
+struct HemoGridImage {
+  vec3 period;
+  vec3 invPeriod;
+};
+
+HemoGridImage hemo_grid_image(HemoGrid g) {
+  const bvec3 periodic = notEqual(g.periodic.xyz, uvec3(0u));
+  const vec3 period = vec3(g.dimsN.xyz) / g.invCell.xyz;
+  return HemoGridImage(mix(vec3(0.0), period, periodic), mix(vec3(0.0), 1.0 / period, periodic));
+}
+
+vec3 hemo_grid_min_image(vec3 d, HemoGridImage image) {
+  return d - image.period * round(d * image.invPeriod);
+}

@@ -48,6 +48,7 @@ void main() {
   const uint capacity = params.neighbourCapacity;
   const HemoPairParams pp = hemo_pair_params();
   const uvec3 dims = pc.grid.dimsN.xyz;
+  const HemoGridImage image = hemo_grid_image(pc.grid);  // no division per candidate
 
   // The grid's cells are half the list radius R wide (sph.cpp), so every neighbour lies in
   // the 5 x 5 rows (dz, dy in -2..2) around the particle's cell, each within 2 cells in x.
@@ -110,7 +111,7 @@ void main() {
         const uint jEnd = texelFetch(cellStart, int(hemo_cell_linear(ivec3(x1, y, z), dims) + 1u)).x;
         for (uint j = texelFetch(cellStart, int(hemo_cell_linear(ivec3(x0, y, z), dims))).x; j < jEnd; ++j) {
           const vec4 xj = texelFetch(positions, int(j));
-          const vec3 d = hemo_grid_min_image(xi - xj.xyz, pc.grid);
+          const vec3 d = hemo_grid_min_image(xi - xj.xyz, image);
           // Every candidate is written to the next free slot, and the slot is kept (count
           // advances) only if the candidate is a neighbour: a store under a data-dependent
           // condition cost llvmpipe more than the candidate test itself (dam break: list
