@@ -79,6 +79,11 @@ uint hemo_list_texel(uint i, uint k, HemoPairParams pp) {
   return hemo_list_slot(i, k, pp) >> 2u;
 }
 
+// The interacting-pair counts of interface/sph.h: (fluid pairs, boundary pairs).
+uvec2 hemo_pair_counts(uint packed) {
+  return uvec2(packed & 0xffffu, packed >> 16u);
+}
+
 // Minimum-image separation (unchanged on non-periodic axes).
 vec3 hemo_min_image(vec3 d, HemoPairParams pp) {
   return d - pp.period * round(d * pp.invPeriod);

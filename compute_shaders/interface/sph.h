@@ -76,7 +76,11 @@
 #define HEMO_BUILD_BINDING_CELL_START 1
 #define HEMO_BUILD_BINDING_PARAMS 2
 #define HEMO_BUILD_BINDING_NCOUNT 3
+// Entries are slots; a boundary or wall neighbour's entry carries HEMO_LIST_BOUNDARY_BIT, so
+// the density pass can sort the interacting pairs by kind without loading the neighbour's
+// kind (boundary particles list only fluid neighbours, whose entries are plain slots).
 #define HEMO_BUILD_BINDING_NLIST 4
+#define HEMO_LIST_BOUNDARY_BIT 0x80000000u
 #define HEMO_BUILD_BINDING_STATUS 5
 #define HEMO_BUILD_BINDING_FLUID_CELLS 6
 #define HEMO_BUILD_BINDING_COUNT 7
@@ -100,10 +104,13 @@
 #define HEMO_DENSITY_BINDING_PAIR_POSITION 9  // written for fluid particles (see the pair data below)
 // The interacting pairs: of a fluid particle's list (built with a skin, so up to a third of
 // its entries lie beyond the support at any step), the entries within interaction range now,
-// in list order and with the list's layout (hemo_list_slot), for the SPS and force passes of
-// the same evaluation. Interaction range: the kernel's support, or the repulsion's reach
-// sqrt((|D| + dp)^2 + dp^2) where that is larger (common/repulsion.glsl). Entries of other
-// particles are not written.
+// for the SPS and force passes of the same evaluation, as plain slots with the list's layout
+// (hemo_list_slot): the fluid neighbours from entry 0 up, in list order, and the boundary and
+// wall neighbours from entry capacity - 1 down, in list order, so the force pass runs the
+// repulsion in a loop of its own over the boundary pairs only. The count packs both:
+// fluid pairs | boundary pairs << 16 (hemo_pair_counts). Interaction range: the kernel's
+// support, or the repulsion's reach sqrt((|D| + dp)^2 + dp^2) where that is larger
+// (common/repulsion.glsl). Entries of other particles are not written.
 #define HEMO_DENSITY_BINDING_PAIR_COUNT 10
 #define HEMO_DENSITY_BINDING_PAIR_LIST 11
 #define HEMO_DENSITY_BINDING_COUNT 12

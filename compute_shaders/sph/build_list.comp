@@ -117,7 +117,8 @@ void main() {
           // condition cost llvmpipe more than the candidate test itself (dam break: list
           // build 20 -> 14 ms, docs/benchmarks.md). Past the capacity the last slot is
           // overwritten; that overflow stops the run at the end of the batch (status).
-          neighbourList[hemo_list_slot(i, min(count, capacity - 1u), pp)] = j;
+          neighbourList[hemo_list_slot(i, min(count, capacity - 1u), pp)] =
+              uint(xj.w) == HEMO_KIND_FLUID ? j : j | HEMO_LIST_BOUNDARY_BIT;
           if (j != i && dot(d, d) < list2 && (fluidI || uint(xj.w) == HEMO_KIND_FLUID)) {
             ++count;
           }

@@ -61,22 +61,30 @@ uint gI;
 vec4 gPi, gVi;
 HemoPairParams gPp;
 float gKeep2;   // squared interaction range: entries within it are kept as interacting pairs
-uint gM;        // interacting pairs kept so far
+uint gMf, gMb;  // interacting pairs kept so far: fluid, boundary
+uint gLast;     // the list's last entry (capacity - 1), where the boundary pairs start
 float gRho;     // summation: the sum; continuity: the carried density
 float gContinuity, gDiffused;
 float gInvH, gGradNorm, gRho0, gHydroScale, gEtaSq;
 vec3 gG;
 
-// One list entry j; `valid` is false for the padding of the last texel (j is then this
-// particle), which adds nothing and is not kept.
-void pair(uint j, bool valid) {
+// One list entry (a slot, with HEMO_LIST_BOUNDARY_BIT for a boundary neighbour); `valid` is
+// false for the padding of the last texel (the entry is then this particle), which adds
+// nothing and is not kept.
+void pair(uint entry, bool valid) {
+  const uint j = entry & ~HEMO_LIST_BOUNDARY_BIT;
+  const bool boundary = entry >= HEMO_LIST_BOUNDARY_BIT;
   const vec4 pj = texelFetch(positions, int(j));
   const vec3 d = hemo_min_image(gPi.xyz - pj.xyz, gPp);  // x_ij
   const float r2 = dot(d, d);
-  // Interacting pairs: every entry is stored at the next free slot and the slot advances only
-  // for entries in range (no branch around the store; m <= k keeps it inside the list).
-  pairList[hemo_list_slot(gI, gM, gPp)] = j;
-  gM += valid && r2 < gKeep2 ? 1u : 0u;
+  // Interacting pairs: every entry is stored at the next free slot of its end of the list,
+  // and that end advances only for entries in range (no branch around the store). Before
+  // entry k, at most k pairs are kept, so both next free slots lie in the gap between the
+  // ends (fluid count <= capacity - 1 - boundary count).
+  pairList[hemo_list_slot(gI, boundary ? gLast - gMb : gMf, gPp)] = j;
+  const bool kept = valid && r2 < gKeep2;
+  gMf += kept && !boundary ? 1u : 0u;
+  gMb += kept && boundary ? 1u : 0u;
   if (kContinuity != 0u) {
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm);  // 0 beyond the support and for j = i
     const vec4 vj = texelFetch(velocities, int(j));
@@ -106,7 +114,9 @@ void main() {
   const uint count = texelFetch(neighbourCount, int(i)).x;
   const float cutoffReach = abs(params.repulsionCutoff) + params.wallSpacing;
   gKeep2 = max(gPp.support2, cutoffReach * cutoffReach + params.wallSpacing * params.wallSpacing);
-  gM = 0u;
+  gMf = 0u;
+  gMb = 0u;
+  gLast = params.neighbourCapacity - 1u;
   gContinuity = 0.0;
   gDiffused = 0.0;
   if (kContinuity != 0u) {
@@ -142,7 +152,7 @@ void main() {
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   const float p = hemo_tait_pressure(rho, background, params);
-  pairCount[i] = gM;
+  pairCount[i] = gMf | gMb << 16u;  // hemo_pair_counts
   state[i] = vec4(rho, p, rate, 0.0);
   const float volume = gPi.w / rho;
   pairPosition[i] = vec4(gPi.xyz, volume * p);

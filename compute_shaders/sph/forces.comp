@@ -76,9 +76,10 @@ vec3 gViscous;    // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
 vec3 gRepulsion;
 float gRepulsionWeight;
 
-// One interacting pair (i, j). The padding of the list's last texel passes j = i: a pair at
+// One interacting pair (i, j), j a boundary or wall particle or not (a constant at each call,
+// so each loop holds only its own terms). The padding of a texel read passes j = i: a pair at
 // zero distance, whose terms are all exactly 0 (grad W = 0, and no repulsion at r = 0).
-void pair(uint j) {
+void pair(uint j, const bool boundary) {
   const vec4 pj = texelFetch(pairPosition, int(j));  // (x_j, V_j p_j)
   const vec3 d = hemo_min_image(gXi - pj.xyz, gPp);
   const float r2 = dot(d, d);
@@ -90,11 +91,11 @@ void pair(uint j) {
   const float volumeJ = abs(vj.w);
   gStress -= (volumeJ * gPI + pj.w) * gradW;
   gViscous += (volumeJ * dot(d, gradW) / (r2 + gEtaSq)) * (gVi - vj.xyz);
-  if (kSps != 0u && vj.w > 0.0) {
+  if (kSps != 0u && !boundary) {
     // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
     gStress += volumeJ * ((gSpsI + hemo_sps_tensor(j)) * gradW);
   }
-  if (vj.w < 0.0 && r2 > 0.0) {  // boundary and wall particles; detached ones (V = 0) do not repel
+  if (boundary && vj.w < 0.0 && r2 > 0.0) {  // boundary and wall particles; detached ones (V = 0) do not repel
     const vec3 nrm = texelFetch(normals, int(j)).xyz;
     const float x = dot(d, nrm);
     float w;
@@ -102,6 +103,23 @@ void pair(uint j) {
     if (w > 0.0) {
       gRepulsion += nrm * push;
       gRepulsionWeight += w;
+    }
+  }
+}
+
+// The pairs in entries [first, end) of particle i's pair list: all fluid or all boundary.
+void pairRange(uint i, uint first, uint end, const bool boundary) {
+  if (kListWidth == 4u) {
+    for (uint k = first & ~3u; k < end; k += 4u) {
+      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
+      pair(k >= first ? js.x : i, boundary);
+      pair(k + 1u >= first && k + 1u < end ? js.y : i, boundary);
+      pair(k + 2u >= first && k + 2u < end ? js.z : i, boundary);
+      pair(k + 3u >= first && k + 3u < end ? js.w : i, boundary);
+    }
+  } else {
+    for (uint k = first; k < end; ++k) {
+      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x, boundary);
     }
   }
 }
@@ -144,18 +162,11 @@ void main() {
   gViscous = vec3(0.0);
   gRepulsion = vec3(0.0);
   gRepulsionWeight = 0.0;
-  const uint count = texelFetch(neighbourCount, int(i)).x;
-  for (uint k = 0u; k < count; k += kListWidth) {
-    if (kListWidth == 4u) {
-      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
-      pair(js.x);
-      pair(k + 1u < count ? js.y : i);
-      pair(k + 2u < count ? js.z : i);
-      pair(k + 3u < count ? js.w : i);
-    } else {
-      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x);
-    }
-  }
+  // the fluid pairs from the list's first entry, then the boundary pairs, which end at its
+  // last (interface/sph.h)
+  const uvec2 counts = hemo_pair_counts(texelFetch(neighbourCount, int(i)).x);
+  pairRange(i, 0u, counts.x, false);
+  pairRange(i, params.neighbourCapacity - counts.y, params.neighbourCapacity, true);
   const vec3 stress = gStress, viscous = gViscous, repulsion = gRepulsion;
   const float repulsionWeight = gRepulsionWeight;
   vec3 a = (stress + twoMu * viscous) / si.x;

@@ -42,6 +42,23 @@ void pair(uint j) {
   gG += outerProduct(du, gradW);
 }
 
+// The pairs in entries [first, end) of particle i's pair list.
+void pairRange(uint i, uint first, uint end) {
+  if (kListWidth == 4u) {
+    for (uint k = first & ~3u; k < end; k += 4u) {
+      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
+      pair(k >= first ? js.x : i);
+      pair(k + 1u >= first && k + 1u < end ? js.y : i);
+      pair(k + 2u >= first && k + 2u < end ? js.z : i);
+      pair(k + 3u >= first && k + 3u < end ? js.w : i);
+    }
+  } else {
+    for (uint k = first; k < end; ++k) {
+      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x);
+    }
+  }
+}
+
 void main() {
   const uint i = hemo_global_index();
   if (i >= pc.n) {
@@ -59,18 +76,11 @@ void main() {
   gInvH = 1.0 / gPp.h;
   gGradNorm = hemo_kernel_grad_norm(gPp.h, gPp.kernelNorm);
   gG = mat3(0.0);
-  const uint count = texelFetch(neighbourCount, int(i)).x;
-  for (uint k = 0u; k < count; k += kListWidth) {
-    if (kListWidth == 4u) {
-      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
-      pair(js.x);
-      pair(k + 1u < count ? js.y : i);
-      pair(k + 2u < count ? js.z : i);
-      pair(k + 3u < count ? js.w : i);
-    } else {
-      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x);
-    }
-  }
+  // the fluid pairs from the list's first entry, then the boundary pairs, which end at its
+  // last (interface/sph.h)
+  const uvec2 counts = hemo_pair_counts(texelFetch(neighbourCount, int(i)).x);
+  pairRange(i, 0u, counts.x);
+  pairRange(i, params.neighbourCapacity - counts.y, params.neighbourCapacity);
   const mat3 g = gG;
   const float sxx = g[0][0], syy = g[1][1], szz = g[2][2];
   const float sxy = 0.5 * (g[1][0] + g[0][1]);

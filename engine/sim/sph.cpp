@@ -26,6 +26,7 @@ struct IntegratePush {
   std::uint32_t clockIn;
 };
 static_assert(sizeof(IntegratePush) == 20);
+static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
 struct ReachPush {
   std::uint32_t n, midpointLookahead;
 };

@@ -347,13 +347,18 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
     ASSERT_EQ(layout == sim::ListLayout::Interleaved ? particleStride : entryStride, 1u);
     const auto list = st.solver->neighbourList().readback<std::uint32_t>(std::size_t(n) * s.neighbourCapacity);
     std::vector<std::uint32_t> flat;  // every list in slot order, as ids
-    std::size_t pairs = 0, seam = 0, mismatches = 0;
+    std::size_t pairs = 0, seam = 0, mismatches = 0, kindMismatches = 0, boundaryEntries = 0;
     for (std::uint32_t slot = 0; slot < n; ++slot) {
       const std::uint32_t i = slotIds[slot];
       const bool fluidI = c.vel[i].w == float(sim::ParticleKind::Fluid);
       std::vector<std::uint32_t> got;
       for (std::uint32_t k = 0; k < counts[slot]; ++k) {
-        got.push_back(slotIds[list[std::size_t(slot) * particleStride + std::size_t(k) * entryStride]]);
+        const std::uint32_t entry = list[std::size_t(slot) * particleStride + std::size_t(k) * entryStride];
+        const std::uint32_t j = slotIds[entry & ~sim::SphSolver::kListBoundaryBit];
+        got.push_back(j);
+        // a boundary or wall neighbour's entry is marked
+        kindMismatches += ((entry & sim::SphSolver::kListBoundaryBit) != 0) != (c.vel[j].w != float(sim::ParticleKind::Fluid));
+        boundaryEntries += (entry & sim::SphSolver::kListBoundaryBit) != 0;
       }
       flat.insert(flat.end(), got.begin(), got.end());
       std::sort(got.begin(), got.end());
@@ -381,6 +386,8 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
       }
     }
     EXPECT_EQ(mismatches, 0u);
+    EXPECT_EQ(kindMismatches, 0u) << "entries whose boundary mark does not match the neighbour's kind";
+    EXPECT_GT(boundaryEntries, 1000u);
     EXPECT_GT(pairs, 20000u);
     EXPECT_GT(seam, 1000u) << "the case must have pairs across the periodic seam";
     if (firstLists.empty()) {
@@ -392,8 +399,9 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
 }
 
 // The density pass's interacting pairs: of each fluid particle's list, exactly the entries
-// within interaction range (the support, or the repulsion's reach where larger), in list
-// order, in both list layouts. The list's skin must leave entries out, or nothing is tested.
+// within interaction range (the support, or the repulsion's reach where larger), the fluid
+// ones from the first entry and the boundary ones from the last, each in list order, in both
+// list layouts. The list's skin must leave entries out, or nothing is tested.
 TEST_F(SphStageTest, InteractingPairsAreTheListEntriesWithinRange) {
   auto rng = rngFor();
   sim::SphSettings s = settings();
@@ -415,35 +423,46 @@ TEST_F(SphStageTest, InteractingPairsAreTheListEntriesWithinRange) {
     auto at = [&](std::uint32_t slot, std::uint32_t k) {
       return std::size_t(slot) * p.listParticleStride + std::size_t(k) * p.listStride;
     };
-    std::size_t fluid = 0, listed = 0, kept = 0, mismatches = 0;
+    std::size_t fluid = 0, listed = 0, kept = 0, keptBoundary = 0, mismatches = 0;
     for (std::uint32_t slot = 0; slot < n; ++slot) {
       if (velocities[slot].w != float(sim::ParticleKind::Fluid)) continue;
       ++fluid;
-      std::vector<std::uint32_t> want, got, undecided;
+      // in range: the fluid neighbours in list order, then the boundary ones in list order
+      std::vector<std::uint32_t> wantFluid, wantBoundary, got, undecided;
       for (std::uint32_t k = 0; k < counts[slot]; ++k) {
-        const std::uint32_t j = list[at(slot, k)];
+        const std::uint32_t entry = list[at(slot, k)];
+        const std::uint32_t j = entry & ~sim::SphSolver::kListBoundaryBit;
         const double r2 = glm::dot(glm::dvec3(positions[slot]) - glm::dvec3(positions[j]),
                                    glm::dvec3(positions[slot]) - glm::dvec3(positions[j]));
         if (std::abs(r2 - keep2) < 1e-5 * keep2) {
           undecided.push_back(j);  // float rounding may decide either way
         } else if (r2 < keep2) {
-          want.push_back(j);
+          (velocities[j].w == float(sim::ParticleKind::Fluid) ? wantFluid : wantBoundary).push_back(j);
         }
       }
-      ASSERT_LE(pairCounts[slot], counts[slot]);
-      for (std::uint32_t k = 0; k < pairCounts[slot]; ++k) {
+      std::vector<std::uint32_t> want = wantFluid;
+      want.insert(want.end(), wantBoundary.begin(), wantBoundary.end());
+      // the pair list: fluid pairs from entry 0 up, boundary pairs from the last entry down
+      const std::uint32_t fluidPairs = pairCounts[slot] & 0xffffu, boundaryPairs = pairCounts[slot] >> 16;
+      ASSERT_LE(fluidPairs + boundaryPairs, counts[slot]);
+      std::vector<std::uint32_t> order;
+      for (std::uint32_t k = 0; k < fluidPairs; ++k) order.push_back(k);
+      for (std::uint32_t k = 0; k < boundaryPairs; ++k) order.push_back(s.neighbourCapacity - 1 - k);
+      for (const std::uint32_t k : order) {
         const std::uint32_t j = pairs[at(slot, k)];
         if (std::find(undecided.begin(), undecided.end(), j) == undecided.end()) got.push_back(j);
       }
       listed += counts[slot];
-      kept += pairCounts[slot];
+      kept += fluidPairs + boundaryPairs;
+      keptBoundary += boundaryPairs;
       if (got != want && ++mismatches <= 5) {
         ADD_FAILURE() << "slot " << slot << ": " << got.size() << " interacting pairs, " << want.size()
-                      << " list entries within range";
+                      << " list entries within range (or another order)";
       }
     }
     EXPECT_EQ(mismatches, 0u);
     EXPECT_GT(fluid, 300u);
+    EXPECT_GT(keptBoundary, 1000u) << "the case must have boundary pairs";
     EXPECT_LT(kept, listed * 9 / 10) << "the list's skin should hold entries beyond the interaction range";
     EXPECT_GT(kept, listed / 2);
   }

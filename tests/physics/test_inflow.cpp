@@ -206,7 +206,8 @@ TEST_F(InflowTest, NeighbourListStaysCompleteWhileTheBloodDrifts) {
       if (vel[i].w != float(sim::ParticleKind::Fluid)) continue;
       std::vector<std::uint32_t> have;
       for (std::uint32_t k = 0; k < counts[i]; ++k) {
-        have.push_back(list[std::size_t(i) * p.listParticleStride + std::size_t(k) * p.listStride]);
+        have.push_back(list[std::size_t(i) * p.listParticleStride + std::size_t(k) * p.listStride] &
+                       ~sim::SphSolver::kListBoundaryBit);
       }
       std::sort(have.begin(), have.end());
       for (std::uint32_t k = 0; k < n; ++k) {

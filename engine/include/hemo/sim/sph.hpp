@@ -173,6 +173,11 @@ class SphSolver {
   const gpu::Buffer& dtLimits() const { return dtLimit_; }
   const gpu::Buffer& neighbourCounts() const { return ncount_; }
   const gpu::Buffer& neighbourList() const { return nlist_; }
+  // A neighbour-list entry is a slot, with kListBoundaryBit set for a boundary or wall
+  // neighbour (interface/sph.h); the interacting-pair list holds plain slots, the fluid pairs
+  // from entry 0 up and the boundary pairs from entry capacity - 1 down, and its count packs
+  // fluid | boundary << 16.
+  static constexpr std::uint32_t kListBoundaryBit = 0x80000000u;
   // List entries the pair passes read per texel: 4 with the contiguous layout and a capacity
   // that is a multiple of 4, else 1 (common/sph_params.glsl, hemo_list_texel).
   std::uint32_t listReadWidth() const { return listWidth_; }
