@@ -8,6 +8,14 @@ float hemo_kernel_w(float r, float h, float kernelNorm) {
   return kernelNorm * t2 * t2 * (2.0 * q + 1.0);
 }
 
+// The same with 1 / h given (the pair loops' form: a multiplication, not a division, per pair).
+float hemo_kernel_w_inv(float r, float invH, float kernelNorm) {
+  const float q = r * invH;
+  const float t = 1.0 - 0.5 * q;
+  const float t2 = t * t;
+  return kernelNorm * t2 * t2 * (2.0 * q + 1.0);
+}
+
 // dW/dr / r, the factor that turns a separation d (|d| = r) into grad W = d * factor:
 //   kernelNorm * (-5 q (1 - q/2)^3) / (h r) = gradNorm * (1 - q/2)^3,  gradNorm = -5 kernelNorm / h^2.
 // No division by r, so a coincident pair gets grad W = 0; (1 - q/2) is clamped at 0, so any r

@@ -84,9 +84,19 @@ uvec2 hemo_pair_counts(uint packed) {
   return uvec2(packed & 0xffffu, packed >> 16u);
 }
 
+// Specialization constant HEMO_SPEC_PERIODIC_AXES (interface/sph.h) of the passes that
+// include this file: the periodic axes, bit a for axis a. The pair loops take the minimum
+// image on those axes only, so a bounded axis costs nothing per pair; the default, all three,
+// gives the same separations (on a bounded axis the period and its reciprocal are 0).
+layout(constant_id = HEMO_SPEC_PERIODIC_AXES) const uint kPeriodicAxes = 7u;
+
 // Minimum-image separation (unchanged on non-periodic axes).
 vec3 hemo_min_image(vec3 d, HemoPairParams pp) {
-  return d - pp.period * round(d * pp.invPeriod);
+  vec3 r = d;
+  if ((kPeriodicAxes & 1u) != 0u) r.x = d.x - pp.period.x * round(d.x * pp.invPeriod.x);
+  if ((kPeriodicAxes & 2u) != 0u) r.y = d.y - pp.period.y * round(d.y * pp.invPeriod.y);
+  if ((kPeriodicAxes & 4u) != 0u) r.z = d.z - pp.period.z * round(d.z * pp.invPeriod.z);
+  return r;
 }
 
 // Position wrapped into [origin, origin + period) on periodic axes (needs `params` bound).

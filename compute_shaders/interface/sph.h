@@ -14,6 +14,10 @@
 // the records it writes and texel for those it reads; no record is both.
 
 // Particle kinds, stored as a float in velocities[i].w (exact small integers).
+// Specialization constant of the SPH pair passes (density, boundary pressure, SPS, forces,
+// the wall's reaction): the periodic axes, bit a for axis a (common/sph_params.glsl). An id
+// past the passes' own constants (1, 2).
+#define HEMO_SPEC_PERIODIC_AXES 9
 #define HEMO_KIND_FLUID 0
 #define HEMO_KIND_BOUNDARY 1  // rigid: fixed position, counts in density, viscosity, repulsion
 #define HEMO_KIND_WALL 2      // vessel wall: a boundary particle for the fluid that moves as a mass

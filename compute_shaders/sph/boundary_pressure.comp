@@ -42,6 +42,7 @@ layout(push_constant) uniform Push {
 // The loop's state, shared by its body (pair()) whichever way the list is read.
 vec3 gXb;
 HemoPairParams gPp;
+float gInvH;
 float gSumW, gSumP;
 vec3 gSumRhoR, gSumV;
 
@@ -52,7 +53,7 @@ void pair(uint f, bool valid) {
   if (!valid || r2 >= gPp.support2) {
     return;
   }
-  const float w = hemo_kernel_w(sqrt(r2), gPp.h, gPp.kernelNorm);
+  const float w = hemo_kernel_w_inv(sqrt(r2), gInvH, gPp.kernelNorm);
   const vec2 sf = texelFetch(fluidState, int(f)).xy;
   gSumW += w;
   gSumP += sf.y * w;
@@ -73,6 +74,7 @@ void main() {
   const vec3 xb = xb4.xyz;
   gXb = xb;
   gPp = hemo_pair_params();
+  gInvH = 1.0 / gPp.h;
   gSumW = 0.0;
   gSumP = 0.0;
   gSumRhoR = vec3(0.0);

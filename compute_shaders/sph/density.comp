@@ -95,7 +95,7 @@ void pair(uint entry, bool valid) {
       gDiffused += 2.0 * ((rhoJ - gRho) - hydro) * (-dot(d, gradW)) / (r2 + gEtaSq) * (pj.w / rhoJ);
     }
   } else if (valid && r2 < gPp.support2) {
-    gRho += pj.w * hemo_kernel_w(sqrt(r2), gPp.h, gPp.kernelNorm);
+    gRho += pj.w * hemo_kernel_w_inv(sqrt(r2), gInvH, gPp.kernelNorm);
   }
 }
 
@@ -128,6 +128,7 @@ void main() {
     gHydroScale = params.rho0 / params.taitB;
     gEtaSq = params.etaSq;  // registers
   } else {
+    gInvH = 1.0 / gPp.h;
     gRho = gPi.w * hemo_kernel_w(0.0, gPp.h, gPp.kernelNorm);
   }
   for (uint k = 0u; k < count; k += kListWidth) {

@@ -27,6 +27,7 @@ struct IntegratePush {
 };
 static_assert(sizeof(IntegratePush) == 20);
 static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
+
 struct ReachPush {
   std::uint32_t n, midpointLookahead;
 };
@@ -200,6 +201,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   // (common/sph_params.glsl, hemo_list_texel): specialization constant 2 of the pair passes.
   listWidth_ = contiguous && settings.neighbourCapacity % 4u == 0u ? 4u : 1u;
   const VkFormat listFormat = listWidth_ == 4u ? gpu::texel::kUvec4 : gpu::texel::kUint;
+  for (int a = 0; a < 3; ++a) {
+    if (grid_.spec().periodic(a)) periodicAxes_ |= 1u << a;
+  }
   const GridSpec& spec = grid_.spec();
   for (int a = 0; a < 3; ++a) {
     params_.origin[a] = spec.origin[a];
@@ -218,22 +222,22 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   const std::uint32_t continuity = settings.densityMethod == DensityMethod::Summation ? 0u
                                    : settings.integrator == Integrator::Rk2Midpoint  ? 2u
                                                                                      : 1u;
-  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {continuity, listWidth_},
+  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, pairSpecialization({continuity, listWidth_}),
                          1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK,
                          1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
                              1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
                              1u << HEMO_DENSITY_BINDING_NORMALS});
-  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, {listWidth_},
+  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, pairSpecialization({listWidth_}),
                                   1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK,
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
                                       1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
                                       1u << HEMO_BPRESSURE_BINDING_FLUID_STATE});
-  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {listWidth_}, 1u << HEMO_SPS_BINDING_PARAMS,
+  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, pairSpecialization({listWidth_}), 1u << HEMO_SPS_BINDING_PARAMS,
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
                                1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
   // constant 1: the SPS term compiled in or out; 2: the list's read width
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup,
-                        {settings.sps ? 1u : 0u, listWidth_}, 1u << HEMO_FORCES_BINDING_PARAMS,
+                        pairSpecialization({settings.sps ? 1u : 0u, listWidth_}), 1u << HEMO_FORCES_BINDING_PARAMS,
                         1u << HEMO_FORCES_BINDING_POSITIONS | 1u << HEMO_FORCES_BINDING_VELOCITIES | 1u << HEMO_FORCES_BINDING_STATE |
                             1u << HEMO_FORCES_BINDING_NCOUNT | 1u << HEMO_FORCES_BINDING_NORMALS | 1u << HEMO_FORCES_BINDING_NLIST | 1u << HEMO_FORCES_BINDING_TAU_A |
                             1u << HEMO_FORCES_BINDING_TAU_B | 1u << HEMO_FORCES_BINDING_VISCOUS_VEL |
@@ -334,11 +338,19 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_REACH_BINDING_REACH, &reach_}});
 }
 
+std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32_t> constants) const {
+  // constants 1, 2, ... of the pass, then HEMO_SPEC_PERIODIC_AXES (interface/sph.h)
+  constants.resize(HEMO_SPEC_PERIODIC_AXES - 1, 0u);
+  constants.push_back(periodicAxes_);
+  return constants;
+}
+
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
 void SphSolver::attachWall(const SpringNetwork& network) {
   const FluidBuffers fluid{&grid_.slotOfId(), &accel_,  &dtLimit_, &paramsBuffer_,       &state_,
-                           &ncount_,           &nlist_,  &viscousVel_, &pairPosition_, listWidth_};
+                           &ncount_,           &nlist_,  &viscousVel_, &pairPosition_, listWidth_,
+                           pairSpecialization({listWidth_})};
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }

@@ -127,7 +127,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
       1u << HEMO_SPRINGF_BINDING_SPRINGS_OF | 1u << HEMO_SPRINGF_BINDING_WALL_INFO | 1u << HEMO_SPRINGF_BINDING_STATE |
       1u << HEMO_SPRINGF_BINDING_NCOUNT | 1u << HEMO_SPRINGF_BINDING_NLIST | 1u << HEMO_SPRINGF_BINDING_FRAMES |
       1u << HEMO_SPRINGF_BINDING_WALL_VEL | 1u << HEMO_SPRINGF_BINDING_PAIR_POSITION | 1u << HEMO_SPRINGF_BINDING_FLUID_ACCEL;
-  forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, {fluid.listReadWidth},
+  forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, fluid.reactionSpecialization,
                         1u << HEMO_SPRINGF_BINDING_PARAMS, springTexels});
   shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}, 1u << HEMO_SHADE_BINDING_PARAMS});
   const ParticleArrays& a = particles.live();

@@ -181,6 +181,9 @@ class SphSolver {
   // List entries the pair passes read per texel: 4 with the contiguous layout and a capacity
   // that is a multiple of 4, else 1 (common/sph_params.glsl, hemo_list_texel).
   std::uint32_t listReadWidth() const { return listWidth_; }
+  // A pair pass's specialization constants: its own (1, 2, ...), then the periodic axes at
+  // HEMO_SPEC_PERIODIC_AXES (interface/sph.h); the wall's reaction pass uses it too.
+  std::vector<std::uint32_t> pairSpecialization(std::vector<std::uint32_t> constants) const;
   // A fluid particle's list entries within interaction range at the last density pass, in
   // list order and layout (interface/sph.h, HEMO_DENSITY_BINDING_PAIR_LIST), and their number.
   const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
@@ -211,6 +214,7 @@ class SphSolver {
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
+  std::uint32_t periodicAxes_ = 0;  // bit a: axis a is periodic (HEMO_SPEC_PERIODIC_AXES)
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, driftX_, reach_, viscousVel_;
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   gpu::Buffer clock_, status_, log_;

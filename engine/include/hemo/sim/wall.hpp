@@ -75,6 +75,7 @@ struct FluidBuffers {
   const gpu::Buffer* viscousVelocities;  // a wall particle's entry: the no-slip velocity the fluid saw
   const gpu::Buffer* pairPositions;      // (x, V p) per slot (interface/sph.h, the pair data)
   std::uint32_t listReadWidth;           // list entries per texel read (SphSolver::listReadWidth)
+  std::vector<std::uint32_t> reactionSpecialization;  // of the spring pass (SphSolver::pairSpecialization)
 };
 
 class MassSpring {
