@@ -7,7 +7,7 @@
 #include "interface/grid.h"
 #include "common/index.glsl"
 
-layout(std430, binding = HEMO_RANGES_BINDING_PAIRS) readonly buffer Pairs { uvec2 pairs[]; };
+layout(binding = HEMO_RANGES_BINDING_PAIRS) uniform usamplerBuffer pairs;  // (cell, slot), a texel slot
 layout(std430, binding = HEMO_RANGES_BINDING_CELL_START) writeonly buffer CellStart { uint cellStart[]; };
 layout(push_constant) uniform Push { uint n; uint cellCount; } pc;
 
@@ -16,8 +16,8 @@ void main() {
   if (i > pc.n) {
     return;
   }
-  const uint first = i == 0u ? 0u : pairs[i - 1u].x + 1u;
-  const uint last = i == pc.n ? pc.cellCount : pairs[i].x;
+  const uint first = i == 0u ? 0u : texelFetch(pairs, int(i) - 1).x + 1u;
+  const uint last = i == pc.n ? pc.cellCount : texelFetch(pairs, int(i)).x;
   for (uint c = first; c <= last; ++c) {
     cellStart[c] = i;
   }

@@ -8,7 +8,7 @@
 #include "common/index.glsl"
 #include "common/grid.glsl"
 
-layout(std430, binding = HEMO_HASH_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
+layout(binding = HEMO_HASH_BINDING_POSITIONS) uniform samplerBuffer positions;  // a texel slot
 layout(std430, binding = HEMO_HASH_BINDING_PAIRS) writeonly buffer Pairs { uvec2 pairs[]; };
 layout(std430, binding = HEMO_HASH_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(push_constant) uniform Push { HemoGrid grid; } pc;
@@ -18,7 +18,7 @@ void main() {
   if (i >= pc.grid.dimsN.w) {
     return;
   }
-  const vec3 p = positions[i].xyz;
+  const vec3 p = texelFetch(positions, int(i)).xyz;
   uint cell = 0u;
   if (any(isnan(p)) || any(isinf(p))) {
     atomicAdd(counters[HEMO_COUNTER_NONFINITE], 1u);

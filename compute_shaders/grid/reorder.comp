@@ -8,15 +8,15 @@
 #include "interface/grid.h"
 #include "common/index.glsl"
 
-layout(std430, binding = HEMO_REORDER_BINDING_PAIRS) readonly buffer Pairs { uvec2 pairs[]; };
-layout(std430, binding = HEMO_REORDER_BINDING_POS_IN) readonly buffer PosIn { vec4 posIn[]; };
-layout(std430, binding = HEMO_REORDER_BINDING_VEL_IN) readonly buffer VelIn { vec4 velIn[]; };
-layout(std430, binding = HEMO_REORDER_BINDING_ID_IN) readonly buffer IdIn { uint idIn[]; };
+layout(binding = HEMO_REORDER_BINDING_PAIRS) uniform usamplerBuffer pairs;  // (cell, source slot)
+layout(binding = HEMO_REORDER_BINDING_POS_IN) uniform samplerBuffer posIn;
+layout(binding = HEMO_REORDER_BINDING_VEL_IN) uniform samplerBuffer velIn;
+layout(binding = HEMO_REORDER_BINDING_ID_IN) uniform usamplerBuffer idIn;
 layout(std430, binding = HEMO_REORDER_BINDING_POS_OUT) writeonly buffer PosOut { vec4 posOut[]; };
 layout(std430, binding = HEMO_REORDER_BINDING_VEL_OUT) writeonly buffer VelOut { vec4 velOut[]; };
 layout(std430, binding = HEMO_REORDER_BINDING_ID_OUT) writeonly buffer IdOut { uint idOut[]; };
 layout(std430, binding = HEMO_REORDER_BINDING_SLOT_OF_ID) writeonly buffer SlotOfId { uint slotOfId[]; };
-layout(std430, binding = HEMO_REORDER_BINDING_NORMAL_IN) readonly buffer NormalIn { vec4 normalIn[]; };
+layout(binding = HEMO_REORDER_BINDING_NORMAL_IN) uniform samplerBuffer normalIn;
 layout(std430, binding = HEMO_REORDER_BINDING_NORMAL_OUT) writeonly buffer NormalOut { vec4 normalOut[]; };
 layout(std430, binding = HEMO_REORDER_BINDING_POS_AT_BUILD) writeonly buffer PosAtBuild { vec4 posAtBuild[]; };
 layout(push_constant) uniform Push { uint n; uint idCapacity; } pc;
@@ -26,14 +26,14 @@ void main() {
   if (i >= pc.n) {
     return;
   }
-  const uint src = pairs[i].y;
-  const vec4 p = posIn[src];
-  const vec4 v = velIn[src];
+  const int src = int(texelFetch(pairs, int(i)).y);
+  const vec4 p = texelFetch(posIn, src);
+  const vec4 v = texelFetch(velIn, src);
   posOut[i] = p;
   posAtBuild[i] = vec4(p.xyz, v.w);
   velOut[i] = v;
-  normalOut[i] = normalIn[src];
-  const uint id = idIn[src];
+  normalOut[i] = texelFetch(normalIn, src);
+  const uint id = texelFetch(idIn, src).x;
   idOut[i] = id;
   if (id < pc.idCapacity) {
     slotOfId[id] = i;  // ids are unique, so this scatter has exactly one writer per entry

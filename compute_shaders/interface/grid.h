@@ -23,17 +23,6 @@
 #define HEMO_RANGES_BINDING_CELL_START 1
 #define HEMO_RANGES_BINDING_COUNT 2
 
-// grid/copy_particles.comp: live arrays -> scratch arrays.
-#define HEMO_COPY_BINDING_POS_IN 0
-#define HEMO_COPY_BINDING_VEL_IN 1
-#define HEMO_COPY_BINDING_NORMAL_IN 2
-#define HEMO_COPY_BINDING_ID_IN 3
-#define HEMO_COPY_BINDING_POS_OUT 4
-#define HEMO_COPY_BINDING_VEL_OUT 5
-#define HEMO_COPY_BINDING_NORMAL_OUT 6
-#define HEMO_COPY_BINDING_ID_OUT 7
-#define HEMO_COPY_BINDING_COUNT 8
-
 // grid/reorder.comp: gathers particle data (from the scratch arrays) into sorted order in the
 // live arrays, records the positions at this build, and updates id -> slot.
 #define HEMO_REORDER_BINDING_PAIRS 0

@@ -101,33 +101,32 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
                   "positions at the last grid build"),
       sort_(context, pairs_, particles.capacity()) {
   spec_.validate();
-  hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}});
-  ranges_ = &context.pipelines().get({"grid/cell_ranges", HEMO_RANGES_BINDING_COUNT, sizeof(RangesPush), kWorkgroup, {}});
-  rangesSet_ = ranges_->makeSet({{HEMO_RANGES_BINDING_PAIRS, &pairs_}, {HEMO_RANGES_BINDING_CELL_START, &cellStart_}});
-  copy_ = &context.pipelines().get({"grid/copy_particles", HEMO_COPY_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
-  reorder_ = &context.pipelines().get({"grid/reorder", HEMO_REORDER_BINDING_COUNT, sizeof(ReorderPush), kWorkgroup, {}});
+  hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}, 0u,
+                                    1u << HEMO_HASH_BINDING_POSITIONS});
+  ranges_ = &context.pipelines().get({"grid/cell_ranges", HEMO_RANGES_BINDING_COUNT, sizeof(RangesPush), kWorkgroup, {}, 0u,
+                                      1u << HEMO_RANGES_BINDING_PAIRS});
+  rangesSet_ = ranges_->makeSet({gpu::texelBinding(HEMO_RANGES_BINDING_PAIRS, &pairs_, gpu::texel::kUvec2),
+                                 {HEMO_RANGES_BINDING_CELL_START, &cellStart_}});
+  // Read-only inputs are texel slots (gpu/pipeline.hpp, texelSlots): llvmpipe reads a storage
+  // buffer lane by lane.
+  reorder_ = &context.pipelines().get({"grid/reorder", HEMO_REORDER_BINDING_COUNT, sizeof(ReorderPush), kWorkgroup, {}, 0u,
+                                       1u << HEMO_REORDER_BINDING_PAIRS | 1u << HEMO_REORDER_BINDING_POS_IN |
+                                           1u << HEMO_REORDER_BINDING_VEL_IN | 1u << HEMO_REORDER_BINDING_ID_IN |
+                                           1u << HEMO_REORDER_BINDING_NORMAL_IN});
   const ParticleArrays& live = particles.live();
   const ParticleArrays& scratch = particles.scratch();
-  hashSet_ = hash_->makeSet({{HEMO_HASH_BINDING_POSITIONS, &live.positions},
+  hashSet_ = hash_->makeSet({gpu::texelBinding(HEMO_HASH_BINDING_POSITIONS, &live.positions, gpu::texel::kVec4),
                              {HEMO_HASH_BINDING_PAIRS, &pairs_},
                              {HEMO_HASH_BINDING_COUNTERS, &counters_}});
-  copySet_ = copy_->makeSet({{HEMO_COPY_BINDING_POS_IN, &live.positions},
-                             {HEMO_COPY_BINDING_VEL_IN, &live.velocities},
-                             {HEMO_COPY_BINDING_NORMAL_IN, &live.normals},
-                             {HEMO_COPY_BINDING_ID_IN, &live.ids},
-                             {HEMO_COPY_BINDING_POS_OUT, &scratch.positions},
-                             {HEMO_COPY_BINDING_VEL_OUT, &scratch.velocities},
-                             {HEMO_COPY_BINDING_NORMAL_OUT, &scratch.normals},
-                             {HEMO_COPY_BINDING_ID_OUT, &scratch.ids}});
-  reorderSet_ = reorder_->makeSet({{HEMO_REORDER_BINDING_PAIRS, &pairs_},
-                                   {HEMO_REORDER_BINDING_POS_IN, &scratch.positions},
-                                   {HEMO_REORDER_BINDING_VEL_IN, &scratch.velocities},
-                                   {HEMO_REORDER_BINDING_ID_IN, &scratch.ids},
+  reorderSet_ = reorder_->makeSet({gpu::texelBinding(HEMO_REORDER_BINDING_PAIRS, &pairs_, gpu::texel::kUvec2),
+                                   gpu::texelBinding(HEMO_REORDER_BINDING_POS_IN, &scratch.positions, gpu::texel::kVec4),
+                                   gpu::texelBinding(HEMO_REORDER_BINDING_VEL_IN, &scratch.velocities, gpu::texel::kVec4),
+                                   gpu::texelBinding(HEMO_REORDER_BINDING_ID_IN, &scratch.ids, gpu::texel::kUint),
                                    {HEMO_REORDER_BINDING_POS_OUT, &live.positions},
                                    {HEMO_REORDER_BINDING_VEL_OUT, &live.velocities},
                                    {HEMO_REORDER_BINDING_ID_OUT, &live.ids},
                                    {HEMO_REORDER_BINDING_SLOT_OF_ID, &slotOfId_},
-                                   {HEMO_REORDER_BINDING_NORMAL_IN, &scratch.normals},
+                                   gpu::texelBinding(HEMO_REORDER_BINDING_NORMAL_IN, &scratch.normals, gpu::texel::kVec4),
                                    {HEMO_REORDER_BINDING_NORMAL_OUT, &live.normals},
                                    {HEMO_REORDER_BINDING_POS_AT_BUILD, &posAtBuild_}});
 }
@@ -163,8 +162,18 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
   rec.dispatch(*ranges_, rangesSet_, RangesPush{n, static_cast<std::uint32_t>(cells)}, ranges_->groupsFor(n + 1));
   rec.computeToCompute();
   mark("cell ranges");
-  rec.dispatch(*copy_, copySet_, CountPush{n}, copy_->groupsFor(n));
-  rec.computeToCompute();
+  // The live arrays to scratch, as transfers (a copy, where a shader would store lane by lane
+  // on llvmpipe), then gathered back in cell order.
+  if (n > 0) {
+    const ParticleArrays& live = particles_->live();
+    const ParticleArrays& scratch = particles_->scratch();
+    rec.computeToTransfer();
+    rec.copy(live.positions, scratch.positions, std::uint64_t(n) * 16);
+    rec.copy(live.velocities, scratch.velocities, std::uint64_t(n) * 16);
+    rec.copy(live.normals, scratch.normals, std::uint64_t(n) * 16);
+    rec.copy(live.ids, scratch.ids, std::uint64_t(n) * 4);
+    rec.transferToCompute();
+  }
   rec.dispatch(*reorder_, reorderSet_, ReorderPush{n, particles_->capacity()}, reorder_->groupsFor(n));
   rec.computeToCompute();
   mark("reorder");

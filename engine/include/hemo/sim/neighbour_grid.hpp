@@ -76,7 +76,6 @@ class NeighbourGrid {
   ParticleStore* particles_;
   const gpu::ComputePipeline* hash_;
   const gpu::ComputePipeline* ranges_;
-  const gpu::ComputePipeline* copy_;
   const gpu::ComputePipeline* reorder_;
   gpu::Buffer pairs_;
   gpu::Buffer cellStart_;
@@ -84,7 +83,7 @@ class NeighbourGrid {
   gpu::Buffer slotOfId_;
   gpu::Buffer posAtBuild_;
   gpu::RadixSort sort_;
-  gpu::DescriptorSet hashSet_, rangesSet_, copySet_, reorderSet_;
+  gpu::DescriptorSet hashSet_, rangesSet_, reorderSet_;
 };
 
 // Every particle's neighbours closer than `radius` (<= cell size), as ascending slots of the
