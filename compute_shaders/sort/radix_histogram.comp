@@ -5,7 +5,7 @@
 #include "interface/sort.h"
 #include "common/index.glsl"
 
-layout(std430, binding = HEMO_SORT_BINDING_PAIRS_IN) readonly buffer PairsIn { uvec2 pairsIn[]; };
+layout(binding = HEMO_SORT_BINDING_PAIRS_IN) uniform usamplerBuffer pairsIn;  // uvec2 texels
 layout(std430, binding = HEMO_SORT_BINDING_COUNTS) writeonly buffer Counts { uint counts[]; };
 layout(push_constant) uniform Push { uint n; uint shift; uint chunkSize; uint chunkCount; uint digitBits; } pc;
 
@@ -23,7 +23,7 @@ void main() {
   const uint first = chunk * pc.chunkSize;
   const uint last = min(first + pc.chunkSize, pc.n);
   for (uint i = first; i < last; ++i) {
-    histogram[(pairsIn[i].x >> pc.shift) & mask] += 1u;
+    histogram[(texelFetch(pairsIn, int(i)).x >> pc.shift) & mask] += 1u;
   }
   for (uint b = 0u; b < buckets; ++b) {
     counts[b * pc.chunkCount + chunk] = histogram[b];

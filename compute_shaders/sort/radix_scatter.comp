@@ -6,8 +6,8 @@
 #include "interface/sort.h"
 #include "common/index.glsl"
 
-layout(std430, binding = HEMO_SORT_BINDING_PAIRS_IN) readonly buffer PairsIn { uvec2 pairsIn[]; };
-layout(std430, binding = HEMO_SORT_BINDING_COUNTS) readonly buffer Offsets { uint offsets[]; };
+layout(binding = HEMO_SORT_BINDING_PAIRS_IN) uniform usamplerBuffer pairsIn;  // uvec2 texels
+layout(binding = HEMO_SORT_BINDING_COUNTS) uniform usamplerBuffer offsets;
 layout(std430, binding = HEMO_SORT_BINDING_PAIRS_OUT) writeonly buffer PairsOut { uvec2 pairsOut[]; };
 layout(push_constant) uniform Push { uint n; uint shift; uint chunkSize; uint chunkCount; uint digitBits; } pc;
 
@@ -20,12 +20,12 @@ void main() {
   const uint mask = buckets - 1u;
   uint next[HEMO_RADIX_BUCKETS];
   for (uint b = 0u; b < buckets; ++b) {
-    next[b] = offsets[b * pc.chunkCount + chunk];
+    next[b] = texelFetch(offsets, int(b * pc.chunkCount + chunk)).x;
   }
   const uint first = chunk * pc.chunkSize;
   const uint last = min(first + pc.chunkSize, pc.n);
   for (uint i = first; i < last; ++i) {
-    const uvec2 p = pairsIn[i];
+    const uvec2 p = texelFetch(pairsIn, int(i)).xy;
     const uint b = (p.x >> pc.shift) & mask;
     pairsOut[next[b]] = p;
     next[b] += 1u;

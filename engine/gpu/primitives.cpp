@@ -161,21 +161,24 @@ RadixSort::RadixSort(Context& context, const Buffer& pairs, std::uint64_t capaci
     throw std::invalid_argument("RadixSort: buffer '" + pairs.name() + "' is smaller than " +
                                 std::to_string(capacity) + " pairs");
   }
-  histogram_ = &context.pipelines().get(
-      {"sort/radix_histogram", HEMO_SORT_BINDING_COUNT, sizeof(SortPush), kWorkgroup, {}});
-  scatter_ = &context.pipelines().get({"sort/radix_scatter", HEMO_SORT_BINDING_COUNT, sizeof(SortPush), kWorkgroup, {}});
+  // The pairs read (and the scatter's offsets) are texel slots: llvmpipe reads a storage
+  // buffer lane by lane.
+  histogram_ = &context.pipelines().get({"sort/radix_histogram", HEMO_SORT_BINDING_COUNT, sizeof(SortPush), kWorkgroup,
+                                         {}, 0u, 1u << HEMO_SORT_BINDING_PAIRS_IN});
+  scatter_ = &context.pipelines().get({"sort/radix_scatter", HEMO_SORT_BINDING_COUNT, sizeof(SortPush), kWorkgroup, {}, 0u,
+                                       1u << HEMO_SORT_BINDING_PAIRS_IN | 1u << HEMO_SORT_BINDING_COUNTS});
   // The histogram pass only reads pairs and writes counts; PAIRS_OUT is bound but unused.
-  histFromPairs_ = histogram_->makeSet({{HEMO_SORT_BINDING_PAIRS_IN, &pairs},
+  histFromPairs_ = histogram_->makeSet({texelBinding(HEMO_SORT_BINDING_PAIRS_IN, &pairs, texel::kUvec2),
                                         {HEMO_SORT_BINDING_COUNTS, &counts_},
                                         {HEMO_SORT_BINDING_PAIRS_OUT, &scratch_}});
-  histFromScratch_ = histogram_->makeSet({{HEMO_SORT_BINDING_PAIRS_IN, &scratch_},
+  histFromScratch_ = histogram_->makeSet({texelBinding(HEMO_SORT_BINDING_PAIRS_IN, &scratch_, texel::kUvec2),
                                           {HEMO_SORT_BINDING_COUNTS, &counts_},
                                           {HEMO_SORT_BINDING_PAIRS_OUT, &pairs}});
-  scatterToScratch_ = scatter_->makeSet({{HEMO_SORT_BINDING_PAIRS_IN, &pairs},
-                                         {HEMO_SORT_BINDING_COUNTS, &counts_},
+  scatterToScratch_ = scatter_->makeSet({texelBinding(HEMO_SORT_BINDING_PAIRS_IN, &pairs, texel::kUvec2),
+                                         texelBinding(HEMO_SORT_BINDING_COUNTS, &counts_, texel::kUint),
                                          {HEMO_SORT_BINDING_PAIRS_OUT, &scratch_}});
-  scatterToPairs_ = scatter_->makeSet({{HEMO_SORT_BINDING_PAIRS_IN, &scratch_},
-                                       {HEMO_SORT_BINDING_COUNTS, &counts_},
+  scatterToPairs_ = scatter_->makeSet({texelBinding(HEMO_SORT_BINDING_PAIRS_IN, &scratch_, texel::kUvec2),
+                                       texelBinding(HEMO_SORT_BINDING_COUNTS, &counts_, texel::kUint),
                                        {HEMO_SORT_BINDING_PAIRS_OUT, &pairs}});
 }
 
