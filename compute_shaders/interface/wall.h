@@ -24,7 +24,10 @@
 #define HEMO_RUPTURE_BINDING_SPRINGS 3
 #define HEMO_RUPTURE_BINDING_COUNTERS 4
 #define HEMO_RUPTURE_BINDING_PARAMS 5  // SphParams (the period, for the minimum image)
-#define HEMO_RUPTURE_BINDING_COUNT 6
+// The springs again, read as two uvec4 texels per record (the pass writes only the broken
+// flag of its own spring, through HEMO_RUPTURE_BINDING_SPRINGS, after reading it).
+#define HEMO_RUPTURE_BINDING_SPRINGS_T 6
+#define HEMO_RUPTURE_BINDING_COUNT 7
 
 // wall/spring_forces.comp: one invocation per particle slot; wall particles gather the forces
 // of their unbroken springs through the CSR adjacency (springsOf[first[id] .. first[id + 1]))

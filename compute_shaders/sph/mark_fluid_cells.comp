@@ -6,8 +6,9 @@
 #include "interface/sph.h"
 #include "common/index.glsl"
 
-layout(std430, binding = HEMO_MARK_BINDING_CELL_START) readonly buffer CellStart { uint cellStart[]; };
-layout(std430, binding = HEMO_MARK_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
+// Read-only inputs are uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_MARK_BINDING_CELL_START) uniform usamplerBuffer cellStart;
+layout(binding = HEMO_MARK_BINDING_VELOCITIES) uniform samplerBuffer velocities;
 layout(std430, binding = HEMO_MARK_BINDING_FLAGS) writeonly buffer Flags { uint fluidCells[]; };
 layout(push_constant) uniform Push { uint cellCount; } pc;
 
@@ -17,9 +18,9 @@ void main() {
     return;
   }
   uint flag = 0u;
-  const uint end = cellStart[c + 1u];
-  for (uint j = cellStart[c]; j < end && flag == 0u; ++j) {
-    flag = uint(velocities[j].w) == HEMO_KIND_FLUID ? 1u : 0u;
+  const uint end = texelFetch(cellStart, int(c + 1u)).x;
+  for (uint j = texelFetch(cellStart, int(c)).x; j < end && flag == 0u; ++j) {
+    flag = uint(texelFetch(velocities, int(j)).w) == HEMO_KIND_FLUID ? 1u : 0u;
   }
   fluidCells[c] = flag;
 }

@@ -9,10 +9,12 @@
 #include "wall/spring.glsl"
 #include "common/sph_params.glsl"
 
-layout(std430, binding = HEMO_RUPTURE_BINDING_POSITIONS) readonly buffer Positions { vec4 positions[]; };
-layout(std430, binding = HEMO_RUPTURE_BINDING_VELOCITIES) readonly buffer Velocities { vec4 velocities[]; };
-layout(std430, binding = HEMO_RUPTURE_BINDING_SLOT_OF_ID) readonly buffer SlotOfId { uint slotOfId[]; };
-layout(std430, binding = HEMO_RUPTURE_BINDING_SPRINGS) buffer Springs { Spring springs[]; };
+// Read-only inputs are uniform texel buffers (interface/sph.h, "texel slots").
+layout(binding = HEMO_RUPTURE_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_RUPTURE_BINDING_VELOCITIES) uniform samplerBuffer velocities;
+layout(binding = HEMO_RUPTURE_BINDING_SLOT_OF_ID) uniform usamplerBuffer slotOfId;
+layout(binding = HEMO_RUPTURE_BINDING_SPRINGS_T) uniform usamplerBuffer springsT;  // two uvec4 per Spring
+layout(std430, binding = HEMO_RUPTURE_BINDING_SPRINGS) writeonly buffer Springs { Spring springs[]; };
 layout(std430, binding = HEMO_RUPTURE_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 HEMO_SPH_PARAMS_UNIFORM(HEMO_RUPTURE_BINDING_PARAMS);
 layout(push_constant) uniform Push { uint springCount; } pc;
@@ -22,16 +24,19 @@ void main() {
   if (k >= pc.springCount) {
     return;
   }
-  const Spring s = springs[k];
-  if (s.broken != 0u) {
-    return;
+  // spring k's record (interface/wall.h): (a, b, restLength, stiffness), (damping, maxForce, broken, pad)
+  const uvec4 t0 = texelFetch(springsT, int(2u * k));
+  const uvec4 t1 = texelFetch(springsT, int(2u * k + 1u));
+  if (t1.z != 0u) {
+    return;  // broken for good
   }
-  const uint sa = slotOfId[s.a];
-  const uint sb = slotOfId[s.b];
+  const int sa = int(texelFetch(slotOfId, int(t0.x)).x);
+  const int sb = int(texelFetch(slotOfId, int(t0.y)).x);
   float tension;
-  const vec3 delta = hemo_min_image(positions[sb].xyz - positions[sa].xyz, hemo_pair_params());
-  hemo_spring_force_on_a(delta, velocities[sa].xyz, velocities[sb].xyz, s.restLength, s.stiffness, s.damping, tension);
-  if (tension > s.maxForce) {
+  const vec3 delta = hemo_min_image(texelFetch(positions, sb).xyz - texelFetch(positions, sa).xyz, hemo_pair_params());
+  hemo_spring_force_on_a(delta, texelFetch(velocities, sa).xyz, texelFetch(velocities, sb).xyz, uintBitsToFloat(t0.z),
+                         uintBitsToFloat(t0.w), uintBitsToFloat(t1.x), tension);
+  if (tension > uintBitsToFloat(t1.y)) {
     springs[k].broken = 1u;
     atomicAdd(counters[HEMO_WALL_COUNTER_BROKEN], 1u);
   }

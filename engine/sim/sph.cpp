@@ -213,7 +213,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   inflow_.upload(std::vector<InflowParams>{disabledInflowParams()});
   auto& cache = context.pipelines();
-  markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}});
+  markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 0u,
+                          1u << HEMO_MARK_BINDING_CELL_START | 1u << HEMO_MARK_BINDING_VELOCITIES});
   buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}, 1u << HEMO_BUILD_BINDING_PARAMS,
                              1u << HEMO_BUILD_BINDING_POSITIONS | 1u << HEMO_BUILD_BINDING_CELL_START |
                                  1u << HEMO_BUILD_BINDING_FLUID_CELLS});
@@ -257,8 +258,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                            1u << HEMO_REACH_BINDING_POSITIONS | 1u << HEMO_REACH_BINDING_VELOCITIES |
                                1u << HEMO_REACH_BINDING_POS_AT_BUILD});
   const ParticleArrays& a = particles.live();
-  markSet_ = markFluid_->makeSet({{HEMO_MARK_BINDING_CELL_START, &grid_.cellStart()},
-                                  {HEMO_MARK_BINDING_VELOCITIES, &a.velocities},
+  markSet_ = markFluid_->makeSet({gpu::texelBinding(HEMO_MARK_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
+                                  gpu::texelBinding(HEMO_MARK_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                   {HEMO_MARK_BINDING_FLAGS, &fluidCells_}});
   buildListSet_ = buildList_->makeSet({gpu::texelBinding(HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),

@@ -119,7 +119,9 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   wallInfo_.upload(info);
 
   auto& cache = context.pipelines();
-  rupture_ = &cache.get({"wall/rupture", HEMO_RUPTURE_BINDING_COUNT, sizeof(RupturePush), kWorkgroup, {}, 1u << HEMO_RUPTURE_BINDING_PARAMS});
+  rupture_ = &cache.get({"wall/rupture", HEMO_RUPTURE_BINDING_COUNT, sizeof(RupturePush), kWorkgroup, {}, 1u << HEMO_RUPTURE_BINDING_PARAMS,
+                         1u << HEMO_RUPTURE_BINDING_POSITIONS | 1u << HEMO_RUPTURE_BINDING_VELOCITIES |
+                             1u << HEMO_RUPTURE_BINDING_SLOT_OF_ID | 1u << HEMO_RUPTURE_BINDING_SPRINGS_T});
   // Every read-only input of the spring pass is a texel slot (gpu/pipeline.hpp, texelSlots).
   const std::uint32_t springTexels =
       1u << HEMO_SPRINGF_BINDING_POSITIONS | 1u << HEMO_SPRINGF_BINDING_VELOCITIES | 1u << HEMO_SPRINGF_BINDING_IDS |
@@ -131,9 +133,10 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                         1u << HEMO_SPRINGF_BINDING_PARAMS, springTexels});
   shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}, 1u << HEMO_SHADE_BINDING_PARAMS});
   const ParticleArrays& a = particles.live();
-  ruptureSet_ = rupture_->makeSet({{HEMO_RUPTURE_BINDING_POSITIONS, &a.positions},
-                                   {HEMO_RUPTURE_BINDING_VELOCITIES, &a.velocities},
-                                   {HEMO_RUPTURE_BINDING_SLOT_OF_ID, fluid.slotOfId},
+  ruptureSet_ = rupture_->makeSet({gpu::texelBinding(HEMO_RUPTURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                   gpu::texelBinding(HEMO_RUPTURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                   gpu::texelBinding(HEMO_RUPTURE_BINDING_SLOT_OF_ID, fluid.slotOfId, gpu::texel::kUint),
+                                   gpu::texelBinding(HEMO_RUPTURE_BINDING_SPRINGS_T, &springs_, gpu::texel::kUvec4),
                                    {HEMO_RUPTURE_BINDING_SPRINGS, &springs_},
                                    {HEMO_RUPTURE_BINDING_COUNTERS, &counters_},
                                    {HEMO_RUPTURE_BINDING_PARAMS, fluid.params}});
