@@ -5,7 +5,7 @@
 //   dimsN        xyz: cells per axis, w: particle count
 //   periodic.xyz 1 on periodic axes: the grid then spans exactly one period there
 //                (dims / invCell) and has at least 3 cells, so the 3 cells around any cell
-//                are distinct.
+//                are distinct; w: the grid's parts (interface/grid.h), 1 or 2.
 struct HemoGrid {
   vec4 origin;
   vec4 invCell;

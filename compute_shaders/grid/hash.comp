@@ -1,5 +1,7 @@
 #version 450
-// Neighbour grid, step 1: the cell of every particle as a (cell, slot) pair for the sort.
+// Neighbour grid, step 1: the key of every particle as a (key, slot) pair for the sort: its
+// cell, or in a grid of two parts (interface/grid.h) cell + cellCount for a particle that is
+// not fluid, so the fluid sorts first.
 // Particles outside the grid are clamped into the border cells and counted (on periodic
 // axes they wrap instead); a particle with a non-finite coordinate goes to cell 0 and is
 // counted separately so the caller can stop.
@@ -9,6 +11,7 @@
 #include "common/grid.glsl"
 
 layout(binding = HEMO_HASH_BINDING_POSITIONS) uniform samplerBuffer positions;  // a texel slot
+layout(binding = HEMO_HASH_BINDING_VELOCITIES) uniform samplerBuffer velocities;  // w: kind (a texel slot)
 layout(std430, binding = HEMO_HASH_BINDING_PAIRS) writeonly buffer Pairs { uvec2 pairs[]; };
 layout(std430, binding = HEMO_HASH_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(push_constant) uniform Push { HemoGrid grid; } pc;
@@ -29,6 +32,10 @@ void main() {
     if (outside) {
       atomicAdd(counters[HEMO_COUNTER_OUTSIDE], 1u);
     }
+  }
+  if (pc.grid.periodic.w == 2u && uint(texelFetch(velocities, int(i)).w) != HEMO_GRID_FLUID_KIND) {
+    const uvec3 dims = pc.grid.dimsN.xyz;
+    cell += dims.x * dims.y * dims.z;
   }
   pairs[i] = uvec2(cell, i);
 }

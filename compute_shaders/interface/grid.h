@@ -7,11 +7,17 @@
 // cellStart has cellCount + 1 entries; empty cells carry the running offset, so the
 // particles of cells [a, b] are the slots [cellStart[a], cellStart[b + 1]).
 
+// A grid of two parts (HemoGrid periodic.w = 2, hemo::sim::GridSpec::parts) sorts by the key
+// cell + part * cellCount, part 0 for fluid particles (velocities.w = HEMO_GRID_FLUID_KIND)
+// and 1 for the others; cellStart then has 2 cellCount + 1 entries.
+#define HEMO_GRID_FLUID_KIND 0  // = HEMO_KIND_FLUID of interface/sph.h
+
 // grid/hash.comp
 #define HEMO_HASH_BINDING_POSITIONS 0
 #define HEMO_HASH_BINDING_PAIRS 1
 #define HEMO_HASH_BINDING_COUNTERS 2
-#define HEMO_HASH_BINDING_COUNT 3
+#define HEMO_HASH_BINDING_VELOCITIES 3
+#define HEMO_HASH_BINDING_COUNT 4
 // counters[HEMO_COUNTER_OUTSIDE]: particles outside the grid (clamped into border cells);
 // counters[HEMO_COUNTER_NONFINITE]: particles with a NaN/Inf coordinate (put in cell 0).
 #define HEMO_COUNTER_OUTSIDE 0

@@ -68,14 +68,8 @@
 //   vec4  gravityOnly        xyz: gravity alone (m/s^2), without the body force: the hydrostatic
 //                            density difference the diffusion term leaves alone
 
-// sph/mark_fluid_cells.comp: flags (non-zero) every grid cell that holds a fluid particle, so
-// boundary particles with no fluid in their 27 cells skip the list build.
-#define HEMO_MARK_BINDING_CELL_START 0
-#define HEMO_MARK_BINDING_VELOCITIES 1
-#define HEMO_MARK_BINDING_FLAGS 2
-#define HEMO_MARK_BINDING_COUNT 3
-
-// sph/build_list.comp: the neighbour (Verlet) list.
+// sph/build_list.comp: the neighbour (Verlet) list, over a grid of two parts (interface/grid.h:
+// the fluid's slots first, then the boundary and wall particles', each part by cell).
 #define HEMO_BUILD_BINDING_POSITIONS 0  // the grid's positions at build, with the kind in w
 #define HEMO_BUILD_BINDING_CELL_START 1
 #define HEMO_BUILD_BINDING_PARAMS 2
@@ -86,8 +80,7 @@
 #define HEMO_BUILD_BINDING_NLIST 4
 #define HEMO_LIST_BOUNDARY_BIT 0x80000000u
 #define HEMO_BUILD_BINDING_STATUS 5
-#define HEMO_BUILD_BINDING_FLUID_CELLS 6
-#define HEMO_BUILD_BINDING_COUNT 7
+#define HEMO_BUILD_BINDING_COUNT 6
 
 // sph/density.comp: summation density and Tait pressure of fluid particles from the list.
 #define HEMO_DENSITY_BINDING_POSITIONS 0

@@ -1,11 +1,12 @@
 #version 450
 // The per-particle neighbour list (a Verlet list): every other particle closer than the list
-// radius = support * (1 + skin), as slots of the sorted order (ascending unless a periodic x
-// axis wraps; the order only has to be the same every build). The skin lets the
-// list serve the following steps until some particle has moved half of it (the solver's
-// gate decides on the GPU when to rebuild). Fluid particles list all neighbours; boundary
-// particles list only their fluid neighbours (all boundary_pressure.comp needs) and skip
-// cells without fluid at the ends of each row.
+// radius = support * (1 + skin), as slots of the sorted order (the order only has to be the
+// same every build). The skin lets the list serve the following steps until some particle
+// has moved half of it (the solver's gate decides on the GPU when to rebuild). The grid has
+// two parts (interface/grid.h): the fluid's slots come first, so a SIMD group of this pass
+// and of the passes over the list holds one kind. Fluid particles list the neighbours of
+// both parts, the fluid's first in each row of cells; boundary particles list only their
+// fluid neighbours (all boundary_pressure.comp needs), from the fluid part alone.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -21,7 +22,6 @@ HEMO_SPH_PARAMS_UNIFORM(HEMO_BUILD_BINDING_PARAMS);
 layout(std430, binding = HEMO_BUILD_BINDING_NCOUNT) writeonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_NLIST) writeonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_STATUS) buffer Status { uint status[]; };
-layout(binding = HEMO_BUILD_BINDING_FLUID_CELLS) uniform usamplerBuffer fluidCells;
 layout(push_constant) uniform Push { HemoGrid grid; } pc;
 
 // Distance in cell units from u to cell k along one axis; on a bounded axis the first and
@@ -37,7 +37,7 @@ float hemo_cell_gap(int k, float u, uint dim, uint periodic) {
 }
 
 void main() {
-  const uint i = hemo_global_index();
+  const uint i = hemo_interleaved_index();
   if (i >= pc.grid.dimsN.w) {
     return;
   }
@@ -49,6 +49,8 @@ void main() {
   const HemoPairParams pp = hemo_pair_params();
   const uvec3 dims = pc.grid.dimsN.xyz;
   const HemoGridImage image = hemo_grid_image(pc.grid);  // no division per candidate
+  const uint cellCount = dims.x * dims.y * dims.z;
+  const uint parts = fluidI ? 2u : 1u;  // boundary particles list fluid only
 
   // The grid's cells are half the list radius R wide (sph.cpp), so every neighbour lies in
   // the 5 x 5 rows (dz, dy in -2..2) around the particle's cell, each within 2 cells in x.
@@ -98,29 +100,27 @@ void main() {
       xr[1] = lo < 0 ? ivec2(lo + int(dims.x), hiX) : ivec2(0, hi - int(dims.x));
       const int ranges = pc.grid.periodic.x != 0u ? 2 : 1;
       for (int s = 0; s < ranges; ++s) {
-        int x0 = xr[s].x;
-        int x1 = xr[s].y;
-        if (!fluidI) {
-          // A boundary particle lists only fluid: drop the range's end cells that hold none.
-          while (x0 <= x1 && texelFetch(fluidCells, int(hemo_cell_linear(ivec3(x0, y, z), dims))).x == 0u) ++x0;
-          while (x1 >= x0 && texelFetch(fluidCells, int(hemo_cell_linear(ivec3(x1, y, z), dims))).x == 0u) --x1;
-        }
-        if (x0 > x1) {
+        if (xr[s].x > xr[s].y) {
           continue;
         }
-        const uint jEnd = texelFetch(cellStart, int(hemo_cell_linear(ivec3(x1, y, z), dims) + 1u)).x;
-        for (uint j = texelFetch(cellStart, int(hemo_cell_linear(ivec3(x0, y, z), dims))).x; j < jEnd; ++j) {
-          const vec4 xj = texelFetch(positions, int(j));
-          const vec3 d = hemo_grid_min_image(xi - xj.xyz, image);
-          // Every candidate is written to the next free slot, and the slot is kept (count
-          // advances) only if the candidate is a neighbour: a store under a data-dependent
-          // condition cost llvmpipe more than the candidate test itself (dam break: list
-          // build 20 -> 14 ms, docs/benchmarks.md). Past the capacity the last slot is
-          // overwritten; that overflow stops the run at the end of the batch (status).
-          neighbourList[hemo_list_slot(i, min(count, capacity - 1u), pp)] =
-              uint(xj.w) == HEMO_KIND_FLUID ? j : j | HEMO_LIST_BOUNDARY_BIT;
-          if (j != i && dot(d, d) < list2 && (fluidI || uint(xj.w) == HEMO_KIND_FLUID)) {
-            ++count;
+        const uint first = hemo_cell_linear(ivec3(xr[s].x, y, z), dims);
+        const uint last = hemo_cell_linear(ivec3(xr[s].y, y, z), dims);
+        for (uint part = 0u; part < parts; ++part) {
+          // part 0: the fluid, plain slots; part 1: boundary and wall particles, marked
+          const uint base = part * cellCount;
+          const uint mark = part == 0u ? 0u : HEMO_LIST_BOUNDARY_BIT;
+          const uint jEnd = texelFetch(cellStart, int(base + last + 1u)).x;
+          for (uint j = texelFetch(cellStart, int(base + first)).x; j < jEnd; ++j) {
+            const vec3 d = hemo_grid_min_image(xi - texelFetch(positions, int(j)).xyz, image);
+            // Every candidate is written to the next free slot, and the slot is kept (count
+            // advances) only if the candidate is a neighbour: a store under a data-dependent
+            // condition cost llvmpipe more than the candidate test itself (dam break: list
+            // build 20 -> 14 ms, docs/benchmarks.md). Past the capacity the last slot is
+            // overwritten; that overflow stops the run at the end of the batch (status).
+            neighbourList[hemo_list_slot(i, min(count, capacity - 1u), pp)] = j | mark;
+            if (j != i && dot(d, d) < list2) {
+              ++count;
+            }
           }
         }
       }

@@ -186,25 +186,28 @@ std::uint32_t RadixSort::passesFor(std::uint32_t keyBits) {
   return (std::min<std::uint32_t>(keyBits, 32) + HEMO_RADIX_BITS - 1) / HEMO_RADIX_BITS;
 }
 
-void RadixSort::record(CommandRecorder& rec, std::uint64_t n, std::uint32_t keyBits) const {
+void RadixSort::record(CommandRecorder& rec, std::uint64_t n, std::uint32_t keyBits, bool keysInScratch) const {
   checkCount(n, capacity_, "RadixSort");
-  if (n <= 1) return;
-  const std::uint32_t passes = passesFor(keyBits);
-  if (passes == 0) return;  // all keys are 0: already sorted
-  const std::uint32_t digitBits = (std::min<std::uint32_t>(keyBits, 32) + passes - 1) / passes;
-  const std::uint64_t chunks = chunkCount(n);
-  const std::uint64_t buckets = std::uint64_t(1) << digitBits;
-  for (std::uint32_t pass = 0; pass < passes; ++pass) {
-    const bool fromPairs = pass % 2 == 0;
-    const SortPush push{static_cast<std::uint32_t>(n), pass * digitBits, chunkSize_,
-                        static_cast<std::uint32_t>(chunks), digitBits};
-    rec.dispatch(*histogram_, fromPairs ? histFromPairs_ : histFromScratch_, push, histogram_->groupsFor(chunks));
-    rec.computeToCompute();
-    scan_.record(rec, buckets * chunks);
-    rec.dispatch(*scatter_, fromPairs ? scatterToScratch_ : scatterToPairs_, push, scatter_->groupsFor(chunks));
-    rec.computeToCompute();
+  const std::uint32_t passes = n <= 1 ? 0u : passesFor(keyBits);  // 0: already sorted
+  // Pass p reads the pairs buffer when p is even, unless the keys start in scratch; the
+  // result is wherever the last pass wrote.
+  const bool endsInScratch = (passes % 2 == 1) != keysInScratch;
+  if (passes > 0) {
+    const std::uint32_t digitBits = (std::min<std::uint32_t>(keyBits, 32) + passes - 1) / passes;
+    const std::uint64_t chunks = chunkCount(n);
+    const std::uint64_t buckets = std::uint64_t(1) << digitBits;
+    for (std::uint32_t pass = 0; pass < passes; ++pass) {
+      const bool fromPairs = (pass % 2 == 0) != keysInScratch;
+      const SortPush push{static_cast<std::uint32_t>(n), pass * digitBits, chunkSize_,
+                          static_cast<std::uint32_t>(chunks), digitBits};
+      rec.dispatch(*histogram_, fromPairs ? histFromPairs_ : histFromScratch_, push, histogram_->groupsFor(chunks));
+      rec.computeToCompute();
+      scan_.record(rec, buckets * chunks);
+      rec.dispatch(*scatter_, fromPairs ? scatterToScratch_ : scatterToPairs_, push, scatter_->groupsFor(chunks));
+      rec.computeToCompute();
+    }
   }
-  if (passes % 2 == 1) {
+  if (endsInScratch && n > 0) {
     rec.computeToTransfer();
     rec.copy(scratch_, *pairs_, n * 8);
     rec.transferToCompute();

@@ -25,19 +25,21 @@ std::uint32_t cellLinear(const glm::ivec3& c, const Grid& grid) {
   return std::uint32_t(c.x) + grid.dims.x * (std::uint32_t(c.y) + grid.dims.y * std::uint32_t(c.z));
 }
 
-GridBuild buildGrid(const std::vector<glm::dvec3>& positions, const Grid& grid) {
+GridBuild buildGrid(const std::vector<glm::dvec3>& positions, const Grid& grid, const std::vector<bool>& fluid) {
   GridBuild b;
   const std::size_t n = positions.size();
   const std::size_t cells = std::size_t(grid.dims.x) * grid.dims.y * grid.dims.z;
+  const std::size_t keys = cells * grid.parts;
   b.cellOfParticle.resize(n);
-  std::vector<std::uint32_t> counts(cells + 1, 0);
+  std::vector<std::uint32_t> counts(keys + 1, 0);
   for (std::size_t i = 0; i < n; ++i) {
     bool out = false;
     b.cellOfParticle[i] = cellLinear(cellCoords(positions[i], grid, &out), grid);
+    if (grid.parts == 2 && !(i < fluid.size() && fluid[i])) b.cellOfParticle[i] += std::uint32_t(cells);
     b.outside += out ? 1 : 0;
     ++counts[b.cellOfParticle[i]];
   }
-  b.cellStart.resize(cells + 1);
+  b.cellStart.resize(keys + 1);
   std::exclusive_scan(counts.begin(), counts.end(), b.cellStart.begin(), 0u);
   b.order.resize(n);
   std::iota(b.order.begin(), b.order.end(), 0u);

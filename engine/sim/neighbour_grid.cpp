@@ -56,8 +56,11 @@ void GridSpec::validate() const {
                                   " m)");
     }
   }
-  // cellStart has cellCount + 1 entries and cell indices must fit in uint32.
-  if (cellCount() >= 0xffffffffull) {
+  if (parts != 1 && parts != 2) {
+    throw std::invalid_argument("grid parts must be 1 or 2, got " + std::to_string(parts));
+  }
+  // cellStart has keyCount + 1 entries and keys must fit in uint32.
+  if (keyCount() >= 0xffffffffull) {
     throw std::invalid_argument("grid of " + std::to_string(dims.x) + "x" + std::to_string(dims.y) + "x" +
                                 std::to_string(dims.z) + " cells is too large for 32-bit cell indices");
   }
@@ -94,7 +97,7 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
     : spec_(spec),
       particles_(&particles),
       pairs_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "grid pairs"),
-      cellStart_(context, (spec.cellCount() + 1) * 4, gpu::MemoryUse::Device, "grid cellStart"),
+      cellStart_(context, (spec.keyCount() + 1) * 4, gpu::MemoryUse::Device, "grid cellStart"),
       counters_(context, HEMO_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "grid counters"),
       slotOfId_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "slot of id"),
       posAtBuild_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
@@ -102,7 +105,7 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
       sort_(context, pairs_, particles.capacity()) {
   spec_.validate();
   hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}, 0u,
-                                    1u << HEMO_HASH_BINDING_POSITIONS});
+                                    1u << HEMO_HASH_BINDING_POSITIONS | 1u << HEMO_HASH_BINDING_VELOCITIES});
   ranges_ = &context.pipelines().get({"grid/cell_ranges", HEMO_RANGES_BINDING_COUNT, sizeof(RangesPush), kWorkgroup, {}, 0u,
                                       1u << HEMO_RANGES_BINDING_PAIRS});
   rangesSet_ = ranges_->makeSet({gpu::texelBinding(HEMO_RANGES_BINDING_PAIRS, &pairs_, gpu::texel::kUvec2),
@@ -115,8 +118,13 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
                                            1u << HEMO_REORDER_BINDING_NORMAL_IN});
   const ParticleArrays& live = particles.live();
   const ParticleArrays& scratch = particles.scratch();
+  // With an odd number of sort passes the hash writes its pairs to the sort's scratch, so the
+  // sort ends in pairs_ without a copy (a transfer, which would run every step: the solver's
+  // rebuild gate skips dispatches only).
+  keysInScratch_ = gpu::RadixSort::passesFor(gpu::bitsFor(spec_.keyCount() - 1)) % 2 == 1;
   hashSet_ = hash_->makeSet({gpu::texelBinding(HEMO_HASH_BINDING_POSITIONS, &live.positions, gpu::texel::kVec4),
-                             {HEMO_HASH_BINDING_PAIRS, &pairs_},
+                             gpu::texelBinding(HEMO_HASH_BINDING_VELOCITIES, &live.velocities, gpu::texel::kVec4),
+                             {HEMO_HASH_BINDING_PAIRS, keysInScratch_ ? &sort_.scratch() : &pairs_},
                              {HEMO_HASH_BINDING_COUNTERS, &counters_}});
   reorderSet_ = reorder_->makeSet({gpu::texelBinding(HEMO_REORDER_BINDING_PAIRS, &pairs_, gpu::texel::kUvec2),
                                    gpu::texelBinding(HEMO_REORDER_BINDING_POS_IN, &scratch.positions, gpu::texel::kVec4),
@@ -137,7 +145,7 @@ NeighbourGrid::Push NeighbourGrid::push(std::uint32_t n) const {
               {inv.x, inv.y, inv.z, 0.0f},
               {spec_.dims.x, spec_.dims.y, spec_.dims.z},
               n,
-              {spec_.periodic(0) ? 1u : 0u, spec_.periodic(1) ? 1u : 0u, spec_.periodic(2) ? 1u : 0u, 0u}};
+              {spec_.periodic(0) ? 1u : 0u, spec_.periodic(1) ? 1u : 0u, spec_.periodic(2) ? 1u : 0u, spec_.parts}};
 }
 
 void NeighbourGrid::resetCounters(gpu::CommandRecorder& rec) {
@@ -153,13 +161,13 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
     throw std::invalid_argument("neighbour grid: " + std::to_string(n) + " particles exceed the capacity " +
                                 std::to_string(particles_->capacity()));
   }
-  const std::uint64_t cells = spec_.cellCount();
+  const std::uint64_t keys = spec_.keyCount();
   rec.dispatch(*hash_, hashSet_, push(n), hash_->groupsFor(n));
   rec.computeToCompute();
   mark("hash");
-  sort_.record(rec, n, gpu::bitsFor(cells - 1));
+  sort_.record(rec, n, gpu::bitsFor(keys - 1), keysInScratch_);
   mark("sort");
-  rec.dispatch(*ranges_, rangesSet_, RangesPush{n, static_cast<std::uint32_t>(cells)}, ranges_->groupsFor(n + 1));
+  rec.dispatch(*ranges_, rangesSet_, RangesPush{n, static_cast<std::uint32_t>(keys)}, ranges_->groupsFor(n + 1));
   rec.computeToCompute();
   mark("cell ranges");
   // The live arrays to scratch, as transfers (a copy, where a shader would store lane by lane
@@ -193,6 +201,9 @@ NeighbourList::NeighbourList(gpu::Context& context, const NeighbourGrid& grid, P
               "neighbour counts"),
       list_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * std::max(maxPerParticle, 1u) * 4,
             gpu::MemoryUse::Device, "neighbour list") {
+  if (grid.spec().parts != 1) {
+    throw std::invalid_argument("NeighbourList needs a grid of one part (GridSpec::parts = 1)");
+  }
   if (!(radius > 0.0f) || radius > grid.spec().cellSize ||
       (grid.spec().periodic(0) && 2.0f * radius > grid.spec().period.x) ||
       (grid.spec().periodic(1) && 2.0f * radius > grid.spec().period.y) ||

@@ -3,6 +3,7 @@
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/reference/sph.hpp"
 #include "interface/sph.h"
+#include "interface/grid.h"
 
 #include <cmath>
 #include <numbers>
@@ -27,6 +28,7 @@ struct IntegratePush {
 };
 static_assert(sizeof(IntegratePush) == 20);
 static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
+static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
 
 struct ReachPush {
   std::uint32_t n, midpointLookahead;
@@ -140,10 +142,14 @@ SphParams makeParams(const SphSettings& s) {
 namespace {
 // Cells of half the list radius: the list build (sph/build_list.comp) scans the 5 x 5 rows
 // around a particle's cell, trimmed to the sphere of the list radius, which tests about half
-// the candidates of the 27 cells of a full radius. Periodic axes need 5 distinct cells.
+// the candidates of the 27 cells of a full radius. Periodic axes need 5 distinct cells. Two
+// parts: the fluid's slots first, so the fluid passes' SIMD groups hold fluid only (mixed
+// groups ran their boundary lanes idle: 16% of the dam break's fluid lanes, docs/benchmarks.md).
 GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
   s.validate();
-  const GridSpec spec = GridSpec::covering(lo, hi, 0.5f * s.listRadius(), s.periodic);
+  GridSpec spec = GridSpec::covering(lo, hi, 0.5f * s.listRadius(), s.periodic);
+  spec.parts = 2;
+  spec.validate();
   for (int a = 0; a < 3; ++a) {
     if (spec.periodic(a) && spec.dims[a] < 5) {
       throw std::invalid_argument(std::string("periodic axis ") + "xyz"[a] + " of " + std::to_string(spec.period[a]) +
@@ -180,7 +186,6 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
       inflow_(context, sizeof(InflowParams), gpu::MemoryUse::Device, "inflow params"),
-      fluidCells_(context, grid_.spec().cellCount() * 4, gpu::MemoryUse::Device, "fluid cell flags"),
       savedPos_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "rk2 saved positions"),
       savedVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "rk2 saved velocities"),
       stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
@@ -213,11 +218,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   inflow_.upload(std::vector<InflowParams>{disabledInflowParams()});
   auto& cache = context.pipelines();
-  markFluid_ = &cache.get({"sph/mark_fluid_cells", HEMO_MARK_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 0u,
-                          1u << HEMO_MARK_BINDING_CELL_START | 1u << HEMO_MARK_BINDING_VELOCITIES});
   buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}, 1u << HEMO_BUILD_BINDING_PARAMS,
-                             1u << HEMO_BUILD_BINDING_POSITIONS | 1u << HEMO_BUILD_BINDING_CELL_START |
-                                 1u << HEMO_BUILD_BINDING_FLUID_CELLS});
+                             1u << HEMO_BUILD_BINDING_POSITIONS | 1u << HEMO_BUILD_BINDING_CELL_START});
   // Constant 1 of the density pass and the integrator: summation density (0), or continuity
   // density advanced by the density pass (1, symplectic Euler) or by the RK2 stages (2).
   const std::uint32_t continuity = settings.densityMethod == DensityMethod::Summation ? 0u
@@ -258,16 +260,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                            1u << HEMO_REACH_BINDING_POSITIONS | 1u << HEMO_REACH_BINDING_VELOCITIES |
                                1u << HEMO_REACH_BINDING_POS_AT_BUILD});
   const ParticleArrays& a = particles.live();
-  markSet_ = markFluid_->makeSet({gpu::texelBinding(HEMO_MARK_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
-                                  gpu::texelBinding(HEMO_MARK_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
-                                  {HEMO_MARK_BINDING_FLAGS, &fluidCells_}});
   buildListSet_ = buildList_->makeSet({gpu::texelBinding(HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
                                        {HEMO_BUILD_BINDING_PARAMS, &paramsBuffer_},
                                        {HEMO_BUILD_BINDING_NCOUNT, &ncount_},
                                        {HEMO_BUILD_BINDING_NLIST, &nlist_},
-                                       {HEMO_BUILD_BINDING_STATUS, &status_},
-                                       gpu::texelBinding(HEMO_BUILD_BINDING_FLUID_CELLS, &fluidCells_, gpu::texel::kUint)});
+                                       {HEMO_BUILD_BINDING_STATUS, &status_}});
   densitySet_ = density_->makeSet({gpu::texelBinding(HEMO_DENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                    gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                    {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
@@ -379,9 +377,6 @@ void SphSolver::recordRebuildRequest(gpu::CommandRecorder& rec) {
 void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
   grid_.record(rec, n, timestamps);
-  const auto cells = static_cast<std::uint32_t>(grid_.spec().cellCount());
-  rec.dispatch(*markFluid_, markSet_, CountPush{cells}, markFluid_->groupsFor(cells));
-  rec.computeToCompute();
   rec.dispatch(*buildList_, buildListSet_, grid_.push(n), buildList_->groupsFor(n));
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "neighbour list");

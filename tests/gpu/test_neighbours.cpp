@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <set>
 
 namespace hemo::test {
@@ -28,10 +29,13 @@ class NeighbourTest : public GpuTest {
  protected:
   static constexpr std::uint32_t kMaxNeighbours = 256;
 
-  Result run(const sim::GridSpec& spec, const std::vector<glm::vec4>& pos, float radius, int builds = 1) {
+  // kinds (velocities.w) of the particles: kindOf(i), 1 (boundary) for all without it. A grid of
+  // two parts builds no list (NeighbourList needs one part).
+  Result run(const sim::GridSpec& spec, const std::vector<glm::vec4>& pos, float radius, int builds = 1,
+             const std::vector<float>& kinds = {}) {
     sim::ParticleStore store(ctx(), static_cast<std::uint32_t>(pos.size()));
     std::vector<glm::vec4> vel(pos.size());
-    for (std::size_t i = 0; i < pos.size(); ++i) vel[i] = glm::vec4(float(i), -float(i), 0.5f, 1.0f);
+    for (std::size_t i = 0; i < pos.size(); ++i) vel[i] = glm::vec4(float(i), -float(i), 0.5f, kindOf(i, kinds));
     // ids are a permutation so id != input slot
     std::vector<std::uint32_t> ids(pos.size());
     for (std::size_t i = 0; i < ids.size(); ++i) ids[i] = static_cast<std::uint32_t>(ids.size() - 1 - i);
@@ -39,12 +43,13 @@ class NeighbourTest : public GpuTest {
     for (std::size_t i = 0; i < pos.size(); ++i) normals[i] = glm::vec4(0.0f, float(i), 1.0f, -float(i));
     store.upload(pos, vel, ids, normals);
     sim::NeighbourGrid grid(ctx(), spec, store);
-    sim::NeighbourList nlist(ctx(), grid, store, radius, kMaxNeighbours);
+    std::unique_ptr<sim::NeighbourList> nlist;
+    if (spec.parts == 1) nlist = std::make_unique<sim::NeighbourList>(ctx(), grid, store, radius, kMaxNeighbours);
     gpu::CommandRecorder rec(ctx());
     rec.begin();
     grid.resetCounters(rec);
     for (int b = 0; b < builds; ++b) grid.record(rec, store.count());
-    nlist.record(rec, store.count());
+    if (nlist) nlist->record(rec, store.count());
     rec.end();
     rec.submitAndWait();
     Result r;
@@ -52,10 +57,12 @@ class NeighbourTest : public GpuTest {
     r.velocities = store.readVelocities();
     r.normals = store.readNormals();
     r.ids = store.readIds();
-    r.cellStart = grid.cellStart().readback<std::uint32_t>(spec.cellCount() + 1);
+    r.cellStart = grid.cellStart().readback<std::uint32_t>(spec.keyCount() + 1);
     r.slotOfId = grid.slotOfId().readback<std::uint32_t>(pos.size());
-    r.counts = nlist.counts().readback<std::uint32_t>(pos.size());
-    r.list = nlist.list().readback<std::uint32_t>(pos.size() * kMaxNeighbours);
+    if (nlist) {
+      r.counts = nlist->counts().readback<std::uint32_t>(pos.size());
+      r.list = nlist->list().readback<std::uint32_t>(pos.size() * kMaxNeighbours);
+    }
     r.counters = grid.readCounters();
     return r;
   }
@@ -99,14 +106,21 @@ class NeighbourTest : public GpuTest {
     EXPECT_GT(checked, 0u);
   }
 
-  // Sorted order = stable sort of the input by reference cell (ties at cell faces excepted),
+  static float kindOf(std::size_t i, const std::vector<float>& kinds) { return i < kinds.size() ? kinds[i] : 1.0f; }
+
+  // Sorted order = stable sort of the input by reference key (ties at cell faces excepted),
   // data moved with it, slotOfId consistent, cellStart matching.
-  void expectGridMatchesReference(const sim::GridSpec& spec, const std::vector<glm::vec4>& pos, const Result& r) {
+  void expectGridMatchesReference(const sim::GridSpec& spec, const std::vector<glm::vec4>& pos, const Result& r,
+                                  const std::vector<float>& kinds = {}) {
     const std::size_t n = pos.size();
-    reference::Grid g{glm::dvec3(spec.origin), spec.cellSize, spec.dims};
+    reference::Grid g{glm::dvec3(spec.origin), spec.cellSize, spec.dims, spec.parts};
     std::vector<glm::dvec3> dpos(n);
-    for (std::size_t i = 0; i < n; ++i) dpos[i] = glm::dvec3(pos[i]);
-    const auto ref = reference::buildGrid(dpos, g);
+    std::vector<bool> fluid(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      dpos[i] = glm::dvec3(pos[i]);
+      fluid[i] = kindOf(i, kinds) == 0.0f;
+    }
+    const auto ref = reference::buildGrid(dpos, g, fluid);
     EXPECT_EQ(r.counters.outside, ref.outside);
     EXPECT_EQ(r.counters.nonFinite, 0u);
     EXPECT_EQ(r.cellStart.size(), ref.cellStart.size());
@@ -118,7 +132,7 @@ class NeighbourTest : public GpuTest {
       EXPECT_FALSE(seen[i]) << "input particle " << i << " appears twice";
       seen[i] = true;
       EXPECT_EQ(r.positions[slot], pos[i]);
-      EXPECT_EQ(r.velocities[slot], glm::vec4(float(i), -float(i), 0.5f, 1.0f));
+      EXPECT_EQ(r.velocities[slot], glm::vec4(float(i), -float(i), 0.5f, kindOf(i, kinds)));
       EXPECT_EQ(r.normals[slot], glm::vec4(0.0f, float(i), 1.0f, -float(i)));
       EXPECT_EQ(r.slotOfId[r.ids[slot]], slot);
       EXPECT_EQ(ref.order[slot], i) << "sorted slot " << slot;
@@ -247,6 +261,35 @@ TEST_F(NeighbourTest, RepeatedBuildsAreBitIdentical) {
   const Result twice = run(spec, pos, h, 2);
   EXPECT_EQ(twice.ids, a.ids);
   EXPECT_EQ(twice.positions, a.positions);
+}
+
+// A grid of two parts (the SPH solver's): fluid particles (kind 0) sort before all others,
+// each part by cell, against the CPU twin; kinds 1 and 2 both go to the second part.
+TEST_F(NeighbourTest, TwoPartsPutTheFluidFirst) {
+  auto rng = rngFor();
+  const float h = 0.0625f;
+  auto spec = sim::GridSpec::covering({0, 0, 0}, {1.0f, 0.625f, 0.375f}, h);
+  spec.parts = 2;
+  const auto pos = snapped(uniformBox(rng, 5000, {-0.1f, 0, 0}, {1.0f, 0.625f, 0.375f}));
+  std::vector<float> kinds(pos.size());
+  std::uniform_int_distribution<int> kind(0, 2);
+  std::size_t fluid = 0;
+  for (float& k : kinds) {
+    k = float(kind(rng));
+    fluid += k == 0.0f ? 1 : 0;
+  }
+  const Result r = run(spec, pos, h, 1, kinds);
+  ASSERT_EQ(r.cellStart.size(), 2 * spec.cellCount() + 1);
+  expectGridMatchesReference(spec, pos, r, kinds);
+  EXPECT_EQ(r.cellStart[spec.cellCount()], fluid);  // the second part starts after the fluid
+  for (std::size_t slot = 0; slot < pos.size(); ++slot) {
+    EXPECT_EQ(r.velocities[slot].w == 0.0f, slot < fluid) << "slot " << slot;
+  }
+  sim::ParticleStore store(ctx(), 10);
+  sim::NeighbourGrid grid(ctx(), spec, store);
+  EXPECT_THROW(sim::NeighbourList(ctx(), grid, store, h, 8), std::invalid_argument);  // one part only
+  spec.parts = 3;
+  EXPECT_THROW(spec.validate(), std::invalid_argument);
 }
 
 TEST_F(NeighbourTest, RejectsARadiusLargerThanTheCell) {

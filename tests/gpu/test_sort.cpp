@@ -14,13 +14,17 @@ using Pairs = std::vector<glm::uvec2>;
 
 class SortTest : public GpuTest {
  protected:
-  Pairs gpuSort(const Pairs& input, std::uint32_t keyBits = 32) {
-    gpu::Buffer pairs(ctx(), input.size() * 8, gpu::MemoryUse::Device, "pairs");
-    pairs.upload(input);
+  // keysInScratch: the input goes to the sort's scratch buffer (RadixSort::record).
+  Pairs gpuSort(const Pairs& input, std::uint32_t keyBits = 32, bool keysInScratch = false) {
+    gpu::Buffer pairs(ctx(), std::max<std::size_t>(input.size(), 1) * 8, gpu::MemoryUse::Device, "pairs");
     gpu::RadixSort sort(ctx(), pairs, input.size());
+    if (!input.empty()) {
+      pairs.upload(Pairs(input.size(), glm::uvec2(0xdeadbeefu)));  // garbage where the keys are not
+      (keysInScratch ? sort.scratch() : pairs).upload(input);
+    }
     gpu::CommandRecorder rec(ctx());
     rec.begin();
-    sort.record(rec, input.size(), keyBits);
+    sort.record(rec, input.size(), keyBits, keysInScratch);
     rec.end();
     rec.submitAndWait();
     return pairs.readback<glm::uvec2>(input.size());
@@ -70,11 +74,18 @@ TEST_F(SortTest, KeysAtTheMaximum) {
 
 TEST_F(SortTest, HonoursKeyBitsWithOddAndEvenPassCounts) {
   auto rng = rngFor();
-  for (std::uint32_t bits : {1u, 8u, 9u, 17u, 24u}) {
+  for (std::uint32_t bits : {0u, 1u, 8u, 9u, 17u, 24u}) {
     std::vector<std::uint32_t> keys(50021);
-    for (auto& k : keys) k = static_cast<std::uint32_t>(rng()) & ((1u << bits) - 1u);
+    for (auto& k : keys) k = bits == 0 ? 0u : static_cast<std::uint32_t>(rng()) & ((1u << bits) - 1u);
     const Pairs input = withIndexValues(keys);
     EXPECT_EQ(gpuSort(input, bits), cpuSort(input)) << bits << " key bits";
+    // the same with the keys starting in the sort's scratch buffer (odd pass counts end in
+    // the pairs without a copy; even ones and none copy at the end)
+    EXPECT_EQ(gpuSort(input, bits, true), cpuSort(input)) << bits << " key bits, keys in scratch";
+  }
+  for (std::size_t n : {0u, 1u, 2u}) {
+    const Pairs input = withIndexValues(std::vector<std::uint32_t>(n, 5u));
+    EXPECT_EQ(gpuSort(input, 17, true), input) << n << " pairs in scratch";
   }
 }
 

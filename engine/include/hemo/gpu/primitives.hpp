@@ -64,8 +64,14 @@ class MinMaxReduce {
 class RadixSort {
  public:
   RadixSort(Context& context, const Buffer& pairs, std::uint64_t capacity);
-  void record(CommandRecorder& rec, std::uint64_t n, std::uint32_t keyBits = 32) const;
+  // Sorts the first n pairs by key into the pairs buffer. With keysInScratch, the unsorted
+  // pairs are in scratch() instead: a sort of an odd number of passes (passesFor) then ends
+  // in the pairs buffer without the final copy, a transfer, which runs even when a dispatch
+  // gate skips the sort's dispatches.
+  void record(CommandRecorder& rec, std::uint64_t n, std::uint32_t keyBits = 32, bool keysInScratch = false) const;
   static std::uint32_t passesFor(std::uint32_t keyBits);
+  const Buffer& scratch() const { return scratch_; }
+  Buffer& scratch() { return scratch_; }
 
  private:
   std::uint64_t chunkCount(std::uint64_t n) const { return (n + chunkSize_ - 1) / chunkSize_; }

@@ -1,7 +1,9 @@
 #pragma once
 // Cell-linked-list neighbour search built on the GPU:
-//   hash ........ cell of each particle as (cell, slot) pairs
-//   sort ........ stable radix sort of the pairs by cell
+//   hash ........ key of each particle as (key, slot) pairs: its cell, or with two parts
+//                 (GridSpec::parts) its cell + part * cellCount, part 0 for fluid particles
+//                 (kind 0 in velocities.w) and 1 for all others
+//   sort ........ stable radix sort of the pairs by key
 //   cell ranges . cellStart from the sorted keys (empty cells carry the running offset)
 //   copy ........ live particle arrays -> scratch
 //   reorder ..... gather positions/velocities/normals/ids from scratch into cell order in the
@@ -24,12 +26,19 @@ struct GridSpec {
   float cellSize = 0.0f;   // m, on bounded axes; periodic axes have cells of period / dims >= this
   glm::uvec3 dims{0u};     // cells per axis
   glm::vec3 period{0.0f};  // m on periodic axes (the grid spans exactly one period), 0 on bounded ones
+  // 1: particles sorted by cell. 2: fluid particles first, by cell, then all others, by
+  // cell, so the slots [0, fluid count) hold the fluid and a pass over the slots runs each
+  // SIMD group over one kind (on lavapipe a group of mixed kinds idles the lanes that return
+  // early); cellStart then has 2 cellCount + 1 entries, part p's cell c at p cellCount + c.
+  std::uint32_t parts = 1;
 
   std::uint64_t cellCount() const { return std::uint64_t(dims.x) * dims.y * dims.z; }
+  std::uint64_t keyCount() const { return cellCount() * parts; }  // cellStart has keyCount() + 1 entries
   bool periodic(int axis) const { return period[axis] > 0.0f; }
   glm::vec3 invCellSize() const;  // cells per m along each axis
   // Throws std::invalid_argument naming the problem (non-positive or non-finite size,
-  // zero dims, too many cells for 32-bit indices, a periodic axis of fewer than 3 cells).
+  // zero dims, too many cells for 32-bit indices, a periodic axis of fewer than 3 cells,
+  // parts other than 1 or 2).
   void validate() const;
   // The smallest grid of cells of `cellSize` that covers the box [lo, hi]; on the axes
   // flagged `periodic`, [lo, hi) is one period, split into as many whole cells of at least
@@ -54,8 +63,8 @@ class NeighbourGrid {
   void resetCounters(gpu::CommandRecorder& rec);
 
   const GridSpec& spec() const { return spec_; }
-  const gpu::Buffer& cellStart() const { return cellStart_; }  // cellCount + 1 entries
-  const gpu::Buffer& pairs() const { return pairs_; }          // sorted (cell, old slot)
+  const gpu::Buffer& cellStart() const { return cellStart_; }  // keyCount + 1 entries
+  const gpu::Buffer& pairs() const { return pairs_; }          // sorted (key, old slot)
   const gpu::Buffer& slotOfId() const { return slotOfId_; }    // id -> slot (ids < capacity)
   const gpu::Buffer& counters() const { return counters_; }
   const gpu::Buffer& positionsAtBuild() const { return posAtBuild_; }  // vec4 per slot: (x, kind)
@@ -66,7 +75,7 @@ class NeighbourGrid {
     float invCell[4];
     std::uint32_t dims[3];
     std::uint32_t n;
-    std::uint32_t periodic[4];
+    std::uint32_t periodic[4];  // xyz: periodic axes; w: GridSpec::parts
   };
   static_assert(sizeof(Push) == 64);
   Push push(std::uint32_t n) const;
@@ -83,12 +92,13 @@ class NeighbourGrid {
   gpu::Buffer slotOfId_;
   gpu::Buffer posAtBuild_;
   gpu::RadixSort sort_;
+  bool keysInScratch_ = false;  // the hash writes to the sort's scratch (an odd number of passes)
   gpu::DescriptorSet hashSet_, rangesSet_, reorderSet_;
 };
 
 // Every particle's neighbours closer than `radius` (<= cell size), as ascending slots of the
 // sorted order, up to `maxPerParticle` each; counts() holds the true number (which may exceed
-// the capacity: the caller checks). Record it after the grid build.
+// the capacity: the caller checks). Record it after the grid build. Needs a grid of one part.
 class NeighbourList {
  public:
   NeighbourList(gpu::Context& context, const NeighbourGrid& grid, ParticleStore& particles, float radius,

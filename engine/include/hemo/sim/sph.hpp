@@ -219,13 +219,11 @@ class SphSolver {
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer inflow_;  // InflowParams
-  gpu::Buffer fluidCells_;
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
   gpu::MinMaxReduce dtReduce_, driftReduce_, reachReduce_;
   std::unique_ptr<MassSpring> wall_;
   gpu::DispatchGate rebuildGate_;
-  const gpu::ComputePipeline* markFluid_;
   const gpu::ComputePipeline* buildList_;
   const gpu::ComputePipeline* density_;
   const gpu::ComputePipeline* boundaryPressure_;
@@ -233,7 +231,7 @@ class SphSolver {
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_[3];  // by stage (HEMO_INTEGRATE_*)
   const gpu::ComputePipeline* reachPass_;
-  gpu::DescriptorSet markSet_, buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_, reachSet_;
+  gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_, reachSet_;
 };
 
 }  // namespace hemo::sim
