@@ -51,6 +51,15 @@ struct ContextOptions {
 // Devices visible to the Vulkan loader (creates a short-lived instance).
 std::vector<DeviceInfo> listDevices();
 
+// The worker-thread count hemo asks lavapipe for (its LP_NUM_THREADS variable) on a machine of
+// `cores` cores when the variable is `current` (nullptr: unset): empty when the user has set
+// it, else three threads per core. lavapipe splits each dispatch into one contiguous chunk of
+// workgroups per thread, one thread per core by default, and waits for the slowest chunk;
+// smaller chunks let the OS balance cores whose speed differs from moment to moment (a VM's)
+// and passes whose cost varies along the slots. Every Context and listDevices() apply it
+// before the driver starts (setenv, overwriting nothing); other drivers ignore the variable.
+std::string cpuDriverThreads(const char* current, unsigned cores);
+
 class Context {
  public:
   explicit Context(const ContextOptions& options = {});
