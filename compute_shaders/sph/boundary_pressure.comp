@@ -62,7 +62,7 @@ void pair(uint f, bool valid) {
 }
 
 void main() {
-  const uint b = hemo_interleaved_index();
+  const uint b = hemo_global_index();
   if (b >= pc.n) {
     return;
   }

@@ -37,7 +37,7 @@ float hemo_cell_gap(int k, float u, uint dim, uint periodic) {
 }
 
 void main() {
-  const uint i = hemo_interleaved_index();
+  const uint i = hemo_global_index();
   if (i >= pc.grid.dimsN.w) {
     return;
   }

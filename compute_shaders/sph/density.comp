@@ -100,7 +100,7 @@ void pair(uint entry, bool valid) {
 }
 
 void main() {
-  const uint i = hemo_interleaved_index();
+  const uint i = hemo_global_index();
   if (i >= pc.n) {
     return;
   }

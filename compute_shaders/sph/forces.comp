@@ -125,7 +125,7 @@ void pairRange(uint i, uint first, uint end, const bool boundary) {
 }
 
 void main() {
-  const uint i = hemo_interleaved_index();
+  const uint i = hemo_global_index();
   if (i >= pc.n) {
     return;
   }

@@ -120,7 +120,7 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
 }
 
 void main() {
-  const uint i = hemo_interleaved_index();
+  const uint i = hemo_global_index();
   const ClockRecord clock = clocks[pc.clockIn];
   // The step's dt: from the reduction (Euler, RK2 first stage), or the one the first stage
   // stored (RK2 second stage, so both stages use the same dt).

@@ -60,7 +60,7 @@ void pairRange(uint i, uint first, uint end) {
 }
 
 void main() {
-  const uint i = hemo_interleaved_index();
+  const uint i = hemo_global_index();
   if (i >= pc.n) {
     return;
   }

@@ -153,7 +153,7 @@ layout(push_constant) uniform Push {
 } pc;
 
 void main() {
-  const uint slot = hemo_interleaved_index();
+  const uint slot = hemo_global_index();
   if (slot >= pc.n || uint(velocities(slot).w) != HEMO_KIND_WALL) {
     return;
   }
