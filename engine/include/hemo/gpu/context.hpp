@@ -56,8 +56,9 @@ std::vector<DeviceInfo> listDevices();
 // it, else three threads per core. lavapipe splits each dispatch into one contiguous chunk of
 // workgroups per thread, one thread per core by default, and waits for the slowest chunk;
 // smaller chunks let the OS balance cores whose speed differs from moment to moment (a VM's)
-// and passes whose cost varies along the slots (the SPH grid puts the fluid's slots first). Every Context and listDevices() apply it
-// before the driver starts (setenv, overwriting nothing); other drivers ignore the variable.
+// and passes whose cost varies along the slots (the SPH grid puts the fluid's slots first).
+// Every Context and listDevices() apply it before the driver starts (setenv, overwriting
+// nothing); other drivers ignore the variable.
 std::string cpuDriverThreads(const char* current, unsigned cores);
 
 class Context {
