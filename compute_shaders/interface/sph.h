@@ -197,19 +197,27 @@
 // fraction of a storage read; no record is read after it is written in the pass).
 #define HEMO_INTEGRATE_BINDING_POSITIONS_IN 16
 #define HEMO_INTEGRATE_BINDING_VELOCITIES_IN 17
-#define HEMO_INTEGRATE_BINDING_COUNT 18
+#define HEMO_INTEGRATE_BINDING_COUNT 20
 
-// sph/reach.comp: each slot's reach for the rebuild test, |d - (c, 0, 0)| (+ the midpoint
-// look-ahead), d its displacement since the list build and c the middle of the x
-// displacements' (min, max) range (docs/architecture.md, "the rebuild test").
-#define HEMO_REACH_BINDING_POSITIONS 0
-#define HEMO_REACH_BINDING_VELOCITIES 1
-#define HEMO_REACH_BINDING_POS_AT_BUILD 2
-#define HEMO_REACH_BINDING_PARAMS 3
-#define HEMO_REACH_BINDING_DRIFT_RANGE 4  // vec2 (min, max) of the x displacements
-#define HEMO_REACH_BINDING_REACH 5
-#define HEMO_REACH_BINDING_COUNT 6
-// push constants: uint n; uint midpointLookahead
+// The rebuild test (docs/architecture.md, "the rebuild test"). sph/integrate.comp writes
+// each slot's x displacement d.x since the list build and its reach |d - (c, 0, 0)| (+ the
+// midpoint look-ahead), c the middle of the x-displacement range extrapolated from the two
+// steps before;
+// sph/rebuild_check.comp reduces both in one dispatch to (min d.x, max d.x, max reach) and
+// arms the neighbour-rebuild gate for the next step (common/gate.glsl).
+#define HEMO_INTEGRATE_BINDING_DRIFT_RANGE 18  // uniform vec4: the last rebuild_check result
+#define HEMO_INTEGRATE_BINDING_REACH 19        // float per slot
+#define HEMO_CHECK_BINDING_DRIFT_X 0   // float per slot (texel)
+#define HEMO_CHECK_BINDING_REACH 1     // float per slot (texel)
+#define HEMO_CHECK_BINDING_PARTIALS 2  // vec4 per workgroup
+#define HEMO_CHECK_BINDING_COUNTER 3   // uint: workgroups finished (starts and ends at 0)
+#define HEMO_CHECK_BINDING_RESULT 4    // vec4 (min d.x, max d.x, max reach, middle of the range a step before); NaN if any is
+#define HEMO_CHECK_BINDING_GATE_ARMED 5
+#define HEMO_CHECK_BINDING_GATE_ARGS 6
+#define HEMO_CHECK_BINDING_GATE_OPENED 7
+#define HEMO_CHECK_BINDING_COUNT 8
+#define HEMO_CHECK_RESULT_REACH 2      // the float index of the largest reach in the result
+// push constants: uint n; float threshold (rebuild when max reach > it); uint gateSlots
 
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).

@@ -10,8 +10,8 @@
 // While t < dampingUntil the velocity is damped (a settling phase for validation scenes).
 // Invocation 0 advances the clock (Kahan-compensated float sum) and logs (t, dt).
 // A particle that becomes non-finite records the step in the status buffer.
-// Every slot also writes its x displacement since the list was built, from which
-// sph/reach.comp derives the reach of the neighbour-list check.
+// Every slot also writes its x displacement since the list was built and its reach for the
+// neighbour-list check (sph/rebuild_check.comp reduces both).
 // A fluid particle that starts the step in the inflow zone of a vessel moves along the axis at
 // the prescribed velocity instead (hemo/sim/inflow.hpp), in every mode; across the section it
 // moves freely.
@@ -46,6 +46,10 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
 layout(binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) uniform samplerBuffer posAtBuildT;
 layout(std430, binding = HEMO_INTEGRATE_BINDING_DRIFT_X) writeonly buffer DriftX { float driftX[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_REACH) writeonly buffer Reach { float reach[]; };
+// The previous step's rebuild check (sph/rebuild_check.comp): (min d.x, max d.x, max reach,
+// the middle of the range a step earlier).
+layout(std140, binding = HEMO_INTEGRATE_BINDING_DRIFT_RANGE) uniform DriftRange { vec4 lastCheck; };
 layout(std140, binding = HEMO_INTEGRATE_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
 layout(binding = HEMO_INTEGRATE_BINDING_STATE) uniform samplerBuffer stateT;
 #define state(k) texelFetch(stateT, int(k))
@@ -81,9 +85,34 @@ bool hemo_moves(float kind) {
   return uint(kind) == HEMO_KIND_FLUID || uint(kind) == HEMO_KIND_WALL;
 }
 
-// The x displacement since the list build, for the rebuild test (sph/reach.comp).
-void writeDriftX(uint i, vec3 x) {
-  driftX[i] = hemo_min_image(x - texelFetch(posAtBuildT, int(i)).xyz, hemo_pair_params()).x;
+// The rebuild test's inputs (docs/architecture.md, "the rebuild test"): the x displacement
+// d.x since the list build, and the reach
+//   reach = |d - (c, 0, 0)|,  c = the middle (min d.x + max d.x) / 2 of this step, predicted
+//                               linearly from those of the two steps before (2 m1 - m2),
+// plus, when the next step evaluates forces at a midpoint (RK2), the farthest the next half
+// step can take the particle, |v| min(dtMax, C_a h / (c0 + |v|)) / 2.
+// Any vector c common to all slots keeps the test valid: two particles' separation has
+// changed by |d_i - d_j| <= |d_i - c| + |d_j - c| <= 2 max reach, so the list holds every
+// pair within the support while the largest reach stays under half the skin. Taking c in the
+// middle of the flow's displacements halves the reach of a uniform or parabolic drift along x
+// (a vessel's axis), which does not change who neighbours whom. Predicting the middle lets
+// this pass compute the reach (no pass of its own, docs/benchmarks.md "Session 17"); the
+// previous step's middle alone lagged the dam break's front by a step's motion, 15% of the
+// threshold, and rebuilt the list 30 times in 600 steps against 21. After a rebuild both
+// middles restart at 0 (sph/rebuild_check.comp).
+void writeRebuildTest(uint i, vec3 x, vec3 v) {
+  const vec3 d = hemo_min_image(x - texelFetch(posAtBuildT, int(i)).xyz, hemo_pair_params());
+  driftX[i] = d.x;
+  float c = (lastCheck.x + lastCheck.y) - lastCheck.w;  // 2 m1 - m2
+  if (!(abs(c) < 1.0e30)) {
+    c = 0.0;  // NaN (some particle was non-finite; its own reach is NaN and opens the gate)
+  }
+  float r = length(d - vec3(c, 0.0, 0.0));
+  if (kMode == HEMO_INTEGRATE_RK2_FULL) {
+    const float speed = length(v);
+    r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / (params.c0 + speed));
+  }
+  reach[i] = r;
 }
 
 // Mean inflow speed u(t) = U w(t) ramp(t) (m/s).
@@ -178,7 +207,7 @@ void main() {
   vec4 v = texelFetch(velocitiesIn, int(i));
   vec4 x = texelFetch(positionsIn, int(i));
   if (!running || !hemo_moves(v.w)) {
-    writeDriftX(i, x.xyz);
+    writeRebuildTest(i, x.xyz, v.xyz);
     return;
   }
   // Where the step started (the inflow zone is judged there).
@@ -236,5 +265,5 @@ void main() {
   velocities[i] = v;
   x.w = hemo_sph_mass(x.w, accel(i).w);
   positions[i] = x;
-  writeDriftX(i, x.xyz);
+  writeRebuildTest(i, x.xyz, v.xyz);
 }

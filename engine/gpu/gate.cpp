@@ -45,6 +45,8 @@ void DispatchGate::recordReset(CommandRecorder& rec) {
 
 std::uint32_t DispatchGate::readOpened() const { return opened_.readback<std::uint32_t>(1)[0]; }
 
+bool DispatchGate::readIsOpen() const { return args_.readback<std::uint32_t>(1)[0] != 0u; }
+
 VkDeviceSize DispatchGate::claim(Groups groups) {
   if (cursor_ >= maxSlots_) {
     throw std::length_error("dispatch gate '" + name_ + "': more than " + std::to_string(maxSlots_) +

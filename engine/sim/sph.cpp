@@ -2,6 +2,7 @@
 
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/reference/sph.hpp"
+#include "interface/scan.h"
 #include "interface/sph.h"
 #include "interface/grid.h"
 
@@ -30,8 +31,10 @@ static_assert(sizeof(IntegratePush) == 20);
 static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
 static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
 
-struct ReachPush {
-  std::uint32_t n, midpointLookahead;
+struct CheckPush {
+  std::uint32_t n;
+  float threshold;
+  std::uint32_t gateSlots;
 };
 
 std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
@@ -192,9 +195,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
       tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)),
-      driftReduce_(context, driftX_, std::max(particles.capacity(), 1u)),
-      reachReduce_(context, reach_, std::max(particles.capacity(), 1u)),
-      rebuildGate_(context, reachReduce_.result(), 64, "neighbour rebuild") {
+      checkPartials_(context, ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup * HEMO_REDUCE_ITEMS - 1) /
+                               (kWorkgroup * HEMO_REDUCE_ITEMS)) * 16,
+                     gpu::MemoryUse::Device, "rebuild check partials"),
+      checkCounter_(context, 4, gpu::MemoryUse::Device, "rebuild check finished workgroups"),
+      checkResult_(context, 16, gpu::MemoryUse::Device, "rebuild check result"),
+      rebuildGate_(context, checkResult_, 64, "neighbour rebuild") {
   // The list's layout (interface/sph.h): on a CPU device each SIMD lane walks its own list,
   // and entries next to each other stream from cache; interleaved entries, which coalesce
   // on a GPU, cost a cache miss per entry there (pair_gather in hemo-bench primitives).
@@ -250,15 +256,13 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   for (std::uint32_t mode = 0; mode < 3; ++mode) {
     integrate_[mode] = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity, mode},
                            1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW |
-                               1u << HEMO_INTEGRATE_BINDING_DT,
+                               1u << HEMO_INTEGRATE_BINDING_DT | 1u << HEMO_INTEGRATE_BINDING_DRIFT_RANGE,
                            1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD |
                                1u << HEMO_INTEGRATE_BINDING_STATE | 1u << HEMO_INTEGRATE_BINDING_POSITIONS_IN |
                                1u << HEMO_INTEGRATE_BINDING_VELOCITIES_IN});
   }
-  reachPass_ = &cache.get({"sph/reach", HEMO_REACH_BINDING_COUNT, sizeof(ReachPush), kWorkgroup, {},
-                           1u << HEMO_REACH_BINDING_PARAMS | 1u << HEMO_REACH_BINDING_DRIFT_RANGE,
-                           1u << HEMO_REACH_BINDING_POSITIONS | 1u << HEMO_REACH_BINDING_VELOCITIES |
-                               1u << HEMO_REACH_BINDING_POS_AT_BUILD});
+  rebuildCheck_ = &cache.get({"sph/rebuild_check", HEMO_CHECK_BINDING_COUNT, sizeof(CheckPush), kWorkgroup, {}, 0u,
+                              1u << HEMO_CHECK_BINDING_DRIFT_X | 1u << HEMO_CHECK_BINDING_REACH});
   const ParticleArrays& a = particles.live();
   buildListSet_ = buildList_->makeSet({gpu::texelBinding(HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
@@ -324,17 +328,23 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_STEP_DT, &stepDt_},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild(), gpu::texel::kVec4),
                                        {HEMO_INTEGRATE_BINDING_DRIFT_X, &driftX_},
+                                       {HEMO_INTEGRATE_BINDING_REACH, &reach_},
+                                       {HEMO_INTEGRATE_BINDING_DRIFT_RANGE, &checkResult_},
                                        {HEMO_INTEGRATE_BINDING_INFLOW, &inflow_},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_STATE, &state_, gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_POSITIONS_IN, &a.positions, gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_VELOCITIES_IN, &a.velocities, gpu::texel::kVec4),
                                        {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals}});
-  reachSet_ = reachPass_->makeSet({gpu::texelBinding(HEMO_REACH_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
-                                   gpu::texelBinding(HEMO_REACH_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
-                                   gpu::texelBinding(HEMO_REACH_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild(), gpu::texel::kVec4),
-                                   {HEMO_REACH_BINDING_PARAMS, &paramsBuffer_},
-                                   {HEMO_REACH_BINDING_DRIFT_RANGE, &driftReduce_.result()},
-                                   {HEMO_REACH_BINDING_REACH, &reach_}});
+  checkSet_ = rebuildCheck_->makeSet({gpu::texelBinding(HEMO_CHECK_BINDING_DRIFT_X, &driftX_, gpu::texel::kFloat),
+                                      gpu::texelBinding(HEMO_CHECK_BINDING_REACH, &reach_, gpu::texel::kFloat),
+                                      {HEMO_CHECK_BINDING_PARTIALS, &checkPartials_},
+                                      {HEMO_CHECK_BINDING_COUNTER, &checkCounter_},
+                                      {HEMO_CHECK_BINDING_RESULT, &checkResult_},
+                                      {HEMO_CHECK_BINDING_GATE_ARMED, &rebuildGate_.armedCounts()},
+                                      {HEMO_CHECK_BINDING_GATE_ARGS, &rebuildGate_.arguments()},
+                                      {HEMO_CHECK_BINDING_GATE_OPENED, &rebuildGate_.openings()}});
+  checkCounter_.upload(std::vector<std::uint32_t>{0u});
+  checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
 }
 
 std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32_t> constants) const {
@@ -363,15 +373,20 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rec.fill(status_, 0);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_BAD_INPUT_ID * 4, 8);  // and BAD_FORCE_ID
-  rec.fill(reachReduce_.result(), 0x7f800000u);  // reach = +inf: the first step builds the list
+  // the first step builds the list
+  rec.fill(checkResult_, 0u, 0, 8);  // displacement range (0, 0): the build restarts it
+  rec.fill(checkResult_, 0x7f800000u, HEMO_CHECK_RESULT_REACH * 4, 4);  // reach +inf: the gate opens
   grid_.resetCounters(rec);
   rebuildGate_.recordReset(rec);
+  armPending_ = true;
 }
 
 void SphSolver::recordRebuildRequest(gpu::CommandRecorder& rec) {
-  rec.computeToTransfer();  // the last step's reduction wrote the reach
-  rec.fill(reachReduce_.result(), 0x7f800000u);  // +inf: the gate opens
+  rec.computeToTransfer();  // the last step's check wrote the result
+  rec.fill(checkResult_, 0u, 0, 8);  // displacement range (0, 0): the build restarts it
+  rec.fill(checkResult_, 0x7f800000u, HEMO_CHECK_RESULT_REACH * 4, 4);  // reach +inf: the gate opens
   rec.transferToCompute();
+  armPending_ = true;
 }
 
 void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
@@ -415,20 +430,21 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   }
   const std::uint32_t n = particles_->count();
   if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, n);  // the second stage reuses the step's dt
-  const std::uint32_t lookahead = settings_.integrator == Integrator::Rk2Midpoint ? 1u : 0u;
   // At least one workgroup: invocation 0 advances the clock even with no particles.
   rec.dispatch(*integrate_[mode], integrateSet_, IntegratePush{n, step, logIndex, endTime, clockParity_},
                integrate_[mode]->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone
-    // The next step's rebuild decision: the reach of every slot relative to the middle of the
-    // x displacements (sph/reach.comp), then its largest value.
-    driftReduce_.record(rec, n);  // ends with its result visible to compute
-    rec.dispatch(*reachPass_, reachSet_, ReachPush{n, lookahead}, reachPass_->groupsFor(n));
-    rec.computeToCompute();
-    reachReduce_.record(rec, n);
+    recordRebuildCheck(rec, n);  // the next step's rebuild decision
   }
+}
+
+void SphSolver::recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n) {
+  // At least one workgroup: its last (only) one arms the gate even with no particles.
+  rec.dispatch(*rebuildCheck_, checkSet_, CheckPush{n, rebuildThreshold(), rebuildGate_.slots()},
+               rebuildCheck_->groupsFor(std::max(n, 1u), HEMO_REDUCE_ITEMS));
+  rec.computeToComputeAndIndirect();  // the gate's arguments; the result for the next integrator
 }
 
 void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
@@ -437,7 +453,10 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
     if (timestamps) timestamps->mark(rec, stage);
   };
   // Rebuild the grid and the list only when some particle may have crossed the list's skin.
-  rebuildGate_.recordArm(rec, 1, rebuildThreshold());  // max of the (min, max) reach
+  if (armPending_) {  // after a reset or a rebuild request; else the last step's check armed it
+    rebuildGate_.recordArm(rec, HEMO_CHECK_RESULT_REACH, rebuildThreshold());
+    armPending_ = false;
+  }
   rec.beginGate(rebuildGate_);
   recordNeighbours(rec, timestamps);
   rec.endGate();
@@ -456,7 +475,12 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   }
 }
 
-std::uint32_t SphSolver::readRebuilds() const { return rebuildGate_.readOpened(); }
+std::uint32_t SphSolver::readRebuilds() const {
+  // The last step's check counts the opening it decides on; that rebuild belongs to the next
+  // step, which has not run yet (unless a reset or request has re-armed the gate since).
+  const std::uint32_t opened = rebuildGate_.readOpened();
+  return opened - (!armPending_ && opened > 0 && rebuildGate_.readIsOpen() ? 1u : 0u);
+}
 
 SphStatus SphSolver::readStatus() const {
   const auto s = status_.readback<std::uint32_t>(HEMO_STATUS_COUNT);

@@ -493,11 +493,11 @@ TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenAParticleCrossesHalfTheSkin) 
   };
   EXPECT_EQ(steps(1), 1u) << "the first step builds the list";
   EXPECT_EQ(steps(5), 1u) << "tiny motion keeps the list";
-  // The test compares displacements since the build with the middle c of their x range
-  // (sph/reach.comp): it must rebuild once two particles may have closed in by the skin
-  // (twice the threshold), and need not for a drift they share. Each move below is measured
-  // by the step after it (the gate uses the reach of the step before) and acted on by the
-  // one after that.
+  // The test compares displacements since the build with the middle c of their x range at
+  // the step before (sph/integrate.comp, sph/rebuild_check.comp): it must rebuild once two
+  // particles may have closed in by the skin (twice the threshold), and need not for a drift
+  // they share. Each move below is measured by the step after it and acted on by the one
+  // after that.
   const float threshold = solver.rebuildThreshold();
   const auto vel = store.readVelocities();
   std::uint32_t moved = n;
@@ -511,16 +511,24 @@ TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenAParticleCrossesHalfTheSkin) 
     pos[moved] += glm::vec4(one, 0.0f);
     store.live().positions.upload(pos);
   };
-  // Every particle (fluid and boundary) 1.5 thresholds along x: nobody moved relative to
-  // anybody, no rebuild (the bare largest displacement, 1.5, would have rebuilt).
-  move(glm::vec3(1.5f * threshold, 0.0f, 0.0f), glm::vec3(0.0f));
-  EXPECT_EQ(steps(2), 1u) << "a common drift keeps the list";
-  // One particle 1.9 thresholds further: closer to the others by less than the skin (x range
-  // 1.5 .. 3.4 thresholds, reach 0.95): the list still holds.
-  move(glm::vec3(0.0f), glm::vec3(1.9f * threshold, 0.0f, 0.0f));
-  EXPECT_EQ(steps(2), 1u) << "a relative move under the skin keeps the list";
-  // 0.2 further (2.1 thresholds from the rest, past the skin): reach 1.05 > 1, rebuild.
-  move(glm::vec3(0.0f), glm::vec3(0.2f * threshold, 0.0f, 0.0f));
+  // Every particle (fluid and boundary) 1.5 thresholds along x, a tenth at a time as a flow
+  // drifts: nobody moved relative to anybody, no rebuild (the bare largest displacement,
+  // 1.5, would have rebuilt; c lags by one move, 0.15).
+  for (int k = 0; k < 10; ++k) {
+    move(glm::vec3(0.15f * threshold, 0.0f, 0.0f), glm::vec3(0.0f));
+    EXPECT_EQ(steps(1), 1u) << "a common drift keeps the list (move " << k << ")";
+  }
+  EXPECT_EQ(steps(1), 1u);
+  // One particle 1.8 thresholds further, a twentieth at a time: closer to the others by less
+  // than the skin (x range 1.5 .. 3.3 thresholds, reach 0.9 from the middle; measured from the
+  // lagging middle, 0.945): the list still holds.
+  for (int k = 0; k < 20; ++k) {
+    move(glm::vec3(0.0f), glm::vec3(0.09f * threshold, 0.0f, 0.0f));
+    EXPECT_EQ(steps(1), 1u) << "a relative move under the skin keeps the list (move " << k << ")";
+  }
+  // 0.3 further (2.1 thresholds from the rest, past the skin): reach 1.05 from the middle,
+  // 1.2 from the lagging one, > 1: rebuild.
+  move(glm::vec3(0.0f), glm::vec3(0.3f * threshold, 0.0f, 0.0f));
   EXPECT_EQ(steps(1), 1u);
   EXPECT_EQ(steps(1), 2u) << "a particle past the skin relative to the others forces a rebuild";
   EXPECT_EQ(steps(3), 2u) << "and the new list serves again";
@@ -599,6 +607,64 @@ TEST_F(SphStageTest, TimeStepLimitIsTheMinimumOfTheConditions) {
     if (a > 0) expect = std::min(expect, p.cflForce * std::sqrt(p.h / a));
     EXPECT_NEAR(limits[i], expect, 1e-5 * expect);
   }
+}
+
+// The rebuild check against a double-precision twin on random particles: after each step the
+// result holds the (min, max) of the x displacements since the build, the largest reach
+// |d - (c, 0, 0)| with c = 2 m1 - m2 predicted from the two checks before, and m1 in w.
+TEST_F(SphStageTest, RebuildCheckMatchesTheCpuReference) {
+  auto rng = rngFor();
+  sim::SphSettings s = settings();
+  const Case c = makeCase(rng, s, 6, 5, 5, 0.1f);
+  const auto n = static_cast<std::uint32_t>(c.pos.size());
+  sim::ParticleStore store(ctx(), n);
+  store.upload(c.pos, c.vel, {}, c.normals);
+  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.12f), s);
+  gpu::CommandRecorder rec(ctx());
+  std::uniform_real_distribution<float> jitter(-1.0f, 1.0f);
+  const float threshold = solver.rebuildThreshold();
+  std::uint32_t step = 0;
+  int checked = 0;
+  for (int round = 0; round < 8; ++round) {
+    const auto before = solver.rebuildCheck().readback<float>(4);
+    rec.begin();
+    if (step == 0) solver.recordReset(rec);
+    solver.recordStep(rec, step, 0);
+    rec.end();
+    rec.submitAndWait();
+    ++step;
+    const auto pos = store.readPositions();
+    const auto build = solver.grid().positionsAtBuild().readback<glm::vec4>(n);
+    const auto got = solver.rebuildCheck().readback<float>(4);
+    const bool rebuiltNext = got[0] == 0.0f && got[1] == 0.0f && got[3] == 0.0f && got[2] > threshold;
+    double lo = 1e300, hi = -1e300, reach = 0.0;
+    const double cRef = round == 0 ? 0.0 : double(before[0]) + double(before[1]) - double(before[3]);
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const glm::dvec3 d = glm::dvec3(pos[i]) - glm::dvec3(build[i]);
+      lo = std::min(lo, d.x);
+      hi = std::max(hi, d.x);
+      reach = std::max(reach, glm::length(d - glm::dvec3(cRef, 0.0, 0.0)));
+    }
+    const double tol = 1e-6 * threshold + 1e-5 * reach;
+    EXPECT_NEAR(got[2], reach, tol) << "largest reach, step " << step;
+    if (!rebuiltNext) {
+      EXPECT_NEAR(got[0], lo, 1e-6 * threshold) << "min d.x, step " << step;
+      EXPECT_NEAR(got[1], hi, 1e-6 * threshold) << "max d.x, step " << step;
+      EXPECT_FLOAT_EQ(got[3], round == 0 ? 0.0f : 0.5f * (before[0] + before[1])) << "previous middle";
+      ++checked;
+    } else {
+      EXPECT_GT(reach, threshold) << "the check rebuilds only past the threshold";
+    }
+    // Move every particle randomly by up to 0.3 thresholds, with a common drift along x that
+    // grows each round, so the prediction of c matters.
+    auto moved = pos;
+    for (auto& p : moved) {
+      p += glm::vec4(0.4f * threshold * float(round) + 0.3f * threshold * jitter(rng), 0.3f * threshold * jitter(rng),
+                     0.3f * threshold * jitter(rng), 0.0f);
+    }
+    store.live().positions.upload(moved);
+  }
+  EXPECT_GE(checked, 4);
 }
 
 }  // namespace

@@ -65,6 +65,8 @@ class CommandRecorder {
   void transferToCompute();  // copy/fill -> shader reads/writes
   void transferToTransfer();
   void computeToIndirect();  // shader writes -> indirect dispatch/draw arguments
+  // Compute writes read both as indirect arguments and by later compute shaders.
+  void computeToComputeAndIndirect();
   // Compute/transfer writes -> what a draw reads: indirect arguments, vertex attributes,
   // storage buffers in vertex shaders (the renderer's one hand-off from the simulation).
   void computeToGraphics();

@@ -6,7 +6,8 @@
 // counts (gate open) or zeros (closed) into the slots, depending on a value another stage
 // computed: open when values[index] > threshold, or when the value is NaN.
 // A region must record the same dispatches with the same counts every time (the slots are
-// reused by every step of a batch); a mismatch throws.
+// reused by every step of a batch); a mismatch throws. A shader may also arm the gate at the
+// end of the pass that computes the decision (common/gate.glsl), saving recordArm's dispatch.
 #include "hemo/gpu/commands.hpp"
 
 #include <cstdint>
@@ -27,7 +28,17 @@ class DispatchGate {
   void recordReset(CommandRecorder& rec);
   // How often the gate opened since the last reset (a readback: outside the step loop).
   std::uint32_t readOpened() const;
+  // Whether the gate stands open for the next region (a readback).
+  bool readIsOpen() const;
   const std::string& name() const { return name_; }
+
+  // For a shader that arms the gate itself, at the end of the pass that computes the decision
+  // (common/gate.glsl: one dispatch less per region than recordArm). Such a shader binds
+  // these three buffers and must be followed by CommandRecorder::computeToIndirect().
+  const Buffer& armedCounts() const { return armed_; }
+  const Buffer& arguments() const { return args_; }
+  const Buffer& openings() const { return opened_; }
+  std::uint32_t slots() const { return maxSlots_; }
 
  private:
   friend class CommandRecorder;

@@ -1,14 +1,15 @@
 #pragma once
 // Weakly compressible SPH on the GPU: one step is
-//   gate ...... decides on the GPU whether the neighbour list is still valid (no particle has
-//               moved more than half its skin since it was built)
+//   gate ...... armed on the GPU by the previous step's rebuild check: is the neighbour list
+//               still valid (no particle has moved more than half its skin since it was built)?
 //   neighbours  only when not: grid (hash, sort, cell ranges, reorder), neighbour list
 //   density ... summation density (fluid + boundary) from the list, Tait pressure
 //   boundary .. boundary-particle pressure extrapolated from the fluid (Adami et al. 2012)
 //   forces .... pressure, laminar viscosity, boundary repulsion, gravity; dt limit per particle
 //   dt ........ min reduction of the limits (stays on the GPU)
 //   integrate . symplectic Euler with that dt; clock, step log and status on the GPU; each
-//               particle's reach since the list build, reduced for the next step's gate
+//               particle's reach since the list build
+//   check ..... reduces the reaches and arms the next step's gate, in one dispatch
 // Sources: Monaghan (1994) for WCSPH and the Tait equation, Mueller et al. (2003) and
 // Crespo et al. (2015) for the symmetric pressure force, Morris et al. (1997) for laminar viscosity, Wendland (1995)
 // for the kernel; docs/physics.md.
@@ -189,6 +190,9 @@ class SphSolver {
   const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
   const gpu::Buffer& interactingPairs() const { return pairList_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
+  // The last step's rebuild check: vec4 (min, max of the x displacements since the list
+  // build, largest reach, 0), m (sph/rebuild_check.comp).
+  const gpu::Buffer& rebuildCheck() const { return checkResult_; }
   const gpu::Buffer& paramsBuffer() const { return paramsBuffer_; }
   // The clock's two records and which one holds the current time (after the recorded steps).
   const gpu::Buffer& clockBuffer() const { return clock_; }
@@ -221,7 +225,10 @@ class SphSolver {
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
-  gpu::MinMaxReduce dtReduce_, driftReduce_, reachReduce_;
+  gpu::MinMaxReduce dtReduce_;
+  // The rebuild check (sph/rebuild_check.comp): per-workgroup partials, the finished-workgroup
+  // counter and the result (min d.x, max d.x, max reach, 0).
+  gpu::Buffer checkPartials_, checkCounter_, checkResult_;
   std::unique_ptr<MassSpring> wall_;
   gpu::DispatchGate rebuildGate_;
   const gpu::ComputePipeline* buildList_;
@@ -230,8 +237,12 @@ class SphSolver {
   const gpu::ComputePipeline* spsStress_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_[3];  // by stage (HEMO_INTEGRATE_*)
-  const gpu::ComputePipeline* reachPass_;
-  gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_, reachSet_;
+  const gpu::ComputePipeline* rebuildCheck_;
+  gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_, checkSet_;
+  // The gate must be armed by its own pass before the next step (after a reset or a rebuild
+  // request); otherwise the last step's rebuild check has armed it.
+  bool armPending_ = true;
+  void recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n);
 };
 
 }  // namespace hemo::sim

@@ -1,0 +1,23 @@
+// Arming a dispatch gate (engine/gpu/gate.cpp) from inside another pass, by the one
+// invocation that knows the decision: every slot's indirect arguments become the workgroup
+// counts the host recorded (open) or zeros (closed), and an opening is counted. The including
+// shader declares the gate's buffers as
+//   readonly buffer  { uvec4 gateArmed[]; }   (DispatchGate::armedCounts)
+//   writeonly buffer { uvec4 gateArgs[]; }    (DispatchGate::arguments)
+//   buffer           { uint gateOpened; }     (DispatchGate::openings)
+// gate/arm.comp does the same work as a pass of its own.
+
+// Open when value > threshold or value is NaN (a blown-up value never skips the work that
+// would report it).
+bool hemo_gate_open(float value, float threshold) {
+  return !(value <= threshold);
+}
+
+void hemo_gate_arm(bool open, uint slots) {
+  for (uint s = 0u; s < slots; ++s) {
+    gateArgs[s] = open ? gateArmed[s] : uvec4(0u);
+  }
+  if (open) {
+    gateOpened += 1u;
+  }
+}
