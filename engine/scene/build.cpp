@@ -4,6 +4,7 @@
 #include "hemo/scene/fusiform.hpp"
 #include "hemo/scene/statics.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace hemo::scene {
@@ -109,11 +110,22 @@ std::uint32_t countEscaped(const Scene& s, const std::vector<glm::vec4>& positio
   for (std::size_t i = 0; i < positions.size(); ++i) {
     if (velocities[i].w != float(sim::ParticleKind::Fluid)) continue;
     const glm::vec3 p(positions[i]);
+    const glm::vec3 v(velocities[i]);
+    if (!std::isfinite(p.x + p.y + p.z + v.x + v.y + v.z)) continue;  // lost (countLost)
     bool out = vessel && outsideVessel(*vessel, p, s.sph.spacing);
     for (int a = 0; a < 3; ++a) out = out || !(p[a] >= s.domain.min[a] && p[a] <= s.domain.max[a]);
     escaped += out;
   }
   return escaped;
+}
+
+std::uint32_t countLost(const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities) {
+  std::uint32_t lost = 0;
+  for (std::size_t i = 0; i < positions.size() && i < velocities.size(); ++i) {
+    const glm::vec4 p = positions[i], v = velocities[i];
+    lost += !std::isfinite(p.x + p.y + p.z + v.x + v.y + v.z);
+  }
+  return lost;
 }
 
 namespace {

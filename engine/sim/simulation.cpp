@@ -218,6 +218,10 @@ std::uint32_t Simulation::escapedParticles() const {
   return scene::countEscaped(scene_, store_->readPositions(), store_->readVelocities());
 }
 
+std::uint32_t Simulation::lostParticles() const {
+  return scene::countLost(store_->readPositions(), store_->readVelocities());
+}
+
 std::uint32_t Simulation::brokenSprings() const { return solver_->wall() ? solver_->wall()->readBrokenCount() : 0; }
 
 std::uint32_t Simulation::detachedParticles() const { return solver_->wall() ? solver_->wall()->readDetachedCount() : 0; }

@@ -24,8 +24,12 @@ SceneBuild buildScene(const Scene& scene);
 std::uint64_t countSceneParticles(const Scene& scene);
 // Fluid particles that have left the scene: outside the domain, or outside the vessel's wall
 // by more than a spacing. `positions` and `velocities` as in ParticleSet (w: mass, kind).
+// A particle whose position or velocity is not finite is lost, not escaped (countLost).
 std::uint32_t countEscaped(const Scene& scene, const std::vector<glm::vec4>& positions,
                            const std::vector<glm::vec4>& velocities);
+// Particles of any kind whose position or velocity is not finite: the simulation has lost
+// them (it stops at the end of the batch in which the first one appears).
+std::uint32_t countLost(const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities);
 
 // The lumen pressure (Pa) at which the scene's wall would first fail under a pressure applied
 // slowly, from the built spring layout, and how it was found: a tube or a fusiform aneurysm by

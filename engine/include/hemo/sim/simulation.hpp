@@ -94,6 +94,8 @@ class Simulation {
   // Fluid particles that have left the scene now: outside the domain, or outside the
   // vessel's wall (through a rupture).
   std::uint32_t escapedParticles() const;
+  // Particles whose state is no longer finite (0 unless the run stopped with a SimulationError).
+  std::uint32_t lostParticles() const;
   // Springs broken and wall particles detached so far (0 without a wall).
   std::uint32_t brokenSprings() const;
   std::uint32_t detachedParticles() const;
