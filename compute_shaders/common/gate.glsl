@@ -5,7 +5,7 @@
 //   readonly buffer  { uvec4 gateArmed[]; }   (DispatchGate::armedCounts)
 //   writeonly buffer { uvec4 gateArgs[]; }    (DispatchGate::arguments)
 //   buffer           { uint gateOpened; }     (DispatchGate::openings)
-// gate/arm.comp does the same work as a pass of its own.
+// gate/arm.comp does the same work as a pass of its own, one invocation per slot.
 
 // Open when value > threshold or value is NaN (a blown-up value never skips the work that
 // would report it).
