@@ -104,14 +104,23 @@ std::uint64_t countSceneParticles(const Scene& s) {
   return countParticles(s) + buildScene(vesselOnly).particles.size();
 }
 
+namespace {
+// Position and velocity finite, component by component (a sum could overflow).
+bool finiteState(const glm::vec4& position, const glm::vec4& velocity) {
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(position[a]) || !std::isfinite(velocity[a])) return false;
+  }
+  return true;
+}
+}  // namespace
+
 std::uint32_t countEscaped(const Scene& s, const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities) {
   const std::optional<AneurysmSpec> vessel = s.vessel ? std::optional(vesselSpec(s)) : std::nullopt;
   std::uint32_t escaped = 0;
   for (std::size_t i = 0; i < positions.size(); ++i) {
     if (velocities[i].w != float(sim::ParticleKind::Fluid)) continue;
     const glm::vec3 p(positions[i]);
-    const glm::vec3 v(velocities[i]);
-    if (!std::isfinite(p.x + p.y + p.z + v.x + v.y + v.z)) continue;  // lost (countLost)
+    if (!finiteState(positions[i], velocities[i])) continue;  // lost (countLost)
     bool out = vessel && outsideVessel(*vessel, p, s.sph.spacing);
     for (int a = 0; a < 3; ++a) out = out || !(p[a] >= s.domain.min[a] && p[a] <= s.domain.max[a]);
     escaped += out;
@@ -122,8 +131,7 @@ std::uint32_t countEscaped(const Scene& s, const std::vector<glm::vec4>& positio
 std::uint32_t countLost(const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities) {
   std::uint32_t lost = 0;
   for (std::size_t i = 0; i < positions.size() && i < velocities.size(); ++i) {
-    const glm::vec4 p = positions[i], v = velocities[i];
-    lost += !std::isfinite(p.x + p.y + p.z + v.x + v.y + v.z);
+    lost += !finiteState(positions[i], velocities[i]);
   }
   return lost;
 }

@@ -34,7 +34,9 @@ class DispatchGate {
 
   // For a shader that arms the gate itself, at the end of the pass that computes the decision
   // (common/gate.glsl: one dispatch less per region than recordArm). Such a shader binds
-  // these three buffers and must be followed by CommandRecorder::computeToIndirect().
+  // these three buffers and must be followed by a barrier to indirect reads
+  // (CommandRecorder::computeToIndirect, or computeToComputeAndIndirect when later compute
+  // passes also read what it wrote).
   const Buffer& armedCounts() const { return armed_; }
   const Buffer& arguments() const { return args_; }
   const Buffer& openings() const { return opened_; }
