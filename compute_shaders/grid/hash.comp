@@ -1,7 +1,8 @@
 #version 450
-// Neighbour grid, step 1: the key of every particle as a (key, slot) pair for the sort: its
-// cell, or in a grid of two parts (interface/grid.h) cell + cellCount for a particle that is
-// not fluid, so the fluid sorts first.
+// Neighbour grid, step 1 of the counting sort (interface/grid.h): the key of every particle,
+// its cell, or in a grid of two parts cell + cellCount for a particle that is not fluid, so
+// the fluid sorts first; and its rank among the particles of that key, from an atomic count
+// per key (the order of those ranks depends on scheduling; grid/reorder.comp removes it).
 // Particles outside the grid are clamped into the border cells and counted (on periodic
 // axes they wrap instead); a particle with a non-finite coordinate goes to cell 0 and is
 // counted separately so the caller can stop.
@@ -14,6 +15,7 @@ layout(binding = HEMO_HASH_BINDING_POSITIONS) uniform samplerBuffer positions;  
 layout(binding = HEMO_HASH_BINDING_VELOCITIES) uniform samplerBuffer velocities;  // w: kind (a texel slot)
 layout(std430, binding = HEMO_HASH_BINDING_PAIRS) writeonly buffer Pairs { uvec2 pairs[]; };
 layout(std430, binding = HEMO_HASH_BINDING_COUNTERS) buffer Counters { uint counters[]; };
+layout(std430, binding = HEMO_HASH_BINDING_KEY_COUNTS) buffer KeyCounts { uint keyCounts[]; };
 layout(push_constant) uniform Push { HemoGrid grid; } pc;
 
 void main() {
@@ -37,5 +39,5 @@ void main() {
     const uvec3 dims = pc.grid.dimsN.xyz;
     cell += dims.x * dims.y * dims.z;
   }
-  pairs[i] = uvec2(cell, i);
+  pairs[i] = uvec2(cell, atomicAdd(keyCounts[cell], 1u));
 }

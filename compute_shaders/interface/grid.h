@@ -12,26 +12,49 @@
 // and 1 for the others; cellStart then has 2 cellCount + 1 entries.
 #define HEMO_GRID_FLUID_KIND 0  // = HEMO_KIND_FLUID of interface/sph.h
 
+// The build is a counting sort by key, stable (ties keep their slot order), so the same input
+// always gives the same order (engine/include/hemo/sim/neighbour_grid.hpp):
+//   hash.comp ...... key and rank (an atomic count per key) of every particle
+//   cell_scan.comp . exclusive scan of the counts, block by block, and of the block totals
+//   scatter.comp ... cellStart; each particle's (key, slot) into its key's range
+//   reorder.comp ... each particle's place within its range by slot order, and its data moved
+// The ranks come from integer atomics in whatever order the invocations run; the reorder's
+// ordering by slot within each cell makes the result independent of it.
+
 // grid/hash.comp
 #define HEMO_HASH_BINDING_POSITIONS 0
-#define HEMO_HASH_BINDING_PAIRS 1
+#define HEMO_HASH_BINDING_PAIRS 1  // uvec2 per slot: (key, rank among the key's particles)
 #define HEMO_HASH_BINDING_COUNTERS 2
 #define HEMO_HASH_BINDING_VELOCITIES 3
-#define HEMO_HASH_BINDING_COUNT 4
+#define HEMO_HASH_BINDING_KEY_COUNTS 4  // uint per key (+ 1): zero before, counts after
+#define HEMO_HASH_BINDING_COUNT 5
 // counters[HEMO_COUNTER_OUTSIDE]: particles outside the grid (clamped into border cells);
 // counters[HEMO_COUNTER_NONFINITE]: particles with a NaN/Inf coordinate (put in cell 0).
 #define HEMO_COUNTER_OUTSIDE 0
 #define HEMO_COUNTER_NONFINITE 1
 #define HEMO_COUNTER_COUNT 4
 
-// grid/cell_ranges.comp: cellStart from the sorted pairs (no atomics, no scan).
-#define HEMO_RANGES_BINDING_PAIRS 0
-#define HEMO_RANGES_BINDING_CELL_START 1
-#define HEMO_RANGES_BINDING_COUNT 2
+// grid/cell_scan.comp: exclusive scan of the key counts (which it leaves at zero for the next
+// build) within blocks of workgroupSize * HEMO_SCAN_ITEMS keys, and of the block totals (by
+// the last workgroup to finish; the counter starts and ends at 0).
+#define HEMO_CELL_SCAN_BINDING_KEY_COUNTS 0
+#define HEMO_CELL_SCAN_BINDING_LOCAL 1    // uint per key: offset within its block
+#define HEMO_CELL_SCAN_BINDING_BLOCKS 2   // uint per block: total, then offset
+#define HEMO_CELL_SCAN_BINDING_FINISHED 3 // uint
+#define HEMO_CELL_SCAN_BINDING_COUNT 4
 
-// grid/reorder.comp: gathers particle data (from the scratch arrays) into sorted order in the
+// grid/scatter.comp: cellStart = local + block offset; (key, slot) of every particle to its
+// key's start + rank.
+#define HEMO_SCATTER_BINDING_PAIRS 0
+#define HEMO_SCATTER_BINDING_LOCAL 1
+#define HEMO_SCATTER_BINDING_BLOCKS 2
+#define HEMO_SCATTER_BINDING_CELL_START 3
+#define HEMO_SCATTER_BINDING_ORDER 4  // uvec2 per slot: (key, source slot), in key order
+#define HEMO_SCATTER_BINDING_COUNT 5
+
+// grid/reorder.comp: moves particle data (from the scratch arrays) into sorted order in the
 // live arrays, records the positions at this build, and updates id -> slot.
-#define HEMO_REORDER_BINDING_PAIRS 0
+#define HEMO_REORDER_BINDING_ORDER 0
 #define HEMO_REORDER_BINDING_POS_IN 1
 #define HEMO_REORDER_BINDING_VEL_IN 2
 #define HEMO_REORDER_BINDING_ID_IN 3
@@ -42,7 +65,8 @@
 #define HEMO_REORDER_BINDING_NORMAL_IN 8
 #define HEMO_REORDER_BINDING_NORMAL_OUT 9
 #define HEMO_REORDER_BINDING_POS_AT_BUILD 10
-#define HEMO_REORDER_BINDING_COUNT 11
+#define HEMO_REORDER_BINDING_CELL_START 11
+#define HEMO_REORDER_BINDING_COUNT 12
 
 // grid/neighbour_list.comp: every particle's neighbours closer than the radius, as slots of
 // the sorted order, ascending; count may exceed the capacity (then the list is truncated).

@@ -2,14 +2,14 @@
 // Exclusive prefix sum, step 1 of 2: each workgroup scans its own block of
 // workgroupSize * HEMO_SCAN_ITEMS elements in place and writes the block total to sums[block].
 // The host scans `sums` the same way (recursively) and then runs scan_add.comp.
-// Within a workgroup: each invocation sums its items sequentially, subgroup inclusive scans
-// combine invocations, and subgroup totals are combined through shared memory. Nothing
-// assumes a subgroup size.
+// Within a workgroup: each invocation sums its items sequentially, and
+// common/workgroup_scan.glsl combines the invocations.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #include "interface/scan.h"
 #include "common/index.glsl"
+#include "common/workgroup_scan.glsl"
 
 layout(std430, binding = HEMO_SCAN_BINDING_DATA) buffer Data { uint data[]; };
 layout(std430, binding = HEMO_SCAN_BINDING_SUMS) writeonly buffer Sums { uint sums[]; };
@@ -35,11 +35,6 @@ uint hemo_scan_length() {
   return min(len, pc.n);
 }
 
-
-// At most one entry per subgroup; a subgroup has at least one invocation.
-shared uint s_subgroupOffset[gl_WorkGroupSize.x];
-shared uint s_blockTotal;
-
 void main() {
   const uint n = hemo_scan_length();
   const uint block = hemo_group_index();
@@ -53,32 +48,8 @@ void main() {
     total += items[k];
   }
 
-  const uint inclusive = subgroupInclusiveAdd(total);
-  const uint subgroupTotal = subgroupAdd(total);
-  if (subgroupElect()) {
-    s_subgroupOffset[gl_SubgroupID] = subgroupTotal;
-  }
-  barrier();
-
-  // Subgroup 0 turns the subgroup totals into exclusive offsets, gl_SubgroupSize at a time.
-  if (gl_SubgroupID == 0u) {
-    uint carry = 0u;
-    for (uint first = 0u; first < gl_NumSubgroups; first += gl_SubgroupSize) {
-      const uint idx = first + gl_SubgroupInvocationID;
-      const uint x = idx < gl_NumSubgroups ? s_subgroupOffset[idx] : 0u;
-      const uint incl = subgroupInclusiveAdd(x);
-      if (idx < gl_NumSubgroups) {
-        s_subgroupOffset[idx] = carry + incl - x;
-      }
-      carry += subgroupAdd(x);
-    }
-    if (subgroupElect()) {
-      s_blockTotal = carry;
-    }
-  }
-  barrier();
-
-  uint running = s_subgroupOffset[gl_SubgroupID] + inclusive - total;
+  uint blockTotal;
+  uint running = hemo_workgroup_exclusive_scan(total, blockTotal);
   for (uint k = 0u; k < HEMO_SCAN_ITEMS; ++k) {
     const uint idx = base + k;
     if (idx < n) {
@@ -88,6 +59,6 @@ void main() {
   }
   const uint blocks = (n + gl_WorkGroupSize.x * HEMO_SCAN_ITEMS - 1u) / (gl_WorkGroupSize.x * HEMO_SCAN_ITEMS);
   if (gl_LocalInvocationID.x == 0u && block < blocks) {
-    sums[block] = s_blockTotal;
+    sums[block] = blockTotal;
   }
 }

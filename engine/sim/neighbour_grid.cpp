@@ -2,6 +2,7 @@
 
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "interface/grid.h"
+#include "interface/scan.h"
 
 #include <cmath>
 #include <stdexcept>
@@ -11,12 +12,21 @@ namespace hemo::sim {
 
 namespace {
 constexpr std::uint32_t kWorkgroup = 256;
+// grid/cell_scan.comp: a workgroup scans kScanBlock keys.
+constexpr std::uint32_t kScanWorkgroup = 256;
+constexpr std::uint32_t kScanBlock = kScanWorkgroup * HEMO_SCAN_ITEMS;
+std::uint64_t ceilDivKeys(std::uint64_t keys) { return (keys + kScanBlock - 1) / kScanBlock; }
 
-struct RangesPush {
-  std::uint32_t n;
-  std::uint32_t cellCount;
+struct CellScanPush {
+  std::uint32_t keys;
 };
-static_assert(sizeof(RangesPush) == 8);
+
+struct ScatterPush {
+  std::uint32_t n;
+  std::uint32_t keys;
+  std::uint32_t blockSize;
+};
+static_assert(sizeof(ScatterPush) == 12);
 
 struct CountPush {
   std::uint32_t n;
@@ -97,36 +107,54 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
     : spec_(spec),
       particles_(&particles),
       pairs_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "grid pairs"),
+      order_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "grid order"),
+      keyCounts_(context, (spec.keyCount() + 1) * 4, gpu::MemoryUse::Device, "grid key counts"),
+      keyLocal_(context, (spec.keyCount() + 1) * 4, gpu::MemoryUse::Device, "grid key offsets in block"),
+      blocks_(context, std::max<std::uint64_t>(ceilDivKeys(spec.keyCount() + 1), 1) * 4, gpu::MemoryUse::Device,
+              "grid block offsets"),
+      finished_(context, 16, gpu::MemoryUse::Device, "grid scan workgroups finished"),
       cellStart_(context, (spec.keyCount() + 1) * 4, gpu::MemoryUse::Device, "grid cellStart"),
       counters_(context, HEMO_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "grid counters"),
       slotOfId_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "slot of id"),
       posAtBuild_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
-                  "positions at the last grid build"),
-      sort_(context, pairs_, particles.capacity()) {
+                  "positions at the last grid build") {
   spec_.validate();
-  hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}, 0u,
-                                    1u << HEMO_HASH_BINDING_POSITIONS | 1u << HEMO_HASH_BINDING_VELOCITIES});
-  ranges_ = &context.pipelines().get({"grid/cell_ranges", HEMO_RANGES_BINDING_COUNT, sizeof(RangesPush), kWorkgroup, {}, 0u,
-                                      1u << HEMO_RANGES_BINDING_PAIRS});
-  rangesSet_ = ranges_->makeSet({gpu::texelBinding(HEMO_RANGES_BINDING_PAIRS, &pairs_, gpu::texel::kUvec2),
-                                 {HEMO_RANGES_BINDING_CELL_START, &cellStart_}});
+  // The counts start at zero; every build's scan leaves them at zero again, as the scan's
+  // finished-workgroup counter.
+  keyCounts_.upload(std::vector<std::uint32_t>(spec_.keyCount() + 1, 0u));
+  finished_.upload(std::vector<std::uint32_t>(4, 0u));
   // Read-only inputs are texel slots (gpu/pipeline.hpp, texelSlots): llvmpipe reads a storage
   // buffer lane by lane.
+  hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}, 0u,
+                                    1u << HEMO_HASH_BINDING_POSITIONS | 1u << HEMO_HASH_BINDING_VELOCITIES});
+  cellScan_ = &context.pipelines().get(
+      {"grid/cell_scan", HEMO_CELL_SCAN_BINDING_COUNT, sizeof(CellScanPush), kScanWorkgroup, {}});
+  scatter_ = &context.pipelines().get({"grid/scatter", HEMO_SCATTER_BINDING_COUNT, sizeof(ScatterPush), kWorkgroup, {},
+                                       0u,
+                                       1u << HEMO_SCATTER_BINDING_PAIRS | 1u << HEMO_SCATTER_BINDING_LOCAL |
+                                           1u << HEMO_SCATTER_BINDING_BLOCKS});
   reorder_ = &context.pipelines().get({"grid/reorder", HEMO_REORDER_BINDING_COUNT, sizeof(ReorderPush), kWorkgroup, {}, 0u,
-                                       1u << HEMO_REORDER_BINDING_PAIRS | 1u << HEMO_REORDER_BINDING_POS_IN |
-                                           1u << HEMO_REORDER_BINDING_VEL_IN | 1u << HEMO_REORDER_BINDING_ID_IN |
-                                           1u << HEMO_REORDER_BINDING_NORMAL_IN});
+                                       1u << HEMO_REORDER_BINDING_ORDER | 1u << HEMO_REORDER_BINDING_CELL_START |
+                                           1u << HEMO_REORDER_BINDING_POS_IN | 1u << HEMO_REORDER_BINDING_VEL_IN |
+                                           1u << HEMO_REORDER_BINDING_ID_IN | 1u << HEMO_REORDER_BINDING_NORMAL_IN});
   const ParticleArrays& live = particles.live();
   const ParticleArrays& scratch = particles.scratch();
-  // With an odd number of sort passes the hash writes its pairs to the sort's scratch, so the
-  // sort ends in pairs_ without a copy (a transfer, which would run every step: the solver's
-  // rebuild gate skips dispatches only).
-  keysInScratch_ = gpu::RadixSort::passesFor(gpu::bitsFor(spec_.keyCount() - 1)) % 2 == 1;
   hashSet_ = hash_->makeSet({gpu::texelBinding(HEMO_HASH_BINDING_POSITIONS, &live.positions, gpu::texel::kVec4),
                              gpu::texelBinding(HEMO_HASH_BINDING_VELOCITIES, &live.velocities, gpu::texel::kVec4),
-                             {HEMO_HASH_BINDING_PAIRS, keysInScratch_ ? &sort_.scratch() : &pairs_},
-                             {HEMO_HASH_BINDING_COUNTERS, &counters_}});
-  reorderSet_ = reorder_->makeSet({gpu::texelBinding(HEMO_REORDER_BINDING_PAIRS, &pairs_, gpu::texel::kUvec2),
+                             {HEMO_HASH_BINDING_PAIRS, &pairs_},
+                             {HEMO_HASH_BINDING_COUNTERS, &counters_},
+                             {HEMO_HASH_BINDING_KEY_COUNTS, &keyCounts_}});
+  cellScanSet_ = cellScan_->makeSet({{HEMO_CELL_SCAN_BINDING_KEY_COUNTS, &keyCounts_},
+                                     {HEMO_CELL_SCAN_BINDING_LOCAL, &keyLocal_},
+                                     {HEMO_CELL_SCAN_BINDING_BLOCKS, &blocks_},
+                                     {HEMO_CELL_SCAN_BINDING_FINISHED, &finished_}});
+  scatterSet_ = scatter_->makeSet({gpu::texelBinding(HEMO_SCATTER_BINDING_PAIRS, &pairs_, gpu::texel::kUvec2),
+                                   gpu::texelBinding(HEMO_SCATTER_BINDING_LOCAL, &keyLocal_, gpu::texel::kUint),
+                                   gpu::texelBinding(HEMO_SCATTER_BINDING_BLOCKS, &blocks_, gpu::texel::kUint),
+                                   {HEMO_SCATTER_BINDING_CELL_START, &cellStart_},
+                                   {HEMO_SCATTER_BINDING_ORDER, &order_}});
+  reorderSet_ = reorder_->makeSet({gpu::texelBinding(HEMO_REORDER_BINDING_ORDER, &order_, gpu::texel::kUvec2),
+                                   gpu::texelBinding(HEMO_REORDER_BINDING_CELL_START, &cellStart_, gpu::texel::kUint),
                                    gpu::texelBinding(HEMO_REORDER_BINDING_POS_IN, &scratch.positions, gpu::texel::kVec4),
                                    gpu::texelBinding(HEMO_REORDER_BINDING_VEL_IN, &scratch.velocities, gpu::texel::kVec4),
                                    gpu::texelBinding(HEMO_REORDER_BINDING_ID_IN, &scratch.ids, gpu::texel::kUint),
@@ -161,15 +189,19 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
     throw std::invalid_argument("neighbour grid: " + std::to_string(n) + " particles exceed the capacity " +
                                 std::to_string(particles_->capacity()));
   }
-  const std::uint64_t keys = spec_.keyCount();
+  const std::uint32_t keys = static_cast<std::uint32_t>(spec_.keyCount() + 1);  // cellStart entries
+  // A counting sort (interface/grid.h): five dispatches in all with the reorder and the list
+  // where the radix sort took eleven; inside the solver's rebuild gate each of them costs
+  // llvmpipe a pass through its dispatch path even on the steps that skip it.
   rec.dispatch(*hash_, hashSet_, push(n), hash_->groupsFor(n));
   rec.computeToCompute();
   mark("hash");
-  sort_.record(rec, n, gpu::bitsFor(keys - 1), keysInScratch_);
-  mark("sort");
-  rec.dispatch(*ranges_, rangesSet_, RangesPush{n, static_cast<std::uint32_t>(keys)}, ranges_->groupsFor(n + 1));
+  rec.dispatch(*cellScan_, cellScanSet_, CellScanPush{keys}, cellScan_->groupsFor(keys, HEMO_SCAN_ITEMS));
   rec.computeToCompute();
-  mark("cell ranges");
+  rec.dispatch(*scatter_, scatterSet_, ScatterPush{n, keys, kScanBlock},
+               scatter_->groupsFor(std::max<std::uint64_t>(n, keys)));
+  rec.computeToCompute();
+  mark("sort");
   // The live arrays to scratch, as transfers (a copy, where a shader would store lane by lane
   // on llvmpipe), then gathered back in cell order.
   if (n > 0) {

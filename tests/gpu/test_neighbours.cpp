@@ -292,6 +292,29 @@ TEST_F(NeighbourTest, TwoPartsPutTheFluidFirst) {
   EXPECT_THROW(spec.validate(), std::invalid_argument);
 }
 
+// The counting sort scans the keys in blocks of 4,096 (grid/cell_scan.comp) and the last
+// workgroup adds the blocks up: a grid of 32,768 keys (two parts of 16,384 cells) takes eight
+// blocks. Built twice in one recording, the second build must find the counts and the scan's
+// workgroup counter back at zero (it re-sorts sorted data and must give the same result).
+TEST_F(NeighbourTest, ManyCellsSpanSeveralScanBlocks) {
+  auto rng = rngFor();
+  const float h = 0.03125f;
+  auto spec = sim::GridSpec::covering({0, 0, 0}, {1.0f, 1.0f, 0.5f}, h);
+  spec.parts = 2;
+  ASSERT_EQ(spec.keyCount(), 32768u);
+  const auto pos = snapped(uniformBox(rng, 12000, {-0.05f, 0, 0}, {1.0f, 1.0f, 0.5f}));
+  std::vector<float> kinds(pos.size());
+  std::bernoulli_distribution fluid(0.6);
+  for (float& k : kinds) k = fluid(rng) ? 0.0f : 2.0f;
+  const Result once = run(spec, pos, h, 1, kinds);
+  expectGridMatchesReference(spec, pos, once, kinds);
+  const Result twice = run(spec, pos, h, 2, kinds);  // (the counters add up over both builds)
+  EXPECT_EQ(twice.cellStart, once.cellStart);
+  EXPECT_EQ(twice.ids, once.ids);
+  EXPECT_EQ(twice.positions, once.positions);
+  EXPECT_EQ(twice.slotOfId, once.slotOfId);
+}
+
 TEST_F(NeighbourTest, RejectsARadiusLargerThanTheCell) {
   const auto spec = sim::GridSpec::covering({0, 0, 0}, {1, 1, 1}, 0.1f);
   sim::ParticleStore store(ctx(), 10);

@@ -1,13 +1,15 @@
 #pragma once
 // Cell-linked-list neighbour search built on the GPU:
-//   hash ........ key of each particle as (key, slot) pairs: its cell, or with two parts
-//                 (GridSpec::parts) its cell + part * cellCount, part 0 for fluid particles
-//                 (kind 0 in velocities.w) and 1 for all others
-//   sort ........ stable radix sort of the pairs by key
-//   cell ranges . cellStart from the sorted keys (empty cells carry the running offset)
+//   hash ........ key of each particle: its cell, or with two parts (GridSpec::parts) its
+//                 cell + part * cellCount, part 0 for fluid particles (kind 0 in
+//                 velocities.w) and 1 for all others; and its rank from a count per key
+//   sort ........ a counting sort: exclusive scan of the counts (cellStart; empty cells carry
+//                 the running offset) and each particle to its key's range
 //   copy ........ live particle arrays -> scratch
-//   reorder ..... gather positions/velocities/normals/ids from scratch into cell order in the
-//                 live arrays, keep the positions at this build, id -> slot map
+//   reorder ..... each particle's place within its key by slot (so the sort is stable and
+//                 the order deterministic); positions/velocities/normals/ids moved from
+//                 scratch into cell order in the live arrays, the positions at this build
+//                 kept, id -> slot map
 // The cell size is the support radius (or more); neighbours within it lie in the 27 cells
 // around a particle, scanned as nine contiguous x-rows.
 #include "hemo/gpu/primitives.hpp"
@@ -58,13 +60,12 @@ class NeighbourGrid {
 
   // Records the whole build for the store's first n particles, which end up sorted by cell
   // in the store's live arrays. Counters are reset by resetCounters(). With `timestamps`,
-  // marks "hash", "sort", "cell ranges" and "reorder" after each stage.
+  // marks "hash", "sort" and "reorder" after each stage.
   void record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps = nullptr);
   void resetCounters(gpu::CommandRecorder& rec);
 
   const GridSpec& spec() const { return spec_; }
   const gpu::Buffer& cellStart() const { return cellStart_; }  // keyCount + 1 entries
-  const gpu::Buffer& pairs() const { return pairs_; }          // sorted (key, old slot)
   const gpu::Buffer& slotOfId() const { return slotOfId_; }    // id -> slot (ids < capacity)
   const gpu::Buffer& counters() const { return counters_; }
   const gpu::Buffer& positionsAtBuild() const { return posAtBuild_; }  // vec4 per slot: (x, kind)
@@ -84,16 +85,20 @@ class NeighbourGrid {
   GridSpec spec_;
   ParticleStore* particles_;
   const gpu::ComputePipeline* hash_;
-  const gpu::ComputePipeline* ranges_;
+  const gpu::ComputePipeline* cellScan_;
+  const gpu::ComputePipeline* scatter_;
   const gpu::ComputePipeline* reorder_;
-  gpu::Buffer pairs_;
+  gpu::Buffer pairs_;      // (key, rank) per slot
+  gpu::Buffer order_;      // (key, source slot), in key order
+  gpu::Buffer keyCounts_;  // zero between builds
+  gpu::Buffer keyLocal_;   // exclusive scan within each block of keys
+  gpu::Buffer blocks_;     // block offsets
+  gpu::Buffer finished_;   // the scan's finished-workgroup counter (zero between builds)
   gpu::Buffer cellStart_;
   gpu::Buffer counters_;
   gpu::Buffer slotOfId_;
   gpu::Buffer posAtBuild_;
-  gpu::RadixSort sort_;
-  bool keysInScratch_ = false;  // the hash writes to the sort's scratch (an odd number of passes)
-  gpu::DescriptorSet hashSet_, rangesSet_, reorderSet_;
+  gpu::DescriptorSet hashSet_, cellScanSet_, scatterSet_, reorderSet_;
 };
 
 // Every particle's neighbours closer than `radius` (<= cell size), as ascending slots of the

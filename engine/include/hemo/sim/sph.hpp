@@ -2,7 +2,7 @@
 // Weakly compressible SPH on the GPU: one step is
 //   gate ...... armed on the GPU by the previous step's rebuild check: is the neighbour list
 //               still valid (no particle has moved more than half its skin since it was built)?
-//   neighbours  only when not: grid (hash, sort, cell ranges, reorder), neighbour list
+//   neighbours  only when not: grid (hash, counting sort, reorder), neighbour list
 //   density ... summation density (fluid + boundary) from the list, Tait pressure
 //   boundary .. boundary-particle pressure extrapolated from the fluid (Adami et al. 2012)
 //   forces .... pressure, laminar viscosity, boundary repulsion, gravity; dt limit per particle
