@@ -35,6 +35,7 @@ layout(push_constant) uniform Push {
   uint n;
   float threshold;
   uint gateSlots;
+  uint staticSlots;  // 1: the slots past n hold rigid boundary particles (not integrated)
 } pc;
 
 #include "common/gate.glsl"
@@ -103,8 +104,17 @@ void main() {
     m = vec3(min(m.x, v.x), max(m.y, v.y), max(m.z, v.z));
   }
   // (The first round's shared values were all read before the barrier after s_last.)
-  const vec3 total = hemo_workgroup_check(m, nan);
+  vec3 total = hemo_workgroup_check(m, nan);
   if (gl_LocalInvocationID.x == 0u) {
+    if (pc.staticSlots != 0u && !isnan(total.z)) {
+      // Slots the integrator left out (SphSolver::movingSlots): rigid boundary particles,
+      // displacement 0, so their reach is |c| with the integrator's own reference c.
+      float c = (result.x + result.y) - result.w;
+      if (!(abs(c) < 1.0e30)) {
+        c = 0.0;
+      }
+      total = vec3(min(total.x, 0.0), max(total.y, 0.0), max(total.z, abs(c)));
+    }
     const bool open = hemo_gate_open(total.z, pc.threshold);
     const float lastMiddle = 0.5 * (result.x + result.y);  // the step before's, for the extrapolation
     result = open ? vec4(0.0, 0.0, total.z, 0.0) : vec4(total.xy, total.z, lastMiddle);

@@ -1,5 +1,7 @@
 #include "hemo/sim/particles.hpp"
 
+#include "interface/sph.h"
+
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -33,6 +35,13 @@ void ParticleStore::upload(const std::vector<glm::vec4>& positions, const std::v
     std::iota(idList.begin(), idList.end(), 0u);
   }
   count_ = static_cast<std::uint32_t>(positions.size());
+  fluid_ = 0;
+  wall_ = 0;
+  for (const glm::vec4& v : velocities) {
+    fluid_ += std::uint32_t(v.w) == HEMO_KIND_FLUID ? 1u : 0u;
+    wall_ += std::uint32_t(v.w) == HEMO_KIND_WALL ? 1u : 0u;
+  }
+  ++uploads_;
   live_.positions.upload(positions);
   live_.velocities.upload(velocities);
   live_.ids.upload(idList);

@@ -35,6 +35,7 @@ struct CheckPush {
   std::uint32_t n;
   float threshold;
   std::uint32_t gateSlots;
+  std::uint32_t staticSlots;  // 1: slots past n hold rigid boundary particles (displacement 0)
 };
 
 std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
@@ -419,11 +420,11 @@ void SphSolver::recordForces(gpu::CommandRecorder& rec) {
 }
 
 void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime) {
-  recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_SYMPLECTIC_EULER);
+  recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_SYMPLECTIC_EULER, particles_->count());
 }
 
 void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex,
-                                    float endTime, std::uint32_t mode) {
+                                    float endTime, std::uint32_t mode, std::uint32_t moving) {
   if (logIndex >= maxStepsPerBatch_) {
     throw std::out_of_range("step log index " + std::to_string(logIndex) + " exceeds the batch capacity " +
                             std::to_string(maxStepsPerBatch_));
@@ -431,20 +432,30 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   const std::uint32_t n = particles_->count();
   if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, n);  // the second stage reuses the step's dt
   // At least one workgroup: invocation 0 advances the clock even with no particles.
-  rec.dispatch(*integrate_[mode], integrateSet_, IntegratePush{n, step, logIndex, endTime, clockParity_},
-               integrate_[mode]->groupsFor(std::max(n, 1u)));
+  rec.dispatch(*integrate_[mode], integrateSet_, IntegratePush{moving, step, logIndex, endTime, clockParity_},
+               integrate_[mode]->groupsFor(std::max(moving, 1u)));
   rec.computeToCompute();
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone
-    recordRebuildCheck(rec, n);  // the next step's rebuild decision
+    recordRebuildCheck(rec, moving, moving < n);  // the next step's rebuild decision
   }
 }
 
-void SphSolver::recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n) {
+void SphSolver::recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n, bool staticSlots) {
   // At least one workgroup: its last (only) one arms the gate even with no particles.
-  rec.dispatch(*rebuildCheck_, checkSet_, CheckPush{n, rebuildThreshold(), rebuildGate_.slots()},
+  rec.dispatch(*rebuildCheck_, checkSet_, CheckPush{n, rebuildThreshold(), rebuildGate_.slots(), staticSlots ? 1u : 0u},
                rebuildCheck_->groupsFor(std::max(n, 1u), HEMO_REDUCE_ITEMS));
   rec.computeToComputeAndIndirect();  // the gate's arguments; the result for the next integrator
+}
+
+std::uint32_t SphSolver::movingSlots() const {
+  // In the grid's order (fluid first) with no wall particles, the slots past the fluid hold
+  // only rigid boundary particles, which never move: the integrator and the rebuild check
+  // leave them out (the dam break: 10,296 of 19,896 slots). Only once this upload has been
+  // sorted, i.e. after a step that rebuilt the grid.
+  const std::uint32_t n = particles_->count();
+  const bool sorted = sortedUpload_ == particles_->uploads();
+  return sorted && particles_->wallCount() == 0 ? particles_->fluidCount() : n;
 }
 
 void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
@@ -456,6 +467,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   if (armPending_) {  // after a reset or a rebuild request; else the last step's check armed it
     rebuildGate_.recordArm(rec, HEMO_CHECK_RESULT_REACH, rebuildThreshold());
     armPending_ = false;
+    sortedUpload_ = particles_->uploads();  // this step rebuilds: the slots are in grid order
   }
   rec.beginGate(rebuildGate_);
   recordNeighbours(rec, timestamps);
@@ -464,13 +476,13 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   recordForces(rec);
   mark("forces");
   if (settings_.integrator == Integrator::Rk2Midpoint) {
-    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_HALF);
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_HALF, movingSlots());
     recordDensity(rec);
     recordForces(rec);
-    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_FULL);
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_FULL, movingSlots());
     mark("rk2 midpoint stage + integrate");
   } else {
-    recordIntegrate(rec, step, logIndex, endTime);
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_SYMPLECTIC_EULER, movingSlots());
     mark("integrate");
   }
 }

@@ -28,6 +28,12 @@ class ParticleStore {
 
   std::uint32_t capacity() const { return capacity_; }
   std::uint32_t count() const { return count_; }
+  // Particles of each kind at the last upload (velocities.w: HEMO_KIND_FLUID, _BOUNDARY,
+  // _WALL of interface/sph.h; kinds never change during a run), and how many uploads there
+  // have been (a solver that relies on the grid's order checks it has sorted this upload).
+  std::uint32_t fluidCount() const { return fluid_; }
+  std::uint32_t wallCount() const { return wall_; }
+  std::uint64_t uploads() const { return uploads_; }
   ParticleArrays& live() { return live_; }
   const ParticleArrays& live() const { return live_; }
   const ParticleArrays& scratch() const { return scratch_; }
@@ -43,6 +49,9 @@ class ParticleStore {
  private:
   std::uint32_t capacity_;
   std::uint32_t count_ = 0;
+  std::uint32_t fluid_ = 0;
+  std::uint32_t wall_ = 0;
+  std::uint64_t uploads_ = 0;
   ParticleArrays live_;
   ParticleArrays scratch_;
 };

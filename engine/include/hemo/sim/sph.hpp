@@ -213,8 +213,10 @@ class SphSolver {
   SphParams params_;
   std::uint32_t maxStepsPerBatch_;
   std::uint32_t clockParity_ = 0;  // which clock record holds the current time
+  // The integrator over the first `moving` slots (the rest must be rigid boundary particles).
   void recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
-                           std::uint32_t mode);
+                           std::uint32_t mode, std::uint32_t moving);
+  std::uint32_t movingSlots() const;
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
@@ -242,7 +244,9 @@ class SphSolver {
   // The gate must be armed by its own pass before the next step (after a reset or a rebuild
   // request); otherwise the last step's rebuild check has armed it.
   bool armPending_ = true;
-  void recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n);
+  std::uint64_t sortedUpload_ = ~std::uint64_t(0);  // the store upload a rebuild has sorted
+  // staticSlots: the slots past n hold rigid boundary particles, which count as displacement 0.
+  void recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n, bool staticSlots);
 };
 
 }  // namespace hemo::sim
