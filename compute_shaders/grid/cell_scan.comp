@@ -3,8 +3,9 @@
 // per-key counts, in one dispatch. Each workgroup scans its block of keys (offsets within the
 // block to `local`) and stores the block's total; the last workgroup to finish turns the
 // totals into block offsets (a sequential pass: a grid has a few blocks per thousand
-// particles). The counts are consumed: set back to zero for the next build's hash.
-// cellStart = local + the block's offset, written by grid/scatter.comp, which reads both.
+// particles). cellStart = local + the block's offset, written by grid/scatter.comp, which
+// reads both and sets the counts back to zero for the next build's hash. The counts are read
+// as texels (one vector gather on llvmpipe, where a storage buffer is read lane by lane).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -13,7 +14,7 @@
 #include "common/index.glsl"
 #include "common/workgroup_scan.glsl"
 
-layout(std430, binding = HEMO_CELL_SCAN_BINDING_KEY_COUNTS) buffer KeyCounts { uint keyCounts[]; };
+layout(binding = HEMO_CELL_SCAN_BINDING_KEY_COUNTS) uniform usamplerBuffer keyCounts;
 layout(std430, binding = HEMO_CELL_SCAN_BINDING_LOCAL) writeonly buffer Local { uint local[]; };
 // Written by every workgroup, read by the last: coherent, and published before the count.
 layout(std430, binding = HEMO_CELL_SCAN_BINDING_BLOCKS) coherent buffer Blocks { uint blocks[]; };
@@ -31,7 +32,7 @@ void main() {
   uint total = 0u;
   for (uint k = 0u; k < HEMO_SCAN_ITEMS; ++k) {
     const uint idx = base + k;
-    items[k] = idx < pc.keys ? keyCounts[idx] : 0u;
+    items[k] = idx < pc.keys ? texelFetch(keyCounts, int(idx)).x : 0u;
     total += items[k];
   }
   uint blockTotal;
@@ -40,7 +41,6 @@ void main() {
     const uint idx = base + k;
     if (idx < pc.keys) {
       local[idx] = running;
-      keyCounts[idx] = 0u;
     }
     running += items[k];
   }

@@ -34,8 +34,7 @@
 #define HEMO_COUNTER_NONFINITE 1
 #define HEMO_COUNTER_COUNT 4
 
-// grid/cell_scan.comp: exclusive scan of the key counts (which it leaves at zero for the next
-// build) within blocks of workgroupSize * HEMO_SCAN_ITEMS keys, and of the block totals (by
+// grid/cell_scan.comp: exclusive scan of the key counts within blocks of workgroupSize * HEMO_SCAN_ITEMS keys, and of the block totals (by
 // the last workgroup to finish; the counter starts and ends at 0).
 #define HEMO_CELL_SCAN_BINDING_KEY_COUNTS 0
 #define HEMO_CELL_SCAN_BINDING_LOCAL 1    // uint per key: offset within its block
@@ -44,13 +43,14 @@
 #define HEMO_CELL_SCAN_BINDING_COUNT 4
 
 // grid/scatter.comp: cellStart = local + block offset; (key, slot) of every particle to its
-// key's start + rank.
+// key's start + rank; the counts back to zero.
 #define HEMO_SCATTER_BINDING_PAIRS 0
 #define HEMO_SCATTER_BINDING_LOCAL 1
 #define HEMO_SCATTER_BINDING_BLOCKS 2
 #define HEMO_SCATTER_BINDING_CELL_START 3
 #define HEMO_SCATTER_BINDING_ORDER 4  // uvec2 per slot: (key, source slot), in key order
-#define HEMO_SCATTER_BINDING_COUNT 5
+#define HEMO_SCATTER_BINDING_KEY_COUNTS 5  // set back to zero for the next build
+#define HEMO_SCATTER_BINDING_COUNT 6
 
 // grid/reorder.comp: moves particle data (from the scratch arrays) into sorted order in the
 // live arrays, records the positions at this build, and updates id -> slot.

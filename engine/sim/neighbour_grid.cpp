@@ -119,16 +119,16 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
       posAtBuild_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
                   "positions at the last grid build") {
   spec_.validate();
-  // The counts start at zero; every build's scan leaves them at zero again, as the scan's
-  // finished-workgroup counter.
+  // The counts start at zero, and every build's scatter leaves them at zero again; the scan's
+  // finished-workgroup counter likewise.
   keyCounts_.upload(std::vector<std::uint32_t>(spec_.keyCount() + 1, 0u));
   finished_.upload(std::vector<std::uint32_t>(4, 0u));
   // Read-only inputs are texel slots (gpu/pipeline.hpp, texelSlots): llvmpipe reads a storage
   // buffer lane by lane.
   hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}, 0u,
                                     1u << HEMO_HASH_BINDING_POSITIONS | 1u << HEMO_HASH_BINDING_VELOCITIES});
-  cellScan_ = &context.pipelines().get(
-      {"grid/cell_scan", HEMO_CELL_SCAN_BINDING_COUNT, sizeof(CellScanPush), kScanWorkgroup, {}});
+  cellScan_ = &context.pipelines().get({"grid/cell_scan", HEMO_CELL_SCAN_BINDING_COUNT, sizeof(CellScanPush),
+                                        kScanWorkgroup, {}, 0u, 1u << HEMO_CELL_SCAN_BINDING_KEY_COUNTS});
   scatter_ = &context.pipelines().get({"grid/scatter", HEMO_SCATTER_BINDING_COUNT, sizeof(ScatterPush), kWorkgroup, {},
                                        0u,
                                        1u << HEMO_SCATTER_BINDING_PAIRS | 1u << HEMO_SCATTER_BINDING_LOCAL |
@@ -144,7 +144,7 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
                              {HEMO_HASH_BINDING_PAIRS, &pairs_},
                              {HEMO_HASH_BINDING_COUNTERS, &counters_},
                              {HEMO_HASH_BINDING_KEY_COUNTS, &keyCounts_}});
-  cellScanSet_ = cellScan_->makeSet({{HEMO_CELL_SCAN_BINDING_KEY_COUNTS, &keyCounts_},
+  cellScanSet_ = cellScan_->makeSet({gpu::texelBinding(HEMO_CELL_SCAN_BINDING_KEY_COUNTS, &keyCounts_, gpu::texel::kUint),
                                      {HEMO_CELL_SCAN_BINDING_LOCAL, &keyLocal_},
                                      {HEMO_CELL_SCAN_BINDING_BLOCKS, &blocks_},
                                      {HEMO_CELL_SCAN_BINDING_FINISHED, &finished_}});
@@ -152,7 +152,8 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
                                    gpu::texelBinding(HEMO_SCATTER_BINDING_LOCAL, &keyLocal_, gpu::texel::kUint),
                                    gpu::texelBinding(HEMO_SCATTER_BINDING_BLOCKS, &blocks_, gpu::texel::kUint),
                                    {HEMO_SCATTER_BINDING_CELL_START, &cellStart_},
-                                   {HEMO_SCATTER_BINDING_ORDER, &order_}});
+                                   {HEMO_SCATTER_BINDING_ORDER, &order_},
+                                   {HEMO_SCATTER_BINDING_KEY_COUNTS, &keyCounts_}});
   reorderSet_ = reorder_->makeSet({gpu::texelBinding(HEMO_REORDER_BINDING_ORDER, &order_, gpu::texel::kUvec2),
                                    gpu::texelBinding(HEMO_REORDER_BINDING_CELL_START, &cellStart_, gpu::texel::kUint),
                                    gpu::texelBinding(HEMO_REORDER_BINDING_POS_IN, &scratch.positions, gpu::texel::kVec4),
