@@ -399,8 +399,13 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQuerie
 }
 
 void SphSolver::recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
+  recordDensityOver(rec, particles_->count(), timestamps);
+}
+
+void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
+                                  gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
-  rec.dispatch(*density_, densitySet_, ClockedPush{n, clockParity_}, density_->groupsFor(n));
+  rec.dispatch(*density_, densitySet_, ClockedPush{fluidSlots, clockParity_}, density_->groupsFor(fluidSlots));
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
   rec.dispatch(*boundaryPressure_, boundarySet_, ClockedPush{n, clockParity_}, boundaryPressure_->groupsFor(n));
@@ -408,13 +413,15 @@ void SphSolver::recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* 
   if (timestamps) timestamps->mark(rec, "boundary pressure");
 }
 
-void SphSolver::recordForces(gpu::CommandRecorder& rec) {
+void SphSolver::recordForces(gpu::CommandRecorder& rec) { recordForcesOver(rec, particles_->count()); }
+
+void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots) {
   const std::uint32_t n = particles_->count();
   if (settings_.sps) {  // only scenes that ask for turbulence pay for it
-    rec.dispatch(*spsStress_, spsSet_, CountPush{n}, spsStress_->groupsFor(n));
+    rec.dispatch(*spsStress_, spsSet_, CountPush{fluidSlots}, spsStress_->groupsFor(fluidSlots));
     rec.computeToCompute();
   }
-  rec.dispatch(*forces_, forcesSet_, CountPush{n}, forces_->groupsFor(n));
+  rec.dispatch(*forces_, forcesSet_, CountPush{fluidSlots}, forces_->groupsFor(fluidSlots));
   rec.computeToCompute();
   if (wall_) wall_->record(rec, n);  // the wall, solved after the fluid in every force evaluation
 }
@@ -430,7 +437,8 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
                             std::to_string(maxStepsPerBatch_));
   }
   const std::uint32_t n = particles_->count();
-  if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, n);  // the second stage reuses the step's dt
+  // The second stage reuses the step's dt; slots past `moving` (rigid) have no limit.
+  if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, moving);
   // At least one workgroup: invocation 0 advances the clock even with no particles.
   rec.dispatch(*integrate_[mode], integrateSet_, IntegratePush{moving, step, logIndex, endTime, clockParity_},
                integrate_[mode]->groupsFor(std::max(moving, 1u)));
@@ -472,17 +480,21 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   rec.beginGate(rebuildGate_);
   recordNeighbours(rec, timestamps);
   rec.endGate();
-  recordDensity(rec, timestamps);
-  recordForces(rec);
+  // Past movingSlots() only rigid boundary particles, for which the density and force passes
+  // do nothing (no density of their own; acceleration 0 and no time-step limit, which nobody
+  // reads for them: the integrator and the dt reduction leave those slots out too).
+  const std::uint32_t moving = movingSlots();
+  recordDensityOver(rec, moving, timestamps);
+  recordForcesOver(rec, moving);
   mark("forces");
   if (settings_.integrator == Integrator::Rk2Midpoint) {
-    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_HALF, movingSlots());
-    recordDensity(rec);
-    recordForces(rec);
-    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_FULL, movingSlots());
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_HALF, moving);
+    recordDensityOver(rec, moving);
+    recordForcesOver(rec, moving);
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_FULL, moving);
     mark("rk2 midpoint stage + integrate");
   } else {
-    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_SYMPLECTIC_EULER, movingSlots());
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_SYMPLECTIC_EULER, moving);
     mark("integrate");
   }
 }

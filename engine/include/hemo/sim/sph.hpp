@@ -217,6 +217,11 @@ class SphSolver {
   void recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
                            std::uint32_t mode, std::uint32_t moving);
   std::uint32_t movingSlots() const;
+  // The density pass over the first `fluidSlots` slots (boundary pressure over all), and the
+  // force passes likewise (the wall stages over all).
+  void recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
+                         gpu::TimestampQueries* timestamps = nullptr);
+  void recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
