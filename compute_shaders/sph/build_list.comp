@@ -46,9 +46,10 @@ void main() {
   const vec3 xi = xi4.xyz;
   const float list2 = params.listRadius * params.listRadius;
   const uint capacity = params.neighbourCapacity;
+  // The minimum image on the periodic axes only (specialization constant, common/sph_params.glsl),
+  // as the passes over the list take it.
   const HemoPairParams pp = hemo_pair_params();
   const uvec3 dims = pc.grid.dimsN.xyz;
-  const HemoGridImage image = hemo_grid_image(pc.grid);  // no division per candidate
   const uint cellCount = dims.x * dims.y * dims.z;
   const uint parts = fluidI ? 2u : 1u;  // boundary particles list fluid only
 
@@ -111,7 +112,7 @@ void main() {
           const uint mark = part == 0u ? 0u : HEMO_LIST_BOUNDARY_BIT;
           const uint jEnd = texelFetch(cellStart, int(base + last + 1u)).x;
           for (uint j = texelFetch(cellStart, int(base + first)).x; j < jEnd; ++j) {
-            const vec3 d = hemo_grid_min_image(xi - texelFetch(positions, int(j)).xyz, image);
+            const vec3 d = hemo_min_image(xi - texelFetch(positions, int(j)).xyz, pp);
             // Every candidate is written to the next free slot, and the slot is kept (count
             // advances) only if the candidate is a neighbour: a store under a data-dependent
             // condition cost llvmpipe more than the candidate test itself (dam break: list

@@ -225,7 +225,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   inflow_.upload(std::vector<InflowParams>{disabledInflowParams()});
   auto& cache = context.pipelines();
-  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup, {}, 1u << HEMO_BUILD_BINDING_PARAMS,
+  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup,
+                           pairSpecialization({}), 1u << HEMO_BUILD_BINDING_PARAMS,
                              1u << HEMO_BUILD_BINDING_POSITIONS | 1u << HEMO_BUILD_BINDING_CELL_START});
   // Constant 1 of the density pass and the integrator: summation density (0), or continuity
   // density advanced by the density pass (1, symplectic Euler) or by the RK2 stages (2).
