@@ -8,11 +8,10 @@ float hemo_kernel_w(float r, float h, float kernelNorm) {
   return kernelNorm * t2 * t2 * (2.0 * q + 1.0);
 }
 
-// The same with 1 / h given (the pair loops' form: a multiplication, not a division, per pair),
-// and 0 at and beyond the support ((1 - q/2) clamped at 0), so a pair loop needs no branch.
+// The same with 1 / h given (the pair loops' form: a multiplication, not a division, per pair).
 float hemo_kernel_w_inv(float r, float invH, float kernelNorm) {
   const float q = r * invH;
-  const float t = max(1.0 - 0.5 * q, 0.0);
+  const float t = 1.0 - 0.5 * q;
   const float t2 = t * t;
   return kernelNorm * t2 * t2 * (2.0 * q + 1.0);
 }

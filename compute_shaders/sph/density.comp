@@ -94,10 +94,8 @@ void pair(uint entry, bool valid) {
       const float hydro = gRho0 * (pow(max(1.0 - gHydroScale * dot(gG, d), 1.0e-6), 1.0 / 7.0) - 1.0);
       gDiffused += 2.0 * ((rhoJ - gRho) - hydro) * (-dot(d, gradW)) / (r2 + gEtaSq) * (pj.w / rhoJ);
     }
-  } else {
-    // W is 0 beyond the support, so the sum takes every entry without a branch (llvmpipe runs
-    // a branch's body under a lane mask whether or not a lane takes it); the padding adds 0.
-    gRho += valid ? pj.w * hemo_kernel_w_inv(sqrt(r2), gInvH, gPp.kernelNorm) : 0.0;
+  } else if (valid && r2 < gPp.support2) {
+    gRho += pj.w * hemo_kernel_w_inv(sqrt(r2), gInvH, gPp.kernelNorm);
   }
 }
 
