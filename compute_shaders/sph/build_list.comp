@@ -77,6 +77,24 @@ void main() {
     if (z < 0 || gz * gz >= trim2) {
       continue;
     }
+    if (!fluidI) {
+      // A boundary particle lists fluid only, and most wall particles of a tank sit far from
+      // it: skip the plane's five rows at once when the block of whole x rows that holds them
+      // (x fastest, so rows yLo .. yHi of plane z are one range of cells) has no fluid.
+      int yLo = c.y - 2;
+      int yHi = c.y + 2;
+      if (pc.grid.periodic.y != 0u && (yLo < 0 || yHi >= int(dims.y))) {
+        yLo = 0;  // the rows wrap: the whole plane
+        yHi = int(dims.y) - 1;
+      }
+      yLo = clamp(yLo, 0, int(dims.y) - 1);
+      yHi = clamp(yHi, 0, int(dims.y) - 1);
+      const uint planeFirst = hemo_cell_linear(ivec3(0, yLo, z), dims);
+      const uint planeLast = hemo_cell_linear(ivec3(hiX, yHi, z), dims);
+      if (texelFetch(cellStart, int(planeFirst)).x == texelFetch(cellStart, int(planeLast + 1u)).x) {
+        continue;
+      }
+    }
     for (int dy = -2; dy <= 2; ++dy) {
       const int ky = c.y + dy;
       const float gy = hemo_cell_gap(ky, u.y, dims.y, pc.grid.periodic.y) * cellM.y;

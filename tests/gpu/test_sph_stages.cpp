@@ -325,8 +325,12 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
     glm::vec3 x(ux(rng), uy(rng), uz(rng));
     if (k % 5 == 0) x = glm::vec3(ux(rng), 0.02f + cluster(rng), 0.01f + cluster(rng));
     x.x -= period * std::floor(x.x / period);
-    // Boundary particles everywhere, fluid only where y < 0.03 (so some cells hold none).
-    const bool fluid = x.y < 0.03f && unit(rng) < 0.6f;
+    // Boundary particles everywhere, fluid only in the band 0.025 < y < 0.05, so some cells
+    // hold none, and boundary particles on both sides of it have fluid in only some of the
+    // rows they scan (build_list.comp skips a boundary particle's rows in blocks when they
+    // hold no fluid; rows are 1.43 cm here, so below the band a row without fluid lies
+    // between a particle and fluid within its reach).
+    const bool fluid = x.y > 0.025f && x.y < 0.05f && unit(rng) < 0.6f;
     c.pos.emplace_back(x, m);
     c.vel.emplace_back(0.0f, 0.0f, 0.0f, float(fluid ? sim::ParticleKind::Fluid : sim::ParticleKind::Boundary));
     c.normals.emplace_back(0.0f, 0.0f, 1.0f, 0.0f);
