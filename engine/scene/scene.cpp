@@ -148,7 +148,7 @@ const std::vector<Field>& schema() {
        {
            {"min_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Lower corner."},
            {"max_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Upper corner."},
-           {"periodic", Kind::ChoiceList, "", 0, 0, false, Json::array(), "Axes on which [min_m, max_m) is one period: particles leaving one side enter at the other, and tanks have no walls across these axes (they must span the domain there). The period must be a whole number of spacings and at least 3 neighbour-list radii.", {"x", "y", "z"}},
+           {"periodic", Kind::ChoiceList, "", 0, 0, false, Json::array(), "Axes on which [min_m, max_m) is one period: particles leaving one side enter at the other, and tanks have no walls across these axes (they must span the domain there). The period must be a whole number of spacings and at least 2.5 neighbour-list radii.", {"x", "y", "z"}},
        }},
   };
   return fields;
@@ -493,9 +493,11 @@ void checkPeriodicAxes(const Scene& s, const std::string& source, int onlyAxis) 
                                     fmt(s.sph.spacing) + " m (it is " + fmt(spacings) + ")");
     }
     const double listRadius = s.sph.listRadius();
-    if (period < 3.0 * listRadius * (1.0 - 1e-6)) {
-      c.fail("domain.periodic", "the period along " + axis + " (" + fmt(period) + " m) must be at least 3 neighbour-list radii (" +
-                                    fmt(3.0 * listRadius) + " m)");
+    // The neighbour grid's cells are half a list radius and a particle scans two cells either
+    // side, so a period needs 5 distinct cells (sph.cpp, gridFor).
+    if (period < 2.5 * listRadius * (1.0 - 1e-6)) {
+      c.fail("domain.periodic", "the period along " + axis + " (" + fmt(period) + " m) must be at least 2.5 neighbour-list radii (" +
+                                    fmt(2.5 * listRadius) + " m)");
     }
     for (std::size_t k = 0; k < s.tanks.size(); ++k) {
       const Box& b = s.tanks[k].box;

@@ -43,7 +43,7 @@ TEST(Scene, ValidSceneLoadsWithDefaultsAndDerivedSoundSpeed) {
 }
 
 // Periodic axes: accepted when the tank spans the domain there (no walls built across the
-// axis); a period that is not a whole number of spacings, one thinner than three list radii,
+// axis); a period that is not a whole number of spacings, one thinner than 2.5 list radii,
 // a tank that does not span the period, an unknown or repeated axis: each named.
 TEST(Scene, PeriodicAxesAreCheckedAndDropTheWallsAcrossThem) {
   Json j = validScene();
@@ -72,7 +72,7 @@ TEST(Scene, PeriodicAxesAreCheckedAndDropTheWallsAcrossThem) {
   bad["domain"]["max_m"][1] = 0.12;
   bad["boundary"]["tanks"][0]["max_m"][1] = 0.12;
   bad["particles"]["spacing_m"] = 0.02;
-  expectError(bad, {"domain.periodic", "at least 3 neighbour-list radii"});
+  expectError(bad, {"domain.periodic", "at least 2.5 neighbour-list radii"});
   bad = j;
   bad["domain"]["periodic"] = Json::array({"w"});
   expectError(bad, {"domain.periodic[0]", "\"x\""});

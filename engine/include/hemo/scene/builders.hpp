@@ -39,7 +39,7 @@ ParticleSet buildParticles(const Scene& scene);
 // For quasi-2D slab scenes (periodic along `axis`, every fluid block and tank spanning the
 // domain there): a copy with the slab `spacings` particle spacings thick. Used when a scene
 // is run at another resolution, since a periodic slab must stay a whole number of spacings
-// and at least three neighbour-list radii thick. Throws SceneError otherwise.
+// and at least 2.5 neighbour-list radii thick. Throws SceneError otherwise.
 Scene withSlabThickness(Scene scene, int axis, int spacings);
 
 }  // namespace hemo::scene

@@ -109,7 +109,7 @@ struct Scene {
 
 Scene parseScene(const std::string& jsonText, const std::string& sourceName);
 Scene loadScene(const std::filesystem::path& path);
-// The rules for periodic axes (a whole number of spacings, at least three neighbour-list
+// The rules for periodic axes (a whole number of spacings, at least 2.5 neighbour-list
 // radii, tanks spanning the period); throws SceneError naming `source` and the field. Run by
 // the loader (every periodic axis), and again by anything that edits a loaded scene's
 // geometry (`axis` 0-2: only that axis).
