@@ -48,7 +48,7 @@ const std::vector<Field>& schema() {
            {"spacing_m", Kind::Number, "m", 0, 10, true, nullptr, "Initial particle spacing dp (fluid and boundary lattice)."},
            {"smoothing_ratio", Kind::Number, "1", 0.5, 3, false, 1.3, "Smoothing length h / dp; the kernel support is 2h."},
            {"neighbour_capacity", Kind::Integer, "1", 8, 1024, false, 128, "Neighbour-list entries per particle; exceeding it stops the run."},
-           {"list_skin", Kind::Number, "1", 0, 1, false, 0.1, "Neighbour-list radius = 2h (1 + skin)."},
+           {"list_skin", Kind::Number, "1", 0, 1, false, 0.1, "Neighbour-list radius = 2h (1 + skin). A larger skin rebuilds the list less often but makes it longer: 0.1 suits the dam break, 0.25 (with a capacity of 176) the vessel scenes, whose shear flows spread the displacements (docs/benchmarks.md)."},
        }},
       {"fluid", Kind::Section, "", 0, 0, false, nullptr, "The fluid (blood defaults are density 1060, viscosity 3.5e-3).", {},
        {
