@@ -397,7 +397,7 @@ Json accuracy(Context& ctx, const std::string& only) {
       for (Integrator integrator : integrators) {
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/poiseuille.json");
         scene.sph.spacing = float(L / across);
-        scene = hemo::scene::withSlabThickness(scene, 0, 9);  // the thinnest periodic extents allowed
+        scene = hemo::scene::withSlabThickness(scene, 0, 9);  // periodic extents of 9 dp (three list radii)
         scene = hemo::scene::withSlabThickness(scene, 1, 9);
         scene.sph.integrator = integrator;
         hemo::sim::Simulation sim(ctx, scene);
@@ -428,7 +428,7 @@ Json accuracy(Context& ctx, const std::string& only) {
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
         scene.sph.spacing = float(a / fraction);
         scene.sph.smoothingRatio = v.smoothingRatio;
-        // the periodic slab: 0.6 a thick as in the scene, at least three list radii
+        // the periodic slab: 0.6 a thick as in the scene, at least 9 dp (three list radii)
         scene = hemo::scene::withSlabThickness(scene, 1, std::max(9, int(std::lround(0.6 * fraction))));
         scene.sph.integrator = v.integrator;
         scene.sph.densityMethod = v.density;

@@ -560,7 +560,7 @@ namespace hemo::test {
 namespace {
 
 // scenes/dam_break.json at half its resolution: dp = a/10 (a = 0.05715 m), in a periodic slab
-// 9 spacings thick (the thinnest that holds three neighbour-list radii), 1,800 fluid particles.
+// 9 spacings thick (three neighbour-list radii), 1,800 fluid particles.
 scene::Scene coarseDamBreak() {
   scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
   scene.sph.spacing = float(0.05715 / 10.0);
