@@ -35,7 +35,8 @@ layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer 
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
 layout(push_constant) uniform Push {
-  uint n;
+  uint first;  // the slots [first, n): after a sort the fluid's slots come first and are
+  uint n;      // left out (SphSolver::nonFluidStart), so every thread shares the boundary's
   uint clockIn;
 } pc;
 
@@ -62,7 +63,7 @@ void pair(uint f, bool valid) {
 }
 
 void main() {
-  const uint b = hemo_global_index();
+  const uint b = pc.first + hemo_global_index();
   if (b >= pc.n) {
     return;
   }

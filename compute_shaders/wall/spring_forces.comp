@@ -150,10 +150,11 @@ layout(push_constant) uniform Push {
   float timeStepFactor;
   float acousticLength;  // C_a h (m): the fluid's acoustic limit C_a h / (c0 + |v|) applies too
   float c0;
+  uint first;  // the slots [first, n): the fluid's, first after a sort, are left out
 } pc;
 
 void main() {
-  const uint slot = hemo_global_index();
+  const uint slot = pc.first + hemo_global_index();
   if (slot >= pc.n || uint(velocities(slot).w) != HEMO_KIND_WALL) {
     return;
   }

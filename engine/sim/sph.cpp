@@ -22,6 +22,9 @@ struct CountPush {
 struct ClockedPush {
   std::uint32_t n, clockIn;
 };
+struct RangePush {  // the slots [first, n)
+  std::uint32_t first, n, clockIn;
+};
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
@@ -238,7 +241,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                          1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
                              1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
                              1u << HEMO_DENSITY_BINDING_NORMALS});
-  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, pairSpecialization({listWidth_}),
+  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(RangePush), kWorkgroup, pairSpecialization({listWidth_}),
                                   1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK,
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
                                       1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
@@ -409,14 +412,16 @@ void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluid
   rec.dispatch(*density_, densitySet_, ClockedPush{fluidSlots, clockParity_}, density_->groupsFor(fluidSlots));
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
-  rec.dispatch(*boundaryPressure_, boundarySet_, ClockedPush{n, clockParity_}, boundaryPressure_->groupsFor(n));
+  const std::uint32_t first = nonFluidStart();
+  rec.dispatch(*boundaryPressure_, boundarySet_, RangePush{first, n, clockParity_}, boundaryPressure_->groupsFor(n - first));
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "boundary pressure");
 }
 
 void SphSolver::recordForces(gpu::CommandRecorder& rec) { recordForcesOver(rec, particles_->count()); }
 
-void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots) {
+void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
+                                 gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
   if (settings_.sps) {  // only scenes that ask for turbulence pay for it
     rec.dispatch(*spsStress_, spsSet_, CountPush{fluidSlots}, spsStress_->groupsFor(fluidSlots));
@@ -424,7 +429,11 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
   }
   rec.dispatch(*forces_, forcesSet_, CountPush{fluidSlots}, forces_->groupsFor(fluidSlots));
   rec.computeToCompute();
-  if (wall_) wall_->record(rec, n);  // the wall, solved after the fluid in every force evaluation
+  if (timestamps) timestamps->mark(rec, "forces");
+  if (wall_) {
+    wall_->record(rec, nonFluidStart(), n);  // the wall, solved after the fluid in every force evaluation
+    if (timestamps) timestamps->mark(rec, "wall");
+  }
 }
 
 void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime) {
@@ -457,6 +466,15 @@ void SphSolver::recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n, b
   rec.computeToComputeAndIndirect();  // the gate's arguments; the result for the next integrator
 }
 
+std::uint32_t SphSolver::nonFluidStart() const {
+  // After a step that rebuilt the grid the fluid holds the first slots (the grid's part 0),
+  // and the passes over boundary and wall particles start past them. Dispatched over all
+  // slots, their work sat in the last workgroups, and lavapipe hands each thread one
+  // contiguous share of a dispatch: in Table 1's tubes one thread of six ran the whole wall
+  // stage (docs/benchmarks.md, "Session 19").
+  return sortedUpload_ == particles_->uploads() ? particles_->fluidCount() : 0u;
+}
+
 std::uint32_t SphSolver::movingSlots() const {
   // In the grid's order (fluid first) with no wall particles, the slots past the fluid hold
   // only rigid boundary particles, which never move: the integrator and the rebuild check
@@ -486,8 +504,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   // reads for them: the integrator and the dt reduction leave those slots out too).
   const std::uint32_t moving = movingSlots();
   recordDensityOver(rec, moving, timestamps);
-  recordForcesOver(rec, moving);
-  mark("forces");
+  recordForcesOver(rec, moving, timestamps);
   if (settings_.integrator == Integrator::Rk2Midpoint) {
     recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_HALF, moving);
     recordDensityOver(rec, moving);

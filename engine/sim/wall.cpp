@@ -25,8 +25,9 @@ struct ForcesPush {
   float gravity[4];
   std::uint32_t n, idCount;
   float timeStepFactor, acousticLength, c0;
+  std::uint32_t first;
 };
-static_assert(sizeof(ForcesPush) == 36);
+static_assert(sizeof(ForcesPush) == 40);
 
 bool finiteNonNegative(float x) { return std::isfinite(x) && x >= 0.0f; }
 }  // namespace
@@ -184,14 +185,14 @@ void MassSpring::recordReset(gpu::CommandRecorder& rec) {
   rec.transferToCompute();
 }
 
-void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t n) {
+void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n) {
   if (springCount_ > 0) {
     rec.dispatch(*rupture_, ruptureSet_, RupturePush{springCount_}, rupture_->groupsFor(springCount_));
     rec.computeToCompute();
   }
   const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, n, idCount_, timeStepFactor_, acousticLength_,
-                        soundSpeed_};
-  rec.dispatch(*forces_, forcesSet_, push, forces_->groupsFor(n));
+                        soundSpeed_, first};
+  rec.dispatch(*forces_, forcesSet_, push, forces_->groupsFor(n - first));
   rec.computeToCompute();
 }
 

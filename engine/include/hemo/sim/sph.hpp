@@ -221,7 +221,9 @@ class SphSolver {
   // force passes likewise (the wall stages over all).
   void recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
                          gpu::TimestampQueries* timestamps = nullptr);
-  void recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots);
+  std::uint32_t nonFluidStart() const;  // the first slot that may hold a non-fluid particle
+  void recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
+                        gpu::TimestampQueries* timestamps = nullptr);
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)

@@ -85,9 +85,10 @@ class MassSpring {
              const SpringNetwork& network, glm::vec3 gravity, float acousticLength, float soundSpeed);
 
   void recordReset(gpu::CommandRecorder& rec);  // counters to zero (flags stay)
-  // Rupture, then spring forces for the first n slots (after the SPH force pass, whose
-  // accelerations of wall particles this replaces).
-  void record(gpu::CommandRecorder& rec, std::uint32_t n);
+  // Rupture, then spring forces for the slots [first, n) (after the SPH force pass, whose
+  // accelerations of wall particles this replaces). Slots before `first` must hold no wall
+  // particle (SphSolver::nonFluidStart).
+  void record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n);
 
   std::uint32_t springCount() const { return springCount_; }
   std::uint32_t readBrokenCount() const;             // since the last reset (a readback)
