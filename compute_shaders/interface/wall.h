@@ -17,18 +17,6 @@
 
 // Per particle id: vec4 (mass in kg, anchored 0/1, 0, 0).
 
-// wall/rupture.comp: one invocation per spring; flags springs whose tension exceeds maxForce.
-#define HEMO_RUPTURE_BINDING_POSITIONS 0
-#define HEMO_RUPTURE_BINDING_VELOCITIES 1
-#define HEMO_RUPTURE_BINDING_SLOT_OF_ID 2
-#define HEMO_RUPTURE_BINDING_SPRINGS 3
-#define HEMO_RUPTURE_BINDING_COUNTERS 4
-#define HEMO_RUPTURE_BINDING_PARAMS 5  // SphParams (the period, for the minimum image)
-// The springs again, read as two uvec4 texels per record (the pass writes only the broken
-// flag of its own spring, through HEMO_RUPTURE_BINDING_SPRINGS, after reading it).
-#define HEMO_RUPTURE_BINDING_SPRINGS_T 6
-#define HEMO_RUPTURE_BINDING_COUNT 7
-
 // wall/spring_forces.comp: one invocation per particle slot; wall particles gather the forces
 // of their unbroken springs through the CSR adjacency (springsOf[first[id] .. first[id + 1]))
 // plus the exact reaction of every force the fluid felt from them (pressure, viscosity,
@@ -60,7 +48,10 @@
 // The acceleration buffer again, read as a texel buffer at the fluid neighbours (ACCEL writes
 // only wall particles' records, so no record is both read and written in the pass).
 #define HEMO_SPRINGF_BINDING_FLUID_ACCEL 19
-#define HEMO_SPRINGF_BINDING_COUNT 20
+// The springs as a storage buffer: the pass sets broken flags (rupture: end a of a spring
+// whose tension exceeds its maximum force; the two ends compute the same tension).
+#define HEMO_SPRINGF_BINDING_SPRINGS_RW 20
+#define HEMO_SPRINGF_BINDING_COUNT 21
 
 // wall/point_shade.comp: per particle slot, vec2(largest strain of its unbroken springs,
 // fraction of its springs broken) for the renderer; push: uint n, uint idCount.

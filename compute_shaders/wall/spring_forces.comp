@@ -1,7 +1,8 @@
 #version 450
-// Spring forces on wall particles, gathered per particle over its springs (CSR adjacency by
-// particle id; no atomics): a = sum of the forces of the unbroken springs / mass + gravity,
-// zero for anchored particles; and the particle's time-step limit
+// Rupture and spring forces on wall particles, gathered per particle over its springs (CSR
+// adjacency by particle id; no float atomics). A spring whose tension exceeds its maximum
+// force breaks for good (the seed's rupture rule; its end a flags it). a = sum of the forces
+// of the unbroken springs / mass + gravity, zero for anchored particles; and the particle's time-step limit
 // min(C sqrt(mass / sum of its unbroken stiffnesses), C_a h / (c0 + |v|)) (the first bounds
 // the phase error of its fastest oscillation; C is push.timeStepFactor; the second is the
 // fluid's acoustic limit, which the neighbour-list look-ahead relies on). Other particle kinds are left alone.
@@ -35,6 +36,8 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_COUNTERS) buffer Counters { uint c
 layout(binding = HEMO_SPRINGF_BINDING_FRAMES) uniform usamplerBuffer framesT;  // R32G32 texels
 layout(binding = HEMO_SPRINGF_BINDING_WALL_VEL) uniform samplerBuffer viscousVelT;
 layout(binding = HEMO_SPRINGF_BINDING_PAIR_POSITION) uniform samplerBuffer pairPositionT;
+// The springs again, for the broken flags this pass sets (rupture).
+layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS_RW) buffer SpringsRW { Spring springsRW[]; };
 
 #define positions(k) texelFetch(positionsT, int(k))
 #define velocities(k) texelFetch(velocitiesT, int(k))
@@ -163,14 +166,12 @@ void main() {
     return;  // not part of the spring network
   }
   const vec4 info = texelFetch(wallInfoT, int(id));
-  if (info.y != 0.0) {
-    accel[slot] = vec4(0.0);  // anchored
-    dtLimit[slot] = 3.0e38;
-    updateNormal(slot, id);
-    return;
-  }
+  const bool anchored = info.y != 0.0;
   const HemoPairParams pp = hemo_pair_params();
-  vec3 force = hemo_fluid_reaction(slot);
+  vec3 force = vec3(0.0);
+  if (!anchored) {
+    force = hemo_fluid_reaction(slot);
+  }
   float stiffness = 0.0;
   uint intact = 0u;
   float marker = 0.0;
@@ -178,7 +179,8 @@ void main() {
   const vec3 vSelf = velocities(slot).xyz;
   const uint end = first(id + 1u);
   for (uint e = first(id); e < end; ++e) {
-    const Spring s = hemo_spring(texelFetch(springsOfT, int(e)).x);
+    const uint springIndex = texelFetch(springsOfT, int(e)).x;
+    const Spring s = hemo_spring(springIndex);
     if (s.broken != 0u) {
       continue;
     }
@@ -192,9 +194,26 @@ void main() {
     const vec3 delta = hemo_min_image(selfIsA ? xOther - xSelf : xSelf - xOther, pp);
     const vec3 fa = hemo_spring_force_on_a(delta, selfIsA ? vSelf : vOther, selfIsA ? vOther : vSelf, s.restLength,
                                            s.stiffness, s.damping, tension);
+    if (tension > s.maxForce) {
+      // Rupture: the spring breaks now, for good. Both ends (anchored ones too) compute this
+      // tension from the same inputs in the same order, so they agree; end a alone writes the
+      // flag and counts it. The other end may read the record before or after that write and
+      // skips the spring either way.
+      if (selfIsA) {
+        springsRW[springIndex].broken = 1u;
+        atomicAdd(counters[HEMO_WALL_COUNTER_BROKEN], 1u);
+      }
+      continue;
+    }
     force += selfIsA ? fa : -fa;
     stiffness += s.stiffness;
     ++intact;
+  }
+  if (anchored) {
+    accel[slot] = vec4(0.0);
+    dtLimit[slot] = 3.0e38;
+    updateNormal(slot, id);
+    return;
   }
   if (intact == 0u && end > first(id) && positions(slot).w != 0.0) {
     // All its springs are broken: the particle detaches from the wall for good. The integrator

@@ -18,9 +18,6 @@ namespace hemo::sim {
 namespace {
 constexpr std::uint32_t kWorkgroup = 256;
 
-struct RupturePush {
-  std::uint32_t springCount;
-};
 struct ForcesPush {
   float gravity[4];
   std::uint32_t n, idCount;
@@ -120,9 +117,6 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   wallInfo_.upload(info);
 
   auto& cache = context.pipelines();
-  rupture_ = &cache.get({"wall/rupture", HEMO_RUPTURE_BINDING_COUNT, sizeof(RupturePush), kWorkgroup, {}, 1u << HEMO_RUPTURE_BINDING_PARAMS,
-                         1u << HEMO_RUPTURE_BINDING_POSITIONS | 1u << HEMO_RUPTURE_BINDING_VELOCITIES |
-                             1u << HEMO_RUPTURE_BINDING_SLOT_OF_ID | 1u << HEMO_RUPTURE_BINDING_SPRINGS_T});
   // Every read-only input of the spring pass is a texel slot (gpu/pipeline.hpp, texelSlots).
   const std::uint32_t springTexels =
       1u << HEMO_SPRINGF_BINDING_POSITIONS | 1u << HEMO_SPRINGF_BINDING_VELOCITIES | 1u << HEMO_SPRINGF_BINDING_IDS |
@@ -134,13 +128,6 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                         1u << HEMO_SPRINGF_BINDING_PARAMS, springTexels});
   shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}, 1u << HEMO_SHADE_BINDING_PARAMS});
   const ParticleArrays& a = particles.live();
-  ruptureSet_ = rupture_->makeSet({gpu::texelBinding(HEMO_RUPTURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
-                                   gpu::texelBinding(HEMO_RUPTURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
-                                   gpu::texelBinding(HEMO_RUPTURE_BINDING_SLOT_OF_ID, fluid.slotOfId, gpu::texel::kUint),
-                                   gpu::texelBinding(HEMO_RUPTURE_BINDING_SPRINGS_T, &springs_, gpu::texel::kUvec4),
-                                   {HEMO_RUPTURE_BINDING_SPRINGS, &springs_},
-                                   {HEMO_RUPTURE_BINDING_COUNTERS, &counters_},
-                                   {HEMO_RUPTURE_BINDING_PARAMS, fluid.params}});
   using gpu::texelBinding;
   using namespace gpu::texel;
   forcesSet_ = forces_->makeSet({texelBinding(HEMO_SPRINGF_BINDING_POSITIONS, &a.positions, kVec4),
@@ -162,7 +149,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  texelBinding(HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities, kVec4),
                                  {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
                                  texelBinding(HEMO_SPRINGF_BINDING_FRAMES, &frames_, kUvec2),
-                                 texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, kVec4)});
+                                 texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, kVec4),
+                                 {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_}});
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
                                     {HEMO_SHADE_BINDING_IDS, &a.ids},
@@ -186,10 +174,6 @@ void MassSpring::recordReset(gpu::CommandRecorder& rec) {
 }
 
 void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n) {
-  if (springCount_ > 0) {
-    rec.dispatch(*rupture_, ruptureSet_, RupturePush{springCount_}, rupture_->groupsFor(springCount_));
-    rec.computeToCompute();
-  }
   const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, n, idCount_, timeStepFactor_, acousticLength_,
                         soundSpeed_, first};
   rec.dispatch(*forces_, forcesSet_, push, forces_->groupsFor(n - first));

@@ -1,8 +1,9 @@
 #pragma once
 // Vessel wall as a mass-spring network on the GPU (compute_shaders/wall/). Wall particles
 // (kind HEMO_KIND_WALL) are boundary particles for the fluid and mass points of the springs.
-// Per force evaluation:
-//   rupture ...... springs whose tension exceeds their maximum force break, for good
+// Per force evaluation, one pass (wall/spring_forces.comp):
+//   rupture ...... springs whose tension exceeds their maximum force break, for good (both
+//                  ends compute the same tension; end a sets the flag)
 //   spring forces  each wall particle gathers its unbroken springs (CSR by particle id, no
 //                  atomics; the two ends get exactly opposite forces) and the reaction of
 //                  every force the fluid felt from it (gathered over its fluid neighbours),
@@ -112,10 +113,9 @@ class MassSpring {
   float gravity_[4];
   float timeStepFactor_, acousticLength_, soundSpeed_;
   gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_, shade_;
-  const gpu::ComputePipeline* rupture_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* shadeStage_;
-  gpu::DescriptorSet ruptureSet_, forcesSet_, shadeSet_;
+  gpu::DescriptorSet forcesSet_, shadeSet_;
 };
 
 }  // namespace hemo::sim
