@@ -1,5 +1,5 @@
 #pragma once
-// CPU double-precision twin of the wall stages (wall/rupture.comp, wall/spring_forces.comp).
+// CPU double-precision twin of the wall stage (wall/spring_forces.comp: rupture, spring forces).
 #include <glm/vec3.hpp>
 
 #include <cstdint>
