@@ -456,11 +456,12 @@ Json accuracy(Context& ctx, const std::string& only) {
 // (the paper's walls were sparser than one layer at the fluid's spacing, so small rows carry
 // more wall particles than the paper's). The full coupled step runs: SPH, springs (aneurysm
 // scene's soft preset), rupture check, parabolic inflow at 0.3 m/s with the lumen supply,
-// lumen pressure 500 Pa, and the vessel scenes' neighbour-list skin of 0.25. Steps per second are the median of 2 * repeat + 1 wall-clock windows
-// of 200 steps each (repeat = --repeat / 3, so 7 windows by default), one after another after
-// a warm-up of 100 steps; the stage times are GPU medians of 5 profiled steps. Paper frame
-// rates: the issue quotes 5.7 fps at 10,000 / 1,000 and 18.2 fps at 5,000 / 600; the other
-// rows' figures are not available here (null).
+// lumen pressure 500 Pa, and the vessel scenes' neighbour-list skin of 0.25. Steps per second
+// are the median of 2 * repeat + 1 wall-clock windows of 200 steps each (repeat = --repeat / 3,
+// so 7 windows by default), one after another after a warm-up of 100 steps; the stage times
+// are GPU medians of 5 profiled steps. Paper frame rates: the issue quotes 5.7 fps at
+// 10,000 / 1,000 and 18.2 fps at 5,000 / 600; the other rows' figures are not available here
+// (null).
 Json table1(Context& ctx, int repeat) {
   struct PaperRow {
     int fluid, boundary;

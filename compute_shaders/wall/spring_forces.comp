@@ -2,10 +2,11 @@
 // Rupture and spring forces on wall particles, gathered per particle over its springs (CSR
 // adjacency by particle id; no float atomics). A spring whose tension exceeds its maximum
 // force breaks for good (the seed's rupture rule; its end a flags it). a = sum of the forces
-// of the unbroken springs / mass + gravity, zero for anchored particles; and the particle's time-step limit
-// min(C sqrt(mass / sum of its unbroken stiffnesses), C_a h / (c0 + |v|)) (the first bounds
-// the phase error of its fastest oscillation; C is push.timeStepFactor; the second is the
-// fluid's acoustic limit, which the neighbour-list look-ahead relies on). Other particle kinds are left alone.
+// of the unbroken springs / mass + gravity, zero for anchored particles; and the particle's
+// time-step limit min(C sqrt(mass / sum of its unbroken stiffnesses), C_a h / (c0 + |v|))
+// (the first bounds the phase error of its fastest oscillation; C is push.timeStepFactor; the
+// second is the fluid's acoustic limit, which the neighbour-list look-ahead relies on). Other
+// particle kinds are left alone.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "interface/wall.h"

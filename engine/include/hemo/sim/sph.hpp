@@ -217,8 +217,8 @@ class SphSolver {
   void recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
                            std::uint32_t mode, std::uint32_t moving);
   std::uint32_t movingSlots() const;
-  // The density pass over the first `fluidSlots` slots (boundary pressure over all), and the
-  // force passes likewise (the wall stages over all).
+  // The density pass over the first `fluidSlots` slots (boundary pressure over the slots from
+  // nonFluidStart() on), and the force passes likewise (the wall stage from nonFluidStart()).
   void recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
                          gpu::TimestampQueries* timestamps = nullptr);
   std::uint32_t nonFluidStart() const;  // the first slot that may hold a non-fluid particle
