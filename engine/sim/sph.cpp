@@ -466,23 +466,25 @@ void SphSolver::recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n, b
   rec.computeToComputeAndIndirect();  // the gate's arguments; the result for the next integrator
 }
 
+bool SphSolver::inGridOrder() const {
+  // A step that rebuilt the grid after the last upload has sorted the slots: the fluid's
+  // first (the grid's part 0), then boundary and wall particles. Kinds never change.
+  return sortedUpload_ == particles_->uploads();
+}
+
 std::uint32_t SphSolver::nonFluidStart() const {
-  // After a step that rebuilt the grid the fluid holds the first slots (the grid's part 0),
-  // and the passes over boundary and wall particles start past them. Dispatched over all
-  // slots, their work sat in the last workgroups, and lavapipe hands each thread one
+  // The passes over boundary and wall particles start past the fluid's slots. Dispatched over
+  // all slots, their work sat in the last workgroups, and lavapipe hands each thread one
   // contiguous share of a dispatch: in Table 1's tubes one thread of six ran the whole wall
   // stage (docs/benchmarks.md, "Session 19").
-  return sortedUpload_ == particles_->uploads() ? particles_->fluidCount() : 0u;
+  return inGridOrder() ? particles_->fluidCount() : 0u;
 }
 
 std::uint32_t SphSolver::movingSlots() const {
   // In the grid's order (fluid first) with no wall particles, the slots past the fluid hold
   // only rigid boundary particles, which never move: the integrator and the rebuild check
-  // leave them out (the dam break: 10,296 of 19,896 slots). Only once this upload has been
-  // sorted, i.e. after a step that rebuilt the grid.
-  const std::uint32_t n = particles_->count();
-  const bool sorted = sortedUpload_ == particles_->uploads();
-  return sorted && particles_->wallCount() == 0 ? particles_->fluidCount() : n;
+  // leave them out (the dam break: 10,296 of 19,896 slots).
+  return inGridOrder() && particles_->wallCount() == 0 ? particles_->fluidCount() : particles_->count();
 }
 
 void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,

@@ -216,6 +216,7 @@ class SphSolver {
   // The integrator over the first `moving` slots (the rest must be rigid boundary particles).
   void recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
                            std::uint32_t mode, std::uint32_t moving);
+  bool inGridOrder() const;  // the slots are sorted since the last upload (fluid first)
   std::uint32_t movingSlots() const;
   // The density pass over the first `fluidSlots` slots (boundary pressure over the slots from
   // nonFluidStart() on), and the force passes likewise (the wall stage from nonFluidStart()).
