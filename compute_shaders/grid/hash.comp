@@ -5,7 +5,8 @@
 // per key (the order of those ranks depends on scheduling; grid/reorder.comp removes it).
 // Particles outside the grid are clamped into the border cells and counted (on periodic
 // axes they wrap instead); a particle with a non-finite coordinate goes to cell 0 and is
-// counted separately so the caller can stop.
+// counted separately so the caller can stop. The particle's data is copied to the scratch
+// arrays, which grid/reorder.comp gathers back in cell order.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/grid.h"
 #include "common/index.glsl"
@@ -16,6 +17,12 @@ layout(binding = HEMO_HASH_BINDING_VELOCITIES) uniform samplerBuffer velocities;
 layout(std430, binding = HEMO_HASH_BINDING_PAIRS) writeonly buffer Pairs { uvec2 pairs[]; };
 layout(std430, binding = HEMO_HASH_BINDING_COUNTERS) buffer Counters { uint counters[]; };
 layout(std430, binding = HEMO_HASH_BINDING_KEY_COUNTS) buffer KeyCounts { uint keyCounts[]; };
+layout(binding = HEMO_HASH_BINDING_NORMALS) uniform samplerBuffer normals;
+layout(binding = HEMO_HASH_BINDING_IDS) uniform usamplerBuffer ids;
+layout(std430, binding = HEMO_HASH_BINDING_POS_OUT) writeonly buffer PosOut { vec4 posOut[]; };
+layout(std430, binding = HEMO_HASH_BINDING_VEL_OUT) writeonly buffer VelOut { vec4 velOut[]; };
+layout(std430, binding = HEMO_HASH_BINDING_NORMAL_OUT) writeonly buffer NormalOut { vec4 normalOut[]; };
+layout(std430, binding = HEMO_HASH_BINDING_ID_OUT) writeonly buffer IdOut { uint idOut[]; };
 layout(push_constant) uniform Push { HemoGrid grid; } pc;
 
 void main() {
@@ -23,7 +30,13 @@ void main() {
   if (i >= pc.grid.dimsN.w) {
     return;
   }
-  const vec3 p = texelFetch(positions, int(i)).xyz;
+  const vec4 p4 = texelFetch(positions, int(i));
+  const vec4 v4 = texelFetch(velocities, int(i));
+  posOut[i] = p4;
+  velOut[i] = v4;
+  normalOut[i] = texelFetch(normals, int(i));
+  idOut[i] = texelFetch(ids, int(i)).x;
+  const vec3 p = p4.xyz;
   uint cell = 0u;
   if (any(isnan(p)) || any(isinf(p))) {
     atomicAdd(counters[HEMO_COUNTER_NONFINITE], 1u);
@@ -35,7 +48,7 @@ void main() {
       atomicAdd(counters[HEMO_COUNTER_OUTSIDE], 1u);
     }
   }
-  if (pc.grid.periodic.w == 2u && uint(texelFetch(velocities, int(i)).w) != HEMO_GRID_FLUID_KIND) {
+  if (pc.grid.periodic.w == 2u && uint(v4.w) != HEMO_GRID_FLUID_KIND) {
     const uvec3 dims = pc.grid.dimsN.xyz;
     cell += dims.x * dims.y * dims.z;
   }

@@ -14,7 +14,8 @@
 
 // The build is a counting sort by key, stable (ties keep their slot order), so the same input
 // always gives the same order (engine/include/hemo/sim/neighbour_grid.hpp):
-//   hash.comp ...... key and rank (an atomic count per key) of every particle
+//   hash.comp ...... key and rank (an atomic count per key) of every particle; its data
+//                    copied to the scratch arrays
 //   cell_scan.comp . exclusive scan of the counts, block by block, and of the block totals
 //   scatter.comp ... cellStart; each particle's (key, slot) into its key's range
 //   reorder.comp ... each particle's place within its range by slot order, and its data moved
@@ -27,7 +28,15 @@
 #define HEMO_HASH_BINDING_COUNTERS 2
 #define HEMO_HASH_BINDING_VELOCITIES 3
 #define HEMO_HASH_BINDING_KEY_COUNTS 4  // uint per key (+ 1): zero before, counts after
-#define HEMO_HASH_BINDING_COUNT 5
+// The particle data the reorder gathers from, copied here (live -> scratch) by the same pass:
+// as transfers they ran on every step, even the steps whose rebuild gate is closed.
+#define HEMO_HASH_BINDING_NORMALS 5
+#define HEMO_HASH_BINDING_IDS 6
+#define HEMO_HASH_BINDING_POS_OUT 7
+#define HEMO_HASH_BINDING_VEL_OUT 8
+#define HEMO_HASH_BINDING_NORMAL_OUT 9
+#define HEMO_HASH_BINDING_ID_OUT 10
+#define HEMO_HASH_BINDING_COUNT 11
 // counters[HEMO_COUNTER_OUTSIDE]: particles outside the grid (clamped into border cells);
 // counters[HEMO_COUNTER_NONFINITE]: particles with a NaN/Inf coordinate (put in cell 0).
 #define HEMO_COUNTER_OUTSIDE 0

@@ -126,7 +126,8 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
   // Read-only inputs are texel slots (gpu/pipeline.hpp, texelSlots): llvmpipe reads a storage
   // buffer lane by lane.
   hash_ = &context.pipelines().get({"grid/hash", HEMO_HASH_BINDING_COUNT, sizeof(Push), kWorkgroup, {}, 0u,
-                                    1u << HEMO_HASH_BINDING_POSITIONS | 1u << HEMO_HASH_BINDING_VELOCITIES});
+                                    1u << HEMO_HASH_BINDING_POSITIONS | 1u << HEMO_HASH_BINDING_VELOCITIES |
+                                        1u << HEMO_HASH_BINDING_NORMALS | 1u << HEMO_HASH_BINDING_IDS});
   cellScan_ = &context.pipelines().get({"grid/cell_scan", HEMO_CELL_SCAN_BINDING_COUNT, sizeof(CellScanPush),
                                         kScanWorkgroup, {}, 0u, 1u << HEMO_CELL_SCAN_BINDING_KEY_COUNTS});
   scatter_ = &context.pipelines().get({"grid/scatter", HEMO_SCATTER_BINDING_COUNT, sizeof(ScatterPush), kWorkgroup, {},
@@ -143,7 +144,13 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
                              gpu::texelBinding(HEMO_HASH_BINDING_VELOCITIES, &live.velocities, gpu::texel::kVec4),
                              {HEMO_HASH_BINDING_PAIRS, &pairs_},
                              {HEMO_HASH_BINDING_COUNTERS, &counters_},
-                             {HEMO_HASH_BINDING_KEY_COUNTS, &keyCounts_}});
+                             {HEMO_HASH_BINDING_KEY_COUNTS, &keyCounts_},
+                             gpu::texelBinding(HEMO_HASH_BINDING_NORMALS, &live.normals, gpu::texel::kVec4),
+                             gpu::texelBinding(HEMO_HASH_BINDING_IDS, &live.ids, gpu::texel::kUint),
+                             {HEMO_HASH_BINDING_POS_OUT, &scratch.positions},
+                             {HEMO_HASH_BINDING_VEL_OUT, &scratch.velocities},
+                             {HEMO_HASH_BINDING_NORMAL_OUT, &scratch.normals},
+                             {HEMO_HASH_BINDING_ID_OUT, &scratch.ids}});
   cellScanSet_ = cellScan_->makeSet({gpu::texelBinding(HEMO_CELL_SCAN_BINDING_KEY_COUNTS, &keyCounts_, gpu::texel::kUint),
                                      {HEMO_CELL_SCAN_BINDING_LOCAL, &keyLocal_},
                                      {HEMO_CELL_SCAN_BINDING_BLOCKS, &blocks_},
@@ -203,18 +210,6 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
                scatter_->groupsFor(std::max<std::uint64_t>(n, keys)));
   rec.computeToCompute();
   mark("sort");
-  // The live arrays to scratch, as transfers (a copy, where a shader would store lane by lane
-  // on llvmpipe), then gathered back in cell order.
-  if (n > 0) {
-    const ParticleArrays& live = particles_->live();
-    const ParticleArrays& scratch = particles_->scratch();
-    rec.computeToTransfer();
-    rec.copy(live.positions, scratch.positions, std::uint64_t(n) * 16);
-    rec.copy(live.velocities, scratch.velocities, std::uint64_t(n) * 16);
-    rec.copy(live.normals, scratch.normals, std::uint64_t(n) * 16);
-    rec.copy(live.ids, scratch.ids, std::uint64_t(n) * 4);
-    rec.transferToCompute();
-  }
   rec.dispatch(*reorder_, reorderSet_, ReorderPush{n, particles_->capacity()}, reorder_->groupsFor(n));
   rec.computeToCompute();
   mark("reorder");

@@ -2,10 +2,10 @@
 // Cell-linked-list neighbour search built on the GPU:
 //   hash ........ key of each particle: its cell, or with two parts (GridSpec::parts) its
 //                 cell + part * cellCount, part 0 for fluid particles (kind 0 in
-//                 velocities.w) and 1 for all others; and its rank from a count per key
+//                 velocities.w) and 1 for all others; and its rank from a count per key;
+//                 the live particle arrays copied to scratch
 //   sort ........ a counting sort: exclusive scan of the counts (cellStart; empty cells carry
 //                 the running offset) and each particle to its key's range
-//   copy ........ live particle arrays -> scratch
 //   reorder ..... each particle's place within its key by slot (so the sort is stable and
 //                 the order deterministic); positions/velocities/normals/ids moved from
 //                 scratch into cell order in the live arrays, the positions at this build
