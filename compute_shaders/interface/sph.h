@@ -80,7 +80,10 @@
 #define HEMO_BUILD_BINDING_NLIST 4
 #define HEMO_LIST_BOUNDARY_BIT 0x80000000u
 #define HEMO_BUILD_BINDING_STATUS 5
-#define HEMO_BUILD_BINDING_COUNT 6
+// The boundary-pressure pass's active list (HEMO_BPRESSURE_BINDING_ACTIVE_ARGS), emptied by
+// invocation 0 of the build: the list is filled again after every build.
+#define HEMO_BUILD_BINDING_ACTIVE_ARGS 6
+#define HEMO_BUILD_BINDING_COUNT 7
 
 // sph/density.comp: summation density and Tait pressure of fluid particles from the list.
 #define HEMO_DENSITY_BINDING_POSITIONS 0
@@ -138,7 +141,21 @@
 // The state buffer again, read as a texel buffer at the fluid neighbours (STATE writes only
 // the boundary particles' records, so no record is both read and written in the pass).
 #define HEMO_BPRESSURE_BINDING_FLUID_STATE 9
-#define HEMO_BPRESSURE_BINDING_COUNT 10
+// Most boundary particles of a tank have no fluid within the list radius (the dam break:
+// 1,600-2,100 of 10,296 do), and no fluid particle reads their pair data. After each list
+// build one pass over the non-fluid slots (HEMO_BPRESSURE_SORT) gives those the values of a
+// particle without fluid neighbours and lists the others, the active ones; every force
+// evaluation then runs over the active list alone (HEMO_BPRESSURE_ACTIVE), dispatched
+// indirectly with the group count the sorting pass counted.
+#define HEMO_BPRESSURE_BINDING_ACTIVE 10       // uint per slot: the active slots, in no particular order
+#define HEMO_BPRESSURE_BINDING_ACTIVE_ARGS 11  // uvec4 (workgroups, 1, 1, active count): indirect arguments
+#define HEMO_BPRESSURE_BINDING_COUNT 12
+// The pass's modes (push constant `mode`):
+#define HEMO_BPRESSURE_ACTIVE 0  // the active list's slots: pressure from the fluid neighbours
+#define HEMO_BPRESSURE_SORT 1    // slots [first, n): list the active ones, set the others
+// slots [first, n): set the particles without fluid neighbours only, to the pressure of the
+// clock record given (for output between list builds); the active list is left alone
+#define HEMO_BPRESSURE_REST 2
 
 // sph/sps_stress.comp: the SPS stress tau of each fluid particle from its strain rate.
 // NCOUNT / NLIST here and in the force pass: the interacting pairs (PAIR_COUNT / PAIR_LIST of

@@ -10,7 +10,11 @@
 // the fluid slips).
 // Also writes the particle's pair data (interface/sph.h): pair position (x, V p) and viscous
 // velocity (no-slip v, -V), V = m / rho.
-// A boundary particle without fluid neighbours keeps (rho0, p_bg) and its own velocity. The force pass then treats
+// A boundary particle without fluid neighbours keeps (rho0, p_bg) and its own velocity. Three
+// modes (interface/sph.h): after each list build one pass over the non-fluid slots sets those
+// without fluid neighbours in the list (no fluid particle reads them until the next build)
+// and lists the others; each force evaluation then runs over that active list only.
+// The force pass then treats
 // boundary particles like fluid ones in the symmetric pressure term, which holds a fluid
 // column at the hydrostatic pressure without the wall having to be penetrated.
 #extension GL_GOOGLE_include_directive : require
@@ -34,10 +38,13 @@ layout(std140, binding = HEMO_BPRESSURE_BINDING_CLOCK) uniform Clock { ClockReco
 layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
+layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE) buffer Active { uint activeSlots[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE_ARGS) buffer ActiveArgs { uvec4 activeArgs; };
 layout(push_constant) uniform Push {
-  uint first;  // the slots [first, n): after a sort the fluid's slots come first and are
-  uint n;      // left out (SphSolver::nonFluidStart), so every thread shares the boundary's
+  uint first;  // SORT and REST: the slots [first, n); after a sort the fluid's slots come
+  uint n;      // first and are left out (SphSolver::nonFluidStart)
   uint clockIn;
+  uint mode;   // HEMO_BPRESSURE_ACTIVE, _SORT or _REST
 } pc;
 
 // The loop's state, shared by its body (pair()) whichever way the list is read.
@@ -63,12 +70,35 @@ void pair(uint f, bool valid) {
 }
 
 void main() {
-  const uint b = pc.first + hemo_global_index();
-  if (b >= pc.n) {
-    return;
+  uint b;
+  if (pc.mode == HEMO_BPRESSURE_ACTIVE) {
+    const uint k = hemo_global_index();
+    if (k >= activeArgs.w) {
+      return;
+    }
+    b = activeSlots[k];
+  } else {
+    b = pc.first + hemo_global_index();
+    if (b >= pc.n) {
+      return;
+    }
   }
   const vec4 vb = texelFetch(velocities, int(b));
   if (uint(vb.w) == HEMO_KIND_FLUID) {
+    return;
+  }
+  const uint count = texelFetch(neighbourCount, int(b)).x;  // fluid neighbours only
+  if (pc.mode != HEMO_BPRESSURE_ACTIVE && count > 0u) {
+    if (pc.mode == HEMO_BPRESSURE_SORT) {
+      // Appended in whatever order the invocations run; each entry's result does not depend
+      // on its place. The invocation that opens a workgroup's worth of entries adds that
+      // workgroup to the indirect dispatch.
+      const uint k = atomicAdd(activeArgs.w, 1u);
+      activeSlots[k] = b;
+      if (k % gl_WorkGroupSize.x == 0u) {
+        atomicAdd(activeArgs.x, 1u);
+      }
+    }
     return;
   }
   const vec4 xb4 = texelFetch(positions, int(b));
@@ -80,7 +110,6 @@ void main() {
   gSumP = 0.0;
   gSumRhoR = vec3(0.0);
   gSumV = vec3(0.0);
-  const uint count = texelFetch(neighbourCount, int(b)).x;  // fluid neighbours only
   for (uint k = 0u; k < count; k += kListWidth) {
     if (kListWidth == 4u) {
       const uvec4 fs = texelFetch(neighbourList, int(hemo_list_texel(b, k, gPp)));

@@ -22,6 +22,7 @@ HEMO_SPH_PARAMS_UNIFORM(HEMO_BUILD_BINDING_PARAMS);
 layout(std430, binding = HEMO_BUILD_BINDING_NCOUNT) writeonly buffer Counts { uint neighbourCount[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_NLIST) writeonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_STATUS) buffer Status { uint status[]; };
+layout(std430, binding = HEMO_BUILD_BINDING_ACTIVE_ARGS) writeonly buffer ActiveArgs { uvec4 activeArgs; };
 layout(push_constant) uniform Push { HemoGrid grid; } pc;
 
 // Distance in cell units from u to cell k along one axis; on a bounded axis the first and
@@ -38,6 +39,9 @@ float hemo_cell_gap(int k, float u, uint dim, uint periodic) {
 
 void main() {
   const uint i = hemo_global_index();
+  if (i == 0u) {
+    activeArgs = uvec4(0u, 1u, 1u, 0u);  // boundary_pressure.comp's active list, filled after this pass
+  }
   if (i >= pc.grid.dimsN.w) {
     return;
   }

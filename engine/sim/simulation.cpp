@@ -193,6 +193,12 @@ void Simulation::enableStepStats(std::uint32_t every) {
 }
 
 Snapshot Simulation::snapshot() const {
+  // Boundary particles without fluid in the list keep the state of the last list build in
+  // the steps; give them the last step's.
+  recorder_->begin();
+  solver_->recordBoundaryRest(*recorder_);
+  recorder_->end();
+  recorder_->submitAndWait();
   Snapshot s;
   const std::uint32_t n = store_->count();
   const auto pos = store_->readPositions();

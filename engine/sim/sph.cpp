@@ -22,8 +22,9 @@ struct CountPush {
 struct ClockedPush {
   std::uint32_t n, clockIn;
 };
-struct RangePush {  // the slots [first, n)
-  std::uint32_t first, n, clockIn;
+struct BoundaryPush {  // sph/boundary_pressure.comp
+  std::uint32_t first, n, clockIn;  // the range modes: the slots [first, n)
+  std::uint32_t mode;               // HEMO_BPRESSURE_*
 };
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
@@ -189,6 +190,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       reach_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "reach since the list build"),
       viscousVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "viscous velocities"),
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
+      activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
+      activeArgs_(context, 16, gpu::MemoryUse::Device, "boundary-pressure indirect arguments"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
@@ -241,7 +244,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                          1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
                              1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
                              1u << HEMO_DENSITY_BINDING_NORMALS});
-  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(RangePush), kWorkgroup, pairSpecialization({listWidth_}),
+  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(BoundaryPush), kWorkgroup, pairSpecialization({listWidth_}),
                                   1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK,
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
                                       1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
@@ -274,7 +277,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_BUILD_BINDING_PARAMS, &paramsBuffer_},
                                        {HEMO_BUILD_BINDING_NCOUNT, &ncount_},
                                        {HEMO_BUILD_BINDING_NLIST, &nlist_},
-                                       {HEMO_BUILD_BINDING_STATUS, &status_}});
+                                       {HEMO_BUILD_BINDING_STATUS, &status_},
+                                       {HEMO_BUILD_BINDING_ACTIVE_ARGS, &activeArgs_}});
   densitySet_ = density_->makeSet({gpu::texelBinding(HEMO_DENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                    gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                    {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
@@ -296,7 +300,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                              gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, &nlist_, listFormat),
                                              {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
                                              {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
-                                             {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_}});
+                                             {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_},
+                                             {HEMO_BPRESSURE_BINDING_ACTIVE, &activeSlots_},
+                                             {HEMO_BPRESSURE_BINDING_ACTIVE_ARGS, &activeArgs_}});
   spsSet_ = spsStress_->makeSet({gpu::texelBinding(HEMO_SPS_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_SPS_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
@@ -375,6 +381,9 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   if (wall_) wall_->recordReset(rec);
   rec.fill(clock_, 0);
   clockParity_ = 0;
+  boundaryClockIn_ = ~0u;
+  // No list yet: the active list is empty until the first build.
+  rec.fill(activeArgs_, 0u);
   rec.fill(status_, 0);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_BAD_INPUT_ID * 4, 8);  // and BAD_FORCE_ID
@@ -399,7 +408,25 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQuerie
   grid_.record(rec, n, timestamps);
   rec.dispatch(*buildList_, buildListSet_, grid_.push(n), buildList_->groupsFor(n));
   rec.computeToCompute();
+  // The boundary and wall particles: those with fluid in the new list to the active list,
+  // the others set to a state without fluid neighbours until the next build.
+  recordBoundaryRange(rec, HEMO_BPRESSURE_SORT, clockParity_);
+  rec.computeToComputeAndIndirect();
   if (timestamps) timestamps->mark(rec, "neighbour list");
+}
+
+void SphSolver::recordBoundaryRange(gpu::CommandRecorder& rec, std::uint32_t mode, std::uint32_t clockIn) {
+  const std::uint32_t n = particles_->count();
+  const std::uint32_t first = nonFluidStart();
+  rec.dispatch(*boundaryPressure_, boundarySet_, BoundaryPush{first, n, clockIn, mode},
+               boundaryPressure_->groupsFor(n - first));
+}
+
+void SphSolver::recordBoundaryRest(gpu::CommandRecorder& rec) {
+  if (boundaryClockIn_ == ~0u) return;
+  rec.computeToCompute();
+  recordBoundaryRange(rec, HEMO_BPRESSURE_REST, boundaryClockIn_);
+  rec.computeToCompute();
 }
 
 void SphSolver::recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
@@ -412,8 +439,10 @@ void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluid
   rec.dispatch(*density_, densitySet_, ClockedPush{fluidSlots, clockParity_}, density_->groupsFor(fluidSlots));
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
-  const std::uint32_t first = nonFluidStart();
-  rec.dispatch(*boundaryPressure_, boundarySet_, RangePush{first, n, clockParity_}, boundaryPressure_->groupsFor(n - first));
+  // Over the active list of the last build (recordNeighbours), as many workgroups as it counted.
+  rec.dispatchIndirect(*boundaryPressure_, boundarySet_, BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
+                       activeArgs_, 0);
+  boundaryClockIn_ = clockParity_;
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "boundary pressure");
 }

@@ -554,6 +554,62 @@ TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenAParticleCrossesHalfTheSkin) 
   EXPECT_EQ(solver.readRebuilds(), 4u) << "a requested rebuild happens once";
 }
 
+// Between list builds each force evaluation updates only the boundary particles with fluid
+// in their list (the active list, sorted out after every build); the others keep the state of
+// the build, and recordBoundaryRest brings them to the last force evaluation's background
+// pressure without touching the active ones. With a background pressure ramping ~30 Pa per
+// step, a stale state is visible.
+TEST_F(SphStageTest, BoundaryParticlesWithoutFluidAreSetAtTheBuildAndOnRequest) {
+  auto rng = rngFor();
+  sim::SphSettings s = settings();
+  s.maxTimeStep = 1.0e-4f;
+  s.backgroundPressure = 3000.0f;
+  s.backgroundPressureRamp = 0.01f;
+  const Case c = makeCase(rng, s, 6, 5, 5, 0.01f);
+  const auto n = static_cast<std::uint32_t>(c.pos.size());
+  sim::ParticleStore store(ctx(), n);
+  store.upload(c.pos, c.vel, {}, c.normals);
+  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.12f), s);
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  solver.recordReset(rec);
+  for (std::uint32_t k = 0; k < 6; ++k) solver.recordStep(rec, k, k);
+  rec.end();
+  rec.submitAndWait();
+  ASSERT_EQ(solver.readRebuilds(), 1u) << "the case must keep its first list";
+  const sim::SphClock clock = solver.readClock();
+  ASSERT_GT(clock.lastDt, 0.0);
+  const auto counts = solver.neighbourCounts().readback<std::uint32_t>(n);
+  const auto vel = store.readVelocities();
+  const auto before = solver.state().readback<glm::vec4>(n);
+  rec.begin();
+  solver.recordBoundaryRest(rec);
+  rec.end();
+  rec.submitAndWait();
+  const auto after = solver.state().readback<glm::vec4>(n);
+  // The last force evaluation ran at the clock before the last step.
+  auto background = [&](double t) { return 3000.0 * std::clamp(t / 0.01, 0.0, 1.0); };
+  const double pLast = background(clock.time - clock.lastDt);
+  const double pBuild = background(0.0);
+  std::size_t active = 0, rest = 0;
+  for (std::uint32_t slot = 0; slot < n; ++slot) {
+    if (vel[slot].w == float(sim::ParticleKind::Fluid)) continue;
+    if (counts[slot] > 0) {
+      ++active;
+      EXPECT_EQ(after[slot], before[slot]) << "an active boundary particle was changed, slot " << slot;
+      EXPECT_GT(before[slot].x, 0.0f);
+      continue;
+    }
+    ++rest;
+    EXPECT_NEAR(before[slot].y, pBuild, 1e-3) << "without fluid: the build's background pressure, slot " << slot;
+    EXPECT_NEAR(after[slot].y, pLast, 1e-2) << "without fluid: the last evaluation's background pressure, slot " << slot;
+    EXPECT_NEAR(after[slot].x, s.restDensity, 1e-3 * s.restDensity) << "slot " << slot;
+  }
+  EXPECT_GT(active, 30u);
+  EXPECT_GT(rest, 15u);
+  EXPECT_GT(pLast - pBuild, 100.0) << "the ramp must make a stale state visible";
+}
+
 // With SPS turbulence on, the accelerations (SPS stress from the strain rate, then its
 // divergence) match the reference, and the SPS term is far from negligible in this case.
 TEST_F(SphStageTest, SpsTurbulenceMatchesReference) {

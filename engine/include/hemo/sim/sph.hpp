@@ -149,6 +149,11 @@ class SphSolver {
   void recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   void recordForces(gpu::CommandRecorder& rec);  // with the SPS stress pass first when enabled
   void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f);
+  // Between list builds the force evaluations update only the boundary and wall particles
+  // with fluid in their list; the others keep the state the last build gave them. This sets
+  // those to the last force evaluation's time (its background pressure), for output. It
+  // changes nothing any later step reads. Records nothing before the first density pass.
+  void recordBoundaryRest(gpu::CommandRecorder& rec);
 
   // Makes the wall particles of `network` (kind HEMO_KIND_WALL) move as mass points of its
   // springs: every force evaluation then runs the wall stages after the fluid's forces.
@@ -217,9 +222,12 @@ class SphSolver {
   void recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
                            std::uint32_t mode, std::uint32_t moving);
   bool inGridOrder() const;  // the slots are sorted since the last upload (fluid first)
+  // The boundary-pressure pass in a range mode (HEMO_BPRESSURE_SORT or _REST) over the
+  // non-fluid slots.
+  void recordBoundaryRange(gpu::CommandRecorder& rec, std::uint32_t mode, std::uint32_t clockIn);
   std::uint32_t movingSlots() const;
-  // The density pass over the first `fluidSlots` slots (boundary pressure over the slots from
-  // nonFluidStart() on), and the force passes likewise (the wall stage from nonFluidStart()).
+  // The density pass over the first `fluidSlots` slots (boundary pressure over the active
+  // list), and the force passes likewise (the wall stage from nonFluidStart()).
   void recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
                          gpu::TimestampQueries* timestamps = nullptr);
   std::uint32_t nonFluidStart() const;  // the first slot that may hold a non-fluid particle
@@ -231,6 +239,10 @@ class SphSolver {
   std::uint32_t periodicAxes_ = 0;  // bit a: axis a is periodic (HEMO_SPEC_PERIODIC_AXES)
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, driftX_, reach_, viscousVel_;
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
+  // The boundary and wall slots with fluid in their list, and the indirect arguments of the
+  // boundary-pressure pass over them (interface/sph.h, HEMO_BPRESSURE_SORT).
+  gpu::Buffer activeSlots_, activeArgs_;
+  std::uint32_t boundaryClockIn_ = ~0u;  // the clock record of the last boundary-pressure pass (~0: none since the reset)
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
