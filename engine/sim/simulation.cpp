@@ -64,6 +64,13 @@ RunResult Simulation::run(const RunOptions& options) {
     std::uint64_t batch = scene_.stepsPerBatch;
     if (options.steps) batch = std::min<std::uint64_t>(batch, firstStep + *options.steps - steps_);
     if (options.outputEvery) batch = std::min<std::uint64_t>(batch, options.outputEvery - steps_ % options.outputEvery);
+    if (!options.steps && clock.lastDt > 0.0f && std::isfinite(clock.lastDt)) {
+      // Steps past the end time change nothing but still run every pass: near the end, a
+      // batch of about the steps left at the last step's dt (10% and two more, as dt may
+      // shrink; if it falls short, the next batch is smaller still).
+      const double left = std::ceil((endTime - clock.time) / double(clock.lastDt));
+      if (left < double(batch)) batch = std::max<std::uint64_t>(1, std::min<std::uint64_t>(batch, std::uint64_t(left * 1.1) + 2));
+    }
     const std::uint64_t before = clock.steps;
     recorder_->begin();
     std::uint32_t statsRows = 0;
