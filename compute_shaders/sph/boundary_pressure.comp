@@ -10,13 +10,13 @@
 // the fluid slips).
 // Also writes the particle's pair data (interface/sph.h): pair position (x, V p) and viscous
 // velocity (no-slip v, -V), V = m / rho.
-// A boundary particle without fluid neighbours keeps (rho0, p_bg) and its own velocity. Three
-// modes (interface/sph.h): after each list build one pass over the non-fluid slots sets those
-// without fluid neighbours in the list (no fluid particle reads them until the next build)
-// and lists the others; each force evaluation then runs over that active list only.
-// The force pass then treats
-// boundary particles like fluid ones in the symmetric pressure term, which holds a fluid
-// column at the hydrostatic pressure without the wall having to be penetrated.
+// A boundary particle without fluid neighbours keeps (rho0, p_bg) and its own velocity. The
+// force pass then treats boundary particles like fluid ones in the symmetric pressure term,
+// which holds a fluid column at the hydrostatic pressure without the wall having to be
+// penetrated.
+// Three modes (interface/sph.h): after each list build one pass over the non-fluid slots sets
+// those without fluid neighbours in the list (no fluid particle reads them until the next
+// build) and lists the others; each force evaluation then runs over that active list only.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"

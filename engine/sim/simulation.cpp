@@ -69,7 +69,7 @@ RunResult Simulation::run(const RunOptions& options) {
       // batch of about the steps left at the last step's dt (10% and two more, as dt may
       // shrink; if it falls short, the next batch is smaller still).
       const double left = std::ceil((endTime - clock.time) / double(clock.lastDt));
-      if (left < double(batch)) batch = std::max<std::uint64_t>(1, std::min<std::uint64_t>(batch, std::uint64_t(left * 1.1) + 2));
+      if (left < double(batch)) batch = std::min<std::uint64_t>(batch, std::uint64_t(left * 1.1) + 2);
     }
     const std::uint64_t before = clock.steps;
     recorder_->begin();
