@@ -115,6 +115,23 @@ Json primitives(Context& ctx, int repeat) {
       }
     });
     row("dispatch", 1, ms / k, {{"clock", "gpu"}, {"dispatches_timed", k}});
+    // The same dispatches without the barrier between them, and indirect dispatches of zero
+    // workgroups (a closed dispatch gate, engine/gpu/gate.cpp) with their barriers: what a
+    // step pays for each dispatch it records, and for each one a gate skips.
+    const double loose = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+      for (int i = 0; i < k; ++i) rec.dispatch(probe, set, n, probe.groupsFor(n.n, HEMO_SCAN_ITEMS));
+      rec.computeToCompute();
+    });
+    row("dispatch_nobar", 1, loose / k, {{"clock", "gpu"}, {"dispatches_timed", k}});
+    hemo::gpu::Buffer zero(ctx, 16, hemo::gpu::MemoryUse::Device, "zero dispatch arguments");
+    zero.upload(std::vector<std::uint32_t>{0, 1, 1, 0});
+    const double closed = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+      for (int i = 0; i < k; ++i) {
+        rec.dispatchIndirect(probe, set, n, zero, 0);
+        rec.computeToCompute();
+      }
+    });
+    row("dispatch_closed", 0, closed / k, {{"clock", "gpu"}, {"dispatches_timed", k}});
   }
 
   // What an SPH pair loop's memory accesses cost (bench/pair_gather.comp): a periodic cubic

@@ -205,7 +205,7 @@
 #define HEMO_INTEGRATE_BINDING_SAVED_VEL 9
 #define HEMO_INTEGRATE_BINDING_STEP_DT 10
 #define HEMO_INTEGRATE_BINDING_POS_AT_BUILD 11
-#define HEMO_INTEGRATE_BINDING_DRIFT_X 12  // float: x displacement since the list build
+#define HEMO_INTEGRATE_BINDING_CHECK_PARTIALS 12  // vec4 per workgroup: its part of the rebuild test
 #define HEMO_INTEGRATE_BINDING_INFLOW 13  // InflowParams (common/inflow.glsl): the driven inflow zone
 #define HEMO_INTEGRATE_BINDING_STATE 14  // vec4 (rho, p, rate, 0): the inflow zone's mass supply reads rho; continuity density rho or its rate
 #define HEMO_INTEGRATE_BINDING_NORMALS 15  // w: where a fluid particle carries its density (continuity)
@@ -214,27 +214,22 @@
 // fraction of a storage read; no record is read after it is written in the pass).
 #define HEMO_INTEGRATE_BINDING_POSITIONS_IN 16
 #define HEMO_INTEGRATE_BINDING_VELOCITIES_IN 17
-#define HEMO_INTEGRATE_BINDING_COUNT 20
+#define HEMO_INTEGRATE_BINDING_COUNT 24
 
-// The rebuild test (docs/architecture.md, "the rebuild test"). sph/integrate.comp writes
-// each slot's x displacement d.x since the list build and its reach |d - (c, 0, 0)| (+ the
-// midpoint look-ahead), c the middle of the x-displacement range extrapolated from the two
-// steps before;
-// sph/rebuild_check.comp reduces both in one dispatch to (min d.x, max d.x, max reach) and
-// arms the neighbour-rebuild gate for the next step (common/gate.glsl).
-#define HEMO_INTEGRATE_BINDING_DRIFT_RANGE 18  // uniform vec4: the last rebuild_check result
-#define HEMO_INTEGRATE_BINDING_REACH 19        // float per slot
-#define HEMO_CHECK_BINDING_DRIFT_X 0   // float per slot (texel)
-#define HEMO_CHECK_BINDING_REACH 1     // float per slot (texel)
-#define HEMO_CHECK_BINDING_PARTIALS 2  // vec4 per workgroup
-#define HEMO_CHECK_BINDING_COUNTER 3   // uint: workgroups finished (starts and ends at 0)
-#define HEMO_CHECK_BINDING_RESULT 4    // vec4 (min d.x, max d.x, max reach, middle of the range a step before); NaN if any is
-#define HEMO_CHECK_BINDING_GATE_ARMED 5
-#define HEMO_CHECK_BINDING_GATE_ARGS 6
-#define HEMO_CHECK_BINDING_GATE_OPENED 7
-#define HEMO_CHECK_BINDING_COUNT 8
+// The rebuild test (docs/architecture.md, "the rebuild test"), in the integrator's full
+// stages (symplectic Euler, RK2's second): each slot's x displacement d.x since the list
+// build and its reach |d - (c, 0, 0)| (+ the midpoint look-ahead), c the middle of the
+// x-displacement range extrapolated from the two steps before; each workgroup reduces them to
+// a partial (min d.x, max d.x, max reach), and the last workgroup to finish reduces the
+// partials to the result and arms the neighbour-rebuild gate for the next step
+// (common/gate.glsl).
+#define HEMO_INTEGRATE_BINDING_DRIFT_RANGE 18  // uniform vec4: the result as the step found it
+#define HEMO_INTEGRATE_BINDING_CHECK_COUNTER 19  // uint: workgroups finished (starts and ends at 0)
+#define HEMO_INTEGRATE_BINDING_CHECK_RESULT 20   // vec4 (min d.x, max d.x, max reach, middle of the range a step before); NaN if any is
+#define HEMO_INTEGRATE_BINDING_GATE_ARMED 21
+#define HEMO_INTEGRATE_BINDING_GATE_ARGS 22
+#define HEMO_INTEGRATE_BINDING_GATE_OPENED 23
 #define HEMO_CHECK_RESULT_REACH 2      // the float index of the largest reach in the result
-// push constants: uint n; float threshold (rebuild when max reach > it); uint gateSlots
 
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).

@@ -10,12 +10,16 @@
 // While t < dampingUntil the velocity is damped (a settling phase for validation scenes).
 // Invocation 0 advances the clock (Kahan-compensated float sum) and logs (t, dt).
 // A particle that becomes non-finite records the step in the status buffer.
-// Every slot also writes its x displacement since the list was built and its reach for the
-// neighbour-list check (sph/rebuild_check.comp reduces both).
+// The full stages also run the neighbour list's rebuild test: every slot's x displacement
+// since the list was built and its reach, reduced per workgroup and then by the last
+// workgroup to finish, which decides the next step's grid and list build (below).
 // A fluid particle that starts the step in the inflow zone of a vessel moves along the axis at
 // the prescribed velocity instead (hemo/sim/inflow.hpp), in every mode; across the section it
 // moves freely.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/sph_params.glsl"
@@ -45,11 +49,18 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_POS) buffer SavedPos { vec
 layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec4 savedVel[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
 layout(binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) uniform samplerBuffer posAtBuildT;
-layout(std430, binding = HEMO_INTEGRATE_BINDING_DRIFT_X) writeonly buffer DriftX { float driftX[]; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_REACH) writeonly buffer Reach { float reach[]; };
-// The previous step's rebuild check (sph/rebuild_check.comp): (min d.x, max d.x, max reach,
-// the middle of the range a step earlier).
+// The previous step's rebuild test: (min d.x, max d.x, max reach, the middle of the range a
+// step earlier). Every invocation reads it here before the last workgroup writes the new one
+// through checkResult (the same buffer): that workgroup starts its write only after every
+// other has counted itself finished.
 layout(std140, binding = HEMO_INTEGRATE_BINDING_DRIFT_RANGE) uniform DriftRange { vec4 lastCheck; };
+// Written by every workgroup, read by the last: coherent, and published before the count.
+layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_PARTIALS) coherent buffer Partials { vec4 partials[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_COUNTER) coherent buffer Counter { uint finished; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_RESULT) writeonly buffer Result { vec4 checkResult; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_GATE_ARMED) readonly buffer GateArmed { uvec4 gateArmed[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_GATE_ARGS) writeonly buffer GateArgs { uvec4 gateArgs[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_GATE_OPENED) buffer GateOpened { uint gateOpened; };
 layout(std140, binding = HEMO_INTEGRATE_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
 layout(binding = HEMO_INTEGRATE_BINDING_STATE) uniform samplerBuffer stateT;
 #define state(k) texelFetch(stateT, int(k))
@@ -69,7 +80,12 @@ layout(push_constant) uniform Push {
   uint logIndex;
   float endTime;
   uint clockIn;
+  float threshold;     // rebuild when the largest reach exceeds it (half the skin), m
+  uint gateSlots;      // the rebuild gate's dispatch slots
+  uint staticSlots;    // 1: the slots past n hold rigid boundary particles (displacement 0)
 } pc;
+
+#include "common/gate.glsl"
 
 // A wall particle whose springs all broke is marked by the wall stage with accel.w < 0 (fluid
 // particles keep a positive value there): from now on it has no SPH mass, so the fluid no
@@ -100,19 +116,93 @@ bool hemo_moves(float kind) {
 // previous step's middle alone lagged the dam break's front by a step's motion, 15% of the
 // threshold, and rebuilt the list 30 times in 600 steps against 21. After a rebuild both
 // middles restart at 0 (sph/rebuild_check.comp).
-void writeRebuildTest(uint i, vec3 x, vec3 v) {
+// The middle c of this step's x-displacement range, predicted from the two steps before.
+float hemo_predicted_middle() {
+  const float c = (lastCheck.x + lastCheck.y) - lastCheck.w;  // 2 m1 - m2
+  return abs(c) < 1.0e30 ? c : 0.0;  // NaN (some particle was non-finite; its own reach is NaN and opens the gate)
+}
+
+// (d.x, reach) of slot i at x, moving at v.
+vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v) {
   const vec3 d = hemo_min_image(x - texelFetch(posAtBuildT, int(i)).xyz, hemo_pair_params());
-  driftX[i] = d.x;
-  float c = (lastCheck.x + lastCheck.y) - lastCheck.w;  // 2 m1 - m2
-  if (!(abs(c) < 1.0e30)) {
-    c = 0.0;  // NaN (some particle was non-finite; its own reach is NaN and opens the gate)
-  }
-  float r = length(d - vec3(c, 0.0, 0.0));
+  float r = length(d - vec3(hemo_predicted_middle(), 0.0, 0.0));
   if (kMode == HEMO_INTEGRATE_RK2_FULL) {
     const float speed = length(v);
     r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / (params.c0 + speed));
   }
-  reach[i] = r;
+  return vec2(d.x, r);
+}
+
+shared vec3 s_subgroup[gl_WorkGroupSize.x];
+shared bool s_nan[gl_WorkGroupSize.x];
+shared bool s_last;
+
+// (min d.x, max d.x, max reach) of the workgroup's m, NaN if any invocation saw one; valid in
+// invocation 0. Called in uniform control flow (it has a barrier).
+vec3 hemo_workgroup_check(vec3 m, bool nan) {
+  const vec3 sub = vec3(subgroupMin(m.x), subgroupMax(m.y), subgroupMax(m.z));
+  const bool subNan = subgroupAny(nan);
+  if (subgroupElect()) {
+    s_subgroup[gl_SubgroupID] = sub;
+    s_nan[gl_SubgroupID] = subNan;
+  }
+  barrier();
+  vec3 r = s_subgroup[0];
+  bool anyNan = s_nan[0];
+  if (gl_LocalInvocationID.x == 0u) {
+    for (uint s = 1u; s < gl_NumSubgroups; ++s) {
+      r = vec3(min(r.x, s_subgroup[s].x), max(r.y, s_subgroup[s].y), max(r.z, s_subgroup[s].z));
+      anyNan = anyNan || s_nan[s];
+    }
+  }
+  return anyNan ? vec3(uintBitsToFloat(0x7fc00000u)) : r;
+}
+
+// The rebuild test's reduction, in uniform control flow: each workgroup stores its partial
+// and counts itself finished; the last reduces the partials (the result does not depend on
+// which one that is: min and max are exact), keeps the middle of the step before's range (w)
+// for the next prediction, and arms the gate: rebuild when the largest reach exceeds the
+// threshold, or is NaN. When the gate opens, the range becomes (0, 0) with w = 0: the next
+// step rebuilds, and displacements start again from the new build. Any NaN makes the whole
+// result NaN. (Folded into this pass, the test costs llvmpipe no dispatch of its own:
+// docs/benchmarks.md, "Session 21".)
+void hemo_finish_rebuild_test(vec2 test, bool valid) {
+  const float inf = uintBitsToFloat(0x7f800000u);
+  const bool nan = valid && (isnan(test.x) || isnan(test.y));
+  const vec3 m = valid ? vec3(test.x, test.x, test.y) : vec3(inf, -inf, -inf);
+  const vec3 partial = hemo_workgroup_check(m, nan);
+  const uint groups = gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z;
+  if (gl_LocalInvocationID.x == 0u) {
+    partials[hemo_group_index()] = vec4(partial, 0.0);
+    memoryBarrierBuffer();  // the partial is visible before the count says so
+    s_last = atomicAdd(finished, 1u) == groups - 1u;
+  }
+  barrier();
+  if (!s_last) {
+    return;  // the same for the whole workgroup
+  }
+  memoryBarrierBuffer();
+  vec3 r = vec3(inf, -inf, -inf);
+  bool anyNan = false;
+  for (uint p = gl_LocalInvocationID.x; p < groups; p += gl_WorkGroupSize.x) {
+    const vec3 v = partials[p].xyz;
+    anyNan = anyNan || any(isnan(v));
+    r = vec3(min(r.x, v.x), max(r.y, v.y), max(r.z, v.z));
+  }
+  // (The first round's shared values were all read before the barrier after s_last.)
+  vec3 total = hemo_workgroup_check(r, anyNan);
+  if (gl_LocalInvocationID.x == 0u) {
+    if (pc.staticSlots != 0u && !isnan(total.z)) {
+      // Slots left out (SphSolver::movingSlots): rigid boundary particles, displacement 0, so
+      // their reach is |c|.
+      total = vec3(min(total.x, 0.0), max(total.y, 0.0), max(total.z, abs(hemo_predicted_middle())));
+    }
+    const bool open = hemo_gate_open(total.z, pc.threshold);
+    const float lastMiddle = 0.5 * (lastCheck.x + lastCheck.y);  // the step before's, for the extrapolation
+    checkResult = open ? vec4(0.0, 0.0, total.z, 0.0) : vec4(total.xy, total.z, lastMiddle);
+    hemo_gate_arm(open, pc.gateSlots);
+    finished = 0u;  // every other workgroup has counted itself: ready for the next use
+  }
 }
 
 // Mean inflow speed u(t) = U w(t) ramp(t) (m/s).
@@ -148,67 +238,12 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
   return true;
 }
 
-void main() {
-  const uint i = hemo_global_index();
-  const ClockRecord clock = clocks[pc.clockIn];
-  // The step's dt: from the reduction (Euler, RK2 first stage), or the one the first stage
-  // stored (RK2 second stage, so both stages use the same dt).
-  float dt;
-  if (kMode == HEMO_INTEGRATE_RK2_FULL) {
-    dt = stepDt;
-  } else {
-    const float remaining = pc.endTime - (clock.time - clock.compensation);
-    dt = min(min(dtMinMax.x, params.dtMax), max(remaining, 0.0));
-  }
-  const bool running = dt > 0.0 || isnan(dt);  // false once the end time is reached
-  if (kMode == HEMO_INTEGRATE_RK2_HALF) {
-    if (i == 0u) {
-      stepDt = dt;  // read by the second stage (a later dispatch)
-    }
-    if (running && i < pc.n && hemo_moves(texelFetch(velocitiesIn, int(i)).w)) {
-      const vec4 v = texelFetch(velocitiesIn, int(i));
-      const vec4 x = texelFetch(positionsIn, int(i));
-      savedPos[i] = x;
-      savedVel[i] = v;
-      if (kContinuity == 2u && uint(v.w) == HEMO_KIND_FLUID) {
-        const float rho = hemo_carried_density(normals[i].w, params.rho0);
-        savedVel[i].w = rho;  // the second stage reads only savedVel.xyz as a velocity
-        normals[i].w = rho + state(i).z * (0.5 * dt);
-      }
-      const vec4 a = accel(i);
-      vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
-      vec3 drift = v.xyz;
-      vec3 u;
-      float s2;
-      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u, s2)) {
-        vMid.x = u.x;
-        drift.x = u.x;
-      }
-      velocities[i] = vec4(vMid, v.w);
-      positions[i] = vec4(hemo_wrap_position(x.xyz + drift * (0.5 * dt)), hemo_sph_mass(x.w, a.w));
-    }
-    return;
-  }
-  if (i == 0u) {
-    ClockRecord next = clock;
-    if (running) {
-      const float y = dt - clock.compensation;
-      next.time = clock.time + y;
-      next.compensation = (next.time - clock.time) - y;
-      next.lastDt = dt;
-      next.steps = clock.steps + 1u;
-    }
-    clocks[1u - pc.clockIn] = next;
-    stepLog[pc.logIndex] = vec2(next.time, running ? dt : 0.0);
-  }
-  if (i >= pc.n) {
-    return;
-  }
+// The full stages' update of slot i (< n); returns its rebuild test (d.x, reach).
+vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running) {
   vec4 v = texelFetch(velocitiesIn, int(i));
   vec4 x = texelFetch(positionsIn, int(i));
   if (!running || !hemo_moves(v.w)) {
-    writeRebuildTest(i, x.xyz, v.xyz);
-    return;
+    return hemo_rebuild_test(i, x.xyz, v.xyz);
   }
   // Where the step started (the inflow zone is judged there).
   const vec3 start = kMode == HEMO_INTEGRATE_RK2_FULL ? savedPos[i].xyz : x.xyz;
@@ -265,5 +300,66 @@ void main() {
   velocities[i] = v;
   x.w = hemo_sph_mass(x.w, accel(i).w);
   positions[i] = x;
-  writeRebuildTest(i, x.xyz, v.xyz);
+  return hemo_rebuild_test(i, x.xyz, v.xyz);
+}
+
+void main() {
+  const uint i = hemo_global_index();
+  const ClockRecord clock = clocks[pc.clockIn];
+  // The step's dt: from the reduction (Euler, RK2 first stage), or the one the first stage
+  // stored (RK2 second stage, so both stages use the same dt).
+  float dt;
+  if (kMode == HEMO_INTEGRATE_RK2_FULL) {
+    dt = stepDt;
+  } else {
+    const float remaining = pc.endTime - (clock.time - clock.compensation);
+    dt = min(min(dtMinMax.x, params.dtMax), max(remaining, 0.0));
+  }
+  const bool running = dt > 0.0 || isnan(dt);  // false once the end time is reached
+  if (kMode == HEMO_INTEGRATE_RK2_HALF) {
+    if (i == 0u) {
+      stepDt = dt;  // read by the second stage (a later dispatch)
+    }
+    if (running && i < pc.n && hemo_moves(texelFetch(velocitiesIn, int(i)).w)) {
+      const vec4 v = texelFetch(velocitiesIn, int(i));
+      const vec4 x = texelFetch(positionsIn, int(i));
+      savedPos[i] = x;
+      savedVel[i] = v;
+      if (kContinuity == 2u && uint(v.w) == HEMO_KIND_FLUID) {
+        const float rho = hemo_carried_density(normals[i].w, params.rho0);
+        savedVel[i].w = rho;  // the second stage reads only savedVel.xyz as a velocity
+        normals[i].w = rho + state(i).z * (0.5 * dt);
+      }
+      const vec4 a = accel(i);
+      vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
+      vec3 drift = v.xyz;
+      vec3 u;
+      float s2;
+      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u, s2)) {
+        vMid.x = u.x;
+        drift.x = u.x;
+      }
+      velocities[i] = vec4(vMid, v.w);
+      positions[i] = vec4(hemo_wrap_position(x.xyz + drift * (0.5 * dt)), hemo_sph_mass(x.w, a.w));
+    }
+    return;
+  }
+  if (i == 0u) {
+    ClockRecord next = clock;
+    if (running) {
+      const float y = dt - clock.compensation;
+      next.time = clock.time + y;
+      next.compensation = (next.time - clock.time) - y;
+      next.lastDt = dt;
+      next.steps = clock.steps + 1u;
+    }
+    clocks[1u - pc.clockIn] = next;
+    stepLog[pc.logIndex] = vec2(next.time, running ? dt : 0.0);
+  }
+  const bool valid = i < pc.n;
+  vec2 test = vec2(0.0);
+  if (valid) {
+    test = hemo_advance(i, clock, dt, running);
+  }
+  hemo_finish_rebuild_test(test, valid);  // every invocation: it has barriers
 }

@@ -30,17 +30,13 @@ struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
   std::uint32_t clockIn;
-};
-static_assert(sizeof(IntegratePush) == 20);
-static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
-static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
-
-struct CheckPush {
-  std::uint32_t n;
-  float threshold;
-  std::uint32_t gateSlots;
+  float threshold;            // the rebuild test (full stages): rebuild past this reach, m
+  std::uint32_t gateSlots;    // the rebuild gate's slots
   std::uint32_t staticSlots;  // 1: slots past n hold rigid boundary particles (displacement 0)
 };
+static_assert(sizeof(IntegratePush) == 32);
+static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
+static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
 
 std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
   return std::uint64_t(std::max(particles.capacity(), 1u)) * bytes;
@@ -186,8 +182,6 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       pairCount_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "interacting pair counts"),
       pairList_(context, perParticle(particles, 4) * settings.neighbourCapacity, gpu::MemoryUse::Device,
                 "interacting pairs"),
-      driftX_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "x displacement since the list build"),
-      reach_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "reach since the list build"),
       viscousVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "viscous velocities"),
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
@@ -202,8 +196,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
       tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
       dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)),
-      checkPartials_(context, ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup * HEMO_REDUCE_ITEMS - 1) /
-                               (kWorkgroup * HEMO_REDUCE_ITEMS)) * 16,
+      checkPartials_(context, ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup) * 16,
                      gpu::MemoryUse::Device, "rebuild check partials"),
       checkCounter_(context, 4, gpu::MemoryUse::Device, "rebuild check finished workgroups"),
       checkResult_(context, 16, gpu::MemoryUse::Device, "rebuild check result"),
@@ -269,8 +262,6 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                1u << HEMO_INTEGRATE_BINDING_STATE | 1u << HEMO_INTEGRATE_BINDING_POSITIONS_IN |
                                1u << HEMO_INTEGRATE_BINDING_VELOCITIES_IN});
   }
-  rebuildCheck_ = &cache.get({"sph/rebuild_check", HEMO_CHECK_BINDING_COUNT, sizeof(CheckPush), kWorkgroup, {}, 0u,
-                              1u << HEMO_CHECK_BINDING_DRIFT_X | 1u << HEMO_CHECK_BINDING_REACH});
   const ParticleArrays& a = particles.live();
   buildListSet_ = buildList_->makeSet({gpu::texelBinding(HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
@@ -338,22 +329,18 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_SAVED_VEL, &savedVel_},
                                        {HEMO_INTEGRATE_BINDING_STEP_DT, &stepDt_},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild(), gpu::texel::kVec4),
-                                       {HEMO_INTEGRATE_BINDING_DRIFT_X, &driftX_},
-                                       {HEMO_INTEGRATE_BINDING_REACH, &reach_},
                                        {HEMO_INTEGRATE_BINDING_DRIFT_RANGE, &checkResult_},
+                                       {HEMO_INTEGRATE_BINDING_CHECK_PARTIALS, &checkPartials_},
+                                       {HEMO_INTEGRATE_BINDING_CHECK_COUNTER, &checkCounter_},
+                                       {HEMO_INTEGRATE_BINDING_CHECK_RESULT, &checkResult_},
+                                       {HEMO_INTEGRATE_BINDING_GATE_ARMED, &rebuildGate_.armedCounts()},
+                                       {HEMO_INTEGRATE_BINDING_GATE_ARGS, &rebuildGate_.arguments()},
+                                       {HEMO_INTEGRATE_BINDING_GATE_OPENED, &rebuildGate_.openings()},
                                        {HEMO_INTEGRATE_BINDING_INFLOW, &inflow_},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_STATE, &state_, gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_POSITIONS_IN, &a.positions, gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_VELOCITIES_IN, &a.velocities, gpu::texel::kVec4),
                                        {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals}});
-  checkSet_ = rebuildCheck_->makeSet({gpu::texelBinding(HEMO_CHECK_BINDING_DRIFT_X, &driftX_, gpu::texel::kFloat),
-                                      gpu::texelBinding(HEMO_CHECK_BINDING_REACH, &reach_, gpu::texel::kFloat),
-                                      {HEMO_CHECK_BINDING_PARTIALS, &checkPartials_},
-                                      {HEMO_CHECK_BINDING_COUNTER, &checkCounter_},
-                                      {HEMO_CHECK_BINDING_RESULT, &checkResult_},
-                                      {HEMO_CHECK_BINDING_GATE_ARMED, &rebuildGate_.armedCounts()},
-                                      {HEMO_CHECK_BINDING_GATE_ARGS, &rebuildGate_.arguments()},
-                                      {HEMO_CHECK_BINDING_GATE_OPENED, &rebuildGate_.openings()}});
   checkCounter_.upload(std::vector<std::uint32_t>{0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
 }
@@ -478,21 +465,17 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   const std::uint32_t n = particles_->count();
   // The second stage reuses the step's dt; slots past `moving` (rigid) have no limit.
   if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, moving);
-  // At least one workgroup: invocation 0 advances the clock even with no particles.
-  rec.dispatch(*integrate_[mode], integrateSet_, IntegratePush{moving, step, logIndex, endTime, clockParity_},
-               integrate_[mode]->groupsFor(std::max(moving, 1u)));
-  rec.computeToCompute();
+  // At least one workgroup: invocation 0 advances the clock even with no particles, and the
+  // last workgroup of a full stage arms the rebuild gate for the next step.
+  const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold(), rebuildGate_.slots(),
+                           moving < n ? 1u : 0u};
+  rec.dispatch(*integrate_[mode], integrateSet_, push, integrate_[mode]->groupsFor(std::max(moving, 1u)));
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone
-    recordRebuildCheck(rec, moving, moving < n);  // the next step's rebuild decision
+    rec.computeToComputeAndIndirect();  // the gate's arguments; the test's result for the next step
+  } else {
+    rec.computeToCompute();
   }
-}
-
-void SphSolver::recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n, bool staticSlots) {
-  // At least one workgroup: its last (only) one arms the gate even with no particles.
-  rec.dispatch(*rebuildCheck_, checkSet_, CheckPush{n, rebuildThreshold(), rebuildGate_.slots(), staticSlots ? 1u : 0u},
-               rebuildCheck_->groupsFor(std::max(n, 1u), HEMO_REDUCE_ITEMS));
-  rec.computeToComputeAndIndirect();  // the gate's arguments; the result for the next integrator
 }
 
 bool SphSolver::inGridOrder() const {

@@ -195,8 +195,8 @@ class SphSolver {
   const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
   const gpu::Buffer& interactingPairs() const { return pairList_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
-  // The last step's rebuild check: vec4 (min, max of the x displacements since the list
-  // build, largest reach, 0), m (sph/rebuild_check.comp).
+  // The last step's rebuild test: vec4 (min, max of the x displacements since the list
+  // build, largest reach, the middle of the range a step before), m (sph/integrate.comp).
   const gpu::Buffer& rebuildCheck() const { return checkResult_; }
   const gpu::Buffer& paramsBuffer() const { return paramsBuffer_; }
   // The clock's two records and which one holds the current time (after the recorded steps).
@@ -237,7 +237,7 @@ class SphSolver {
   gpu::Buffer paramsBuffer_;
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
   std::uint32_t periodicAxes_ = 0;  // bit a: axis a is periodic (HEMO_SPEC_PERIODIC_AXES)
-  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, driftX_, reach_, viscousVel_;
+  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, viscousVel_;
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   // The boundary and wall slots with fluid in their list, and the indirect arguments of the
   // boundary-pressure pass over them (interface/sph.h, HEMO_BPRESSURE_SORT).
@@ -248,8 +248,8 @@ class SphSolver {
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
   gpu::MinMaxReduce dtReduce_;
-  // The rebuild check (sph/rebuild_check.comp): per-workgroup partials, the finished-workgroup
-  // counter and the result (min d.x, max d.x, max reach, 0).
+  // The rebuild test (in sph/integrate.comp): per-workgroup partials, the finished-workgroup
+  // counter and the result (min d.x, max d.x, max reach, middle of the range a step before).
   gpu::Buffer checkPartials_, checkCounter_, checkResult_;
   std::unique_ptr<MassSpring> wall_;
   gpu::DispatchGate rebuildGate_;
@@ -259,14 +259,12 @@ class SphSolver {
   const gpu::ComputePipeline* spsStress_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* integrate_[3];  // by stage (HEMO_INTEGRATE_*)
-  const gpu::ComputePipeline* rebuildCheck_;
-  gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_, checkSet_;
+  gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_;
   // The gate must be armed by its own pass before the next step (after a reset or a rebuild
   // request); otherwise the last step's rebuild check has armed it.
   bool armPending_ = true;
   std::uint64_t sortedUpload_ = ~std::uint64_t(0);  // the store upload a rebuild has sorted
   // staticSlots: the slots past n hold rigid boundary particles, which count as displacement 0.
-  void recordRebuildCheck(gpu::CommandRecorder& rec, std::uint32_t n, bool staticSlots);
 };
 
 }  // namespace hemo::sim
