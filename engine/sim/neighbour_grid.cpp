@@ -189,7 +189,8 @@ void NeighbourGrid::resetCounters(gpu::CommandRecorder& rec) {
   rec.transferToCompute();
 }
 
-void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps) {
+void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, std::uint32_t sorted,
+                           gpu::TimestampQueries* timestamps) {
   auto mark = [&](const char* stage) {
     if (timestamps) timestamps->mark(rec, stage);
   };
@@ -197,20 +198,27 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
     throw std::invalid_argument("neighbour grid: " + std::to_string(n) + " particles exceed the capacity " +
                                 std::to_string(particles_->capacity()));
   }
+  if (sorted > n || (sorted < n && spec_.parts != 2)) {
+    throw std::invalid_argument("neighbour grid: a partial build (" + std::to_string(sorted) + " of " +
+                                std::to_string(n) + " slots) needs a grid of two parts");
+  }
   const std::uint32_t keys = static_cast<std::uint32_t>(spec_.keyCount() + 1);  // cellStart entries
+  // A partial build scans part 0's counts only: its last entry, cellStart[cellCount], is the
+  // number of slots sorted, which is where part 1 starts.
+  const std::uint32_t keysSorted = sorted < n ? static_cast<std::uint32_t>(spec_.cellCount() + 1) : keys;
   // A counting sort (interface/grid.h): five dispatches in all with the reorder and the list
-  // where the radix sort took eleven; inside the solver's rebuild gate each of them costs
-  // llvmpipe a pass through its dispatch path even on the steps that skip it.
-  rec.dispatch(*hash_, hashSet_, push(n), hash_->groupsFor(n));
+  // where the radix sort took eleven. (Inside the solver's rebuild gate, a step that skips
+  // them pays about 1 us each on llvmpipe: dispatch_closed in hemo-bench primitives.)
+  rec.dispatch(*hash_, hashSet_, push(sorted), hash_->groupsFor(n));
   rec.computeToCompute();
   mark("hash");
-  rec.dispatch(*cellScan_, cellScanSet_, CellScanPush{keys}, cellScan_->groupsFor(keys, HEMO_SCAN_ITEMS));
+  rec.dispatch(*cellScan_, cellScanSet_, CellScanPush{keysSorted}, cellScan_->groupsFor(keys, HEMO_SCAN_ITEMS));
   rec.computeToCompute();
-  rec.dispatch(*scatter_, scatterSet_, ScatterPush{n, keys, kScanBlock},
+  rec.dispatch(*scatter_, scatterSet_, ScatterPush{sorted, keysSorted, kScanBlock},
                scatter_->groupsFor(std::max<std::uint64_t>(n, keys)));
   rec.computeToCompute();
   mark("sort");
-  rec.dispatch(*reorder_, reorderSet_, ReorderPush{n, particles_->capacity()}, reorder_->groupsFor(n));
+  rec.dispatch(*reorder_, reorderSet_, ReorderPush{sorted, particles_->capacity()}, reorder_->groupsFor(n));
   rec.computeToCompute();
   mark("reorder");
 }

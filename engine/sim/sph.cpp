@@ -391,8 +391,14 @@ void SphSolver::recordRebuildRequest(gpu::CommandRecorder& rec) {
 }
 
 void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps) {
+  recordNeighbours(rec, movingSlots(), timestamps);
+}
+
+void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted, gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
-  grid_.record(rec, n, timestamps);
+  // Past movingSlots() the slots hold rigid boundary particles in the grid order of an
+  // earlier build, where they still are: the grid sorts the moving slots only.
+  grid_.record(rec, n, sorted, timestamps);
   rec.dispatch(*buildList_, buildListSet_, grid_.push(n), buildList_->groupsFor(n));
   rec.computeToCompute();
   // The boundary and wall particles: those with fluid in the new list to the active list,
@@ -505,13 +511,16 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
     if (timestamps) timestamps->mark(rec, stage);
   };
   // Rebuild the grid and the list only when some particle may have crossed the list's skin.
+  // The slots to sort, as the last build left them (the first build after an upload sorts
+  // them all).
+  const std::uint32_t sorted = movingSlots();
   if (armPending_) {  // after a reset or a rebuild request; else the last step's check armed it
     rebuildGate_.recordArm(rec, HEMO_CHECK_RESULT_REACH, rebuildThreshold());
     armPending_ = false;
     sortedUpload_ = particles_->uploads();  // this step rebuilds: the slots are in grid order
   }
   rec.beginGate(rebuildGate_);
-  recordNeighbours(rec, timestamps);
+  recordNeighbours(rec, sorted, timestamps);
   rec.endGate();
   // Past movingSlots() only rigid boundary particles, for which the density and force passes
   // do nothing (no density of their own; acceleration 0 and no time-step limit, which nobody

@@ -61,7 +61,16 @@ class NeighbourGrid {
   // Records the whole build for the store's first n particles, which end up sorted by cell
   // in the store's live arrays. Counters are reset by resetCounters(). With `timestamps`,
   // marks "hash", "sort" and "reorder" after each stage.
-  void record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps = nullptr);
+  void record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::TimestampQueries* timestamps = nullptr) {
+    record(rec, n, n, timestamps);
+  }
+  // The same with only the first `sorted` slots rebuilt (sorted < n: a grid of two parts
+  // whose slots [sorted, n) hold part 1 exactly as the last whole build left it, particles
+  // that have not moved since, such as rigid boundaries): their cells' ranges and data stay
+  // as they are. The workgroup counts are those of the whole build (a dispatch gate may hold
+  // both kinds of build); the slots and cells past the part are left out by the shaders.
+  void record(gpu::CommandRecorder& rec, std::uint32_t n, std::uint32_t sorted,
+              gpu::TimestampQueries* timestamps = nullptr);
   void resetCounters(gpu::CommandRecorder& rec);
 
   const GridSpec& spec() const { return spec_; }

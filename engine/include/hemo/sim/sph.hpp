@@ -145,6 +145,8 @@ class SphSolver {
   // Stages on their own, for tests. recordNeighbours always rebuilds (grid and list); the
   // others use the current list.
   void recordNeighbours(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
+  // The same with the grid sorting only the slots [0, sorted) (NeighbourGrid::record).
+  void recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted, gpu::TimestampQueries* timestamps = nullptr);
   // Density and pressure of fluid particles, then of boundary particles.
   void recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   void recordForces(gpu::CommandRecorder& rec);  // with the SPS stress pass first when enabled
