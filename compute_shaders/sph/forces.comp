@@ -23,8 +23,12 @@
 //   a += (1 / rho_i) sum_j [ -(V_j p_i + V_j p_j) gradW_ij + V_j (tau_i + tau_j) . gradW_ij
 //                            + 2 mu V_j (x_ij . gradW_ij) / (r^2 + eta^2) v_ij ].
 // accel.w keeps the repulsion's normalisation 1 / max(sum T, 1), so a wall particle can apply
-// the exact reaction of its share. Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc).
+// the exact reaction of its share. Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc),
+// and the time step's reduction over all limits (common/dt_fold.glsl).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/kernel.glsl"
@@ -47,6 +51,10 @@ layout(binding = HEMO_FORCES_BINDING_TAU_A) uniform samplerBuffer tauA;
 layout(binding = HEMO_FORCES_BINDING_TAU_B) uniform samplerBuffer tauB;
 layout(binding = HEMO_FORCES_BINDING_VISCOUS_VEL) uniform samplerBuffer viscousVel;
 layout(binding = HEMO_FORCES_BINDING_PAIR_POSITION) uniform samplerBuffer pairPosition;
+// The time step's reduction (common/dt_fold.glsl).
+layout(std430, binding = HEMO_FORCES_BINDING_DT_PARTIALS) coherent buffer DtPartials { vec2 dtPartials[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_DT_COUNTER) coherent buffer DtCounter { uint dtFinished; };
+layout(std430, binding = HEMO_FORCES_BINDING_DT_RESULT) writeonly buffer DtResult { vec2 dtResult; };
 // 1 when the scene enables the SPS term. A specialization constant rather than a branch on
 // the parameter block: llvmpipe runs a branch's body under a lane mask even when no lane
 // takes it, and the dead SPS loads cost ~10% of the pass (dam break, docs/benchmarks.md).
@@ -60,7 +68,12 @@ mat3 hemo_sps_tensor(uint j) {
   const vec4 b = texelFetch(tauB, int(j));
   return mat3(a.x, a.w, b.x, a.w, a.y, b.y, b.x, b.y, a.z);
 }
-layout(push_constant) uniform Push { uint n; } pc;
+layout(push_constant) uniform Push {
+  uint n;
+  uint dtGroups;  // the workgroups of this pass and of the wall stage after it (common/dt_fold.glsl)
+} pc;
+
+#include "common/dt_fold.glsl"
 
 const float kNoLimit = 3.0e38;
 
@@ -124,16 +137,13 @@ void pairRange(uint i, uint first, uint end, const bool boundary) {
   }
 }
 
-void main() {
-  const uint i = hemo_global_index();
-  if (i >= pc.n) {
-    return;
-  }
+// The acceleration of slot i (< n); returns its time-step limit.
+float hemo_forces(uint i) {
   const vec4 vi = texelFetch(velocities, int(i));
   if (uint(vi.w) != HEMO_KIND_FLUID) {
     accel[i] = vec4(0.0);
     dtLimit[i] = kNoLimit;
-    return;
+    return kNoLimit;
   }
   const vec3 xi = texelFetch(positions, int(i)).xyz;
   const vec2 si = texelFetch(state, int(i)).xy;  // rho, p
@@ -185,4 +195,15 @@ void main() {
     limit = min(limit, params.cflForce * sqrt(h / accelMag));
   }
   dtLimit[i] = limit;  // NaN if anything went non-finite: the reduction propagates it
+  return limit;
+}
+
+void main() {
+  const uint i = hemo_global_index();
+  const bool valid = i < pc.n;
+  float limit = kNoLimit;
+  if (valid) {
+    limit = hemo_forces(i);
+  }
+  hemo_dt_fold(limit, valid, 0u, pc.dtGroups);  // every invocation: it has barriers
 }

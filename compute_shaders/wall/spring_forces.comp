@@ -6,8 +6,12 @@
 // time-step limit min(C sqrt(mass / sum of its unbroken stiffnesses), C_a h / (c0 + |v|))
 // (the first bounds the phase error of its fastest oscillation; C is push.timeStepFactor; the
 // second is the fluid's acoustic limit, which the neighbour-list look-ahead relies on). Other
-// particle kinds are left alone.
+// particle kinds are left alone. The last workgroup of this pass completes the time step's
+// reduction, which the fluid's force pass began (common/dt_fold.glsl).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
 #include "interface/sph.h"
 #include "interface/wall.h"
 #include "common/index.glsl"
@@ -39,6 +43,10 @@ layout(binding = HEMO_SPRINGF_BINDING_WALL_VEL) uniform samplerBuffer viscousVel
 layout(binding = HEMO_SPRINGF_BINDING_PAIR_POSITION) uniform samplerBuffer pairPositionT;
 // The springs again, for the broken flags this pass sets (rupture).
 layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS_RW) buffer SpringsRW { Spring springsRW[]; };
+// The time step's reduction (common/dt_fold.glsl).
+layout(std430, binding = HEMO_SPRINGF_BINDING_DT_PARTIALS) coherent buffer DtPartials { vec2 dtPartials[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_DT_COUNTER) coherent buffer DtCounter { uint dtFinished; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_DT_RESULT) writeonly buffer DtResult { vec2 dtResult; };
 
 #define positions(k) texelFetch(positionsT, int(k))
 #define velocities(k) texelFetch(velocitiesT, int(k))
@@ -155,17 +163,15 @@ layout(push_constant) uniform Push {
   float acousticLength;  // C_a h (m): the fluid's acoustic limit C_a h / (c0 + |v|) applies too
   float c0;
   uint first;  // the slots [first, n): the fluid's, first after a sort, are left out
+  uint dtGroupBase;  // this pass's first partial of the time step's reduction: the force pass's workgroups
+  uint dtGroups;     // the workgroups of both passes
 } pc;
 
-void main() {
-  const uint slot = pc.first + hemo_global_index();
-  if (slot >= pc.n || uint(velocities(slot).w) != HEMO_KIND_WALL) {
-    return;
-  }
-  const uint id = texelFetch(idsT, int(slot)).x;
-  if (id >= pc.idCount) {
-    return;  // not part of the spring network
-  }
+#include "common/dt_fold.glsl"
+
+// The wall particle in `slot`: rupture of its springs, its acceleration and time-step limit
+// (written, and returned).
+float hemo_wall(uint slot, uint id) {
   const vec4 info = texelFetch(wallInfoT, int(id));
   const bool anchored = info.y != 0.0;
   const HemoPairParams pp = hemo_pair_params();
@@ -214,7 +220,7 @@ void main() {
     accel[slot] = vec4(0.0);
     dtLimit[slot] = 3.0e38;
     updateNormal(slot, id);
-    return;
+    return 3.0e38;
   }
   if (intact == 0u && end > first(id) && positions(slot).w != 0.0) {
     // All its springs are broken: the particle detaches from the wall for good. The integrator
@@ -228,5 +234,21 @@ void main() {
   }
   accel[slot] = vec4(force / info.x + pc.gravity.xyz, marker);
   const float acoustic = pc.acousticLength / (pc.c0 + length(vSelf));
-  dtLimit[slot] = stiffness > 0.0 ? min(acoustic, pc.timeStepFactor * sqrt(info.x / stiffness)) : acoustic;
+  const float limit = stiffness > 0.0 ? min(acoustic, pc.timeStepFactor * sqrt(info.x / stiffness)) : acoustic;
+  dtLimit[slot] = limit;
+  return limit;
+}
+
+void main() {
+  const uint slot = pc.first + hemo_global_index();
+  bool valid = false;
+  float limit = 0.0;
+  if (slot < pc.n && uint(velocities(slot).w) == HEMO_KIND_WALL) {
+    const uint id = texelFetch(idsT, int(slot)).x;
+    if (id < pc.idCount) {  // else not part of the spring network
+      limit = hemo_wall(slot, id);
+      valid = true;
+    }
+  }
+  hemo_dt_fold(limit, valid, pc.dtGroupBase, pc.dtGroups);  // every invocation: it has barriers
 }

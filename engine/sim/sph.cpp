@@ -26,6 +26,10 @@ struct BoundaryPush {  // sph/boundary_pressure.comp
   std::uint32_t first, n, clockIn;  // the range modes: the slots [first, n)
   std::uint32_t mode;               // HEMO_BPRESSURE_*
 };
+struct ForcesPush {  // sph/forces.comp
+  std::uint32_t n;
+  std::uint32_t dtGroups;  // workgroups of the force pass and the wall stage (common/dt_fold.glsl)
+};
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
@@ -195,7 +199,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
       tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
       tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
-      dtReduce_(context, dtLimit_, std::max(particles.capacity(), 1u)),
+      // Partials for the force pass's workgroups over all slots and the wall stage's over the
+      // non-fluid ones: twice a pass's at most.
+      dtPartials_(context, 2 * ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup) * 8,
+                  gpu::MemoryUse::Device, "time-step partials"),
+      dtCounter_(context, 4, gpu::MemoryUse::Device, "time-step finished workgroups"),
+      dtResult_(context, 8, gpu::MemoryUse::Device, "time-step limits (min, max)"),
       checkPartials_(context, ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup) * 16,
                      gpu::MemoryUse::Device, "rebuild check partials"),
       checkCounter_(context, 4, gpu::MemoryUse::Device, "rebuild check finished workgroups"),
@@ -246,7 +255,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
                                1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
   // constant 1: the SPS term compiled in or out; 2: the list's read width
-  forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(CountPush), kWorkgroup,
+  forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup,
                         pairSpecialization({settings.sps ? 1u : 0u, listWidth_}), 1u << HEMO_FORCES_BINDING_PARAMS,
                         1u << HEMO_FORCES_BINDING_POSITIONS | 1u << HEMO_FORCES_BINDING_VELOCITIES | 1u << HEMO_FORCES_BINDING_STATE |
                             1u << HEMO_FORCES_BINDING_NCOUNT | 1u << HEMO_FORCES_BINDING_NORMALS | 1u << HEMO_FORCES_BINDING_NLIST | 1u << HEMO_FORCES_BINDING_TAU_A |
@@ -311,6 +320,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_, listFormat),
                                  {HEMO_FORCES_BINDING_ACCEL, &accel_},
                                  {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
+                                 {HEMO_FORCES_BINDING_DT_PARTIALS, &dtPartials_},
+                                 {HEMO_FORCES_BINDING_DT_COUNTER, &dtCounter_},
+                                 {HEMO_FORCES_BINDING_DT_RESULT, &dtResult_},
                                  {HEMO_FORCES_BINDING_IDS, &a.ids},
                                  {HEMO_FORCES_BINDING_STATUS, &status_},
                                  gpu::texelBinding(HEMO_FORCES_BINDING_TAU_A, &tauA_, gpu::texel::kVec4),
@@ -321,7 +333,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_ACCEL, &accel_, gpu::texel::kVec4),
                                        {HEMO_INTEGRATE_BINDING_PARAMS, &paramsBuffer_},
-                                       {HEMO_INTEGRATE_BINDING_DT, &dtReduce_.result()},
+                                       {HEMO_INTEGRATE_BINDING_DT, &dtResult_},
                                        {HEMO_INTEGRATE_BINDING_CLOCK, &clock_},
                                        {HEMO_INTEGRATE_BINDING_STATUS, &status_},
                                        {HEMO_INTEGRATE_BINDING_LOG, &log_},
@@ -342,6 +354,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_VELOCITIES_IN, &a.velocities, gpu::texel::kVec4),
                                        {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals}});
   checkCounter_.upload(std::vector<std::uint32_t>{0u});
+  dtCounter_.upload(std::vector<std::uint32_t>{0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
 }
 
@@ -355,9 +368,9 @@ std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
 void SphSolver::attachWall(const SpringNetwork& network) {
-  const FluidBuffers fluid{&grid_.slotOfId(), &accel_,  &dtLimit_, &paramsBuffer_,       &state_,
-                           &ncount_,           &nlist_,  &viscousVel_, &pairPosition_, listWidth_,
-                           pairSpecialization({listWidth_})};
+  const FluidBuffers fluid{&grid_.slotOfId(), &accel_,      &dtLimit_,      &paramsBuffer_, &state_,
+                           &ncount_,           &nlist_,      &viscousVel_,   &pairPosition_, listWidth_,
+                           &dtPartials_,       &dtCounter_,  &dtResult_,     pairSpecialization({listWidth_})};
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }
@@ -449,11 +462,22 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
     rec.dispatch(*spsStress_, spsSet_, CountPush{fluidSlots}, spsStress_->groupsFor(fluidSlots));
     rec.computeToCompute();
   }
-  rec.dispatch(*forces_, forcesSet_, CountPush{fluidSlots}, forces_->groupsFor(fluidSlots));
+  // The time step's reduction runs in the last workgroup of this pass or, with a wall, of the
+  // wall stage (common/dt_fold.glsl).
+  const gpu::Groups groups = forces_->groupsFor(fluidSlots);
+  const auto forceGroups = static_cast<std::uint32_t>(groups.total());
+  const std::uint32_t first = nonFluidStart();
+  const std::uint32_t dtGroups = forceGroups + (wall_ ? wall_->workgroups(first, n) : 0u);
+  if (dtGroups == 0) {  // no particle limits the step
+    rec.fill(dtResult_, 0x7f800000u, 0, 4);  // +inf
+    rec.fill(dtResult_, 0xff800000u, 4, 4);  // -inf
+    rec.transferToCompute();
+  }
+  rec.dispatch(*forces_, forcesSet_, ForcesPush{fluidSlots, dtGroups}, groups);
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "forces");
   if (wall_) {
-    wall_->record(rec, nonFluidStart(), n);  // the wall, solved after the fluid in every force evaluation
+    wall_->record(rec, first, n, forceGroups, dtGroups);  // the wall, solved after the fluid in every force evaluation
     if (timestamps) timestamps->mark(rec, "wall");
   }
 }
@@ -470,7 +494,6 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   }
   const std::uint32_t n = particles_->count();
   // The second stage reuses the step's dt; slots past `moving` (rigid) have no limit.
-  if (mode != HEMO_INTEGRATE_RK2_FULL) dtReduce_.record(rec, moving);
   // At least one workgroup: invocation 0 advances the clock even with no particles, and the
   // last workgroup of a full stage arms the rebuild gate for the next step.
   const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold(), rebuildGate_.slots(),

@@ -23,8 +23,9 @@ struct ForcesPush {
   std::uint32_t n, idCount;
   float timeStepFactor, acousticLength, c0;
   std::uint32_t first;
+  std::uint32_t dtGroupBase, dtGroups;
 };
-static_assert(sizeof(ForcesPush) == 40);
+static_assert(sizeof(ForcesPush) == 48);
 
 bool finiteNonNegative(float x) { return std::isfinite(x) && x >= 0.0f; }
 }  // namespace
@@ -150,7 +151,10 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
                                  texelBinding(HEMO_SPRINGF_BINDING_FRAMES, &frames_, kUvec2),
                                  texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, kVec4),
-                                 {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_}});
+                                 {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_},
+                                 {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
+                                 {HEMO_SPRINGF_BINDING_DT_COUNTER, fluid.dtCounter},
+                                 {HEMO_SPRINGF_BINDING_DT_RESULT, fluid.dtResult}});
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
                                     {HEMO_SHADE_BINDING_IDS, &a.ids},
@@ -173,11 +177,16 @@ void MassSpring::recordReset(gpu::CommandRecorder& rec) {
   rec.transferToCompute();
 }
 
-void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n) {
+void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t dtGroupBase,
+                        std::uint32_t dtGroups) {
   const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, n, idCount_, timeStepFactor_, acousticLength_,
-                        soundSpeed_, first};
+                        soundSpeed_, first, dtGroupBase, dtGroups};
   rec.dispatch(*forces_, forcesSet_, push, forces_->groupsFor(n - first));
   rec.computeToCompute();
+}
+
+std::uint32_t MassSpring::workgroups(std::uint32_t first, std::uint32_t n) const {
+  return static_cast<std::uint32_t>(forces_->groupsFor(n - first).total());
 }
 
 std::uint32_t MassSpring::readBrokenCount() const {

@@ -740,6 +740,10 @@ TEST_F(SphStageTest, TimeStepLimitIsTheMinimumOfTheConditions) {
     if (a > 0) expect = std::min(expect, p.cflForce * std::sqrt(p.h / a));
     EXPECT_NEAR(limits[i], expect, 1e-5 * expect);
   }
+  // The reduction the force pass folds in for the integrator: exactly the extremes.
+  const auto range = solver.stepLimits().readback<float>(2);
+  EXPECT_EQ(range[0], *std::min_element(limits.begin(), limits.end()));
+  EXPECT_EQ(range[1], *std::max_element(limits.begin(), limits.end()));
 }
 
 // The rebuild check against a double-precision twin on random particles: after each step the

@@ -181,6 +181,9 @@ TEST_F(WallTest, RandomNetworkMatchesReference) {
     const double want = anchored[i] ? 3.0e38 : stiffness[i] > 0 ? std::min(acoustic, 0.1 * std::sqrt(mass[i] / stiffness[i])) : acoustic;
     EXPECT_NEAR(limits[slot], want, 1e-5 * want) << "time-step limit of point " << i;
   }
+  // The time step's reduction, begun by the fluid's force pass and completed by the wall
+  // stage: the smallest limit is a wall particle's.
+  EXPECT_EQ(solver_->stepLimits().readback<float>(1)[0], *std::min_element(limits.begin(), limits.end()));
 
   // The renderer's wall shade (wall/point_shade.comp): per point, the largest strain of its
   // unbroken springs (0 if none is stretched) and the fraction of its springs broken.

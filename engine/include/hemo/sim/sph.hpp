@@ -179,6 +179,9 @@ class SphSolver {
   const gpu::Buffer& state() const { return state_; }     // vec4 (rho, p, d rho/dt with continuity density and RK2, else 0, 0) per slot
   const gpu::Buffer& accel() const { return accel_; }     // vec4 (a, 0) per slot
   const gpu::Buffer& dtLimits() const { return dtLimit_; }
+  // vec2 (min, max) of those limits at the last force evaluation (the wall stage's included),
+  // reduced on the GPU for the integrator's dt (common/dt_fold.glsl).
+  const gpu::Buffer& stepLimits() const { return dtResult_; }
   const gpu::Buffer& neighbourCounts() const { return ncount_; }
   const gpu::Buffer& neighbourList() const { return nlist_; }
   // A neighbour-list entry is a slot, with kListBoundaryBit set for a boundary or wall
@@ -249,7 +252,9 @@ class SphSolver {
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
-  gpu::MinMaxReduce dtReduce_;
+  // The time step's reduction, in the force pass and the wall stage (common/dt_fold.glsl):
+  // partials (vec2 per workgroup of both), finished-workgroup count, result (min, max).
+  gpu::Buffer dtPartials_, dtCounter_, dtResult_;
   // The rebuild test (in sph/integrate.comp): per-workgroup partials, the finished-workgroup
   // counter and the result (min d.x, max d.x, max reach, middle of the range a step before).
   gpu::Buffer checkPartials_, checkCounter_, checkResult_;
