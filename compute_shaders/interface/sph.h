@@ -224,16 +224,16 @@
 // stages (symplectic Euler, RK2's second): each slot's x displacement d.x since the list
 // build and its reach |d - (c, 0, 0)| (+ the midpoint look-ahead), c the middle of the
 // x-displacement range extrapolated from the two steps before; each workgroup reduces them to
-// a partial (min d.x, max d.x, max reach), and the last workgroup to finish reduces the
-// partials to the result and arms the neighbour-rebuild gate for the next step
-// (common/gate.glsl).
+// a partial (min d.x, max d.x, the two largest reaches), and the last workgroup to finish
+// reduces the partials to the result and arms the neighbour-rebuild gate for the next step
+// (common/gate.glsl): rebuild when the two largest reaches' half-sum exceeds half the skin.
 #define HEMO_INTEGRATE_BINDING_DRIFT_RANGE 18  // uniform vec4: the result as the step found it
 #define HEMO_INTEGRATE_BINDING_CHECK_COUNTER 19  // uint: workgroups finished (starts and ends at 0)
-#define HEMO_INTEGRATE_BINDING_CHECK_RESULT 20   // vec4 (min d.x, max d.x, max reach, middle of the range a step before); NaN if any is
+#define HEMO_INTEGRATE_BINDING_CHECK_RESULT 20   // vec4 (min d.x, max d.x, half-sum of the two largest reaches, middle of the range a step before); NaN if any is
 #define HEMO_INTEGRATE_BINDING_GATE_ARMED 21
 #define HEMO_INTEGRATE_BINDING_GATE_ARGS 22
 #define HEMO_INTEGRATE_BINDING_GATE_OPENED 23
-#define HEMO_CHECK_RESULT_REACH 2      // the float index of the largest reach in the result
+#define HEMO_CHECK_RESULT_REACH 2      // the float index of the reach the gate compares (the half-sum) in the result
 
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).

@@ -108,14 +108,14 @@ bool hemo_moves(float kind) {
 // plus, when the next step evaluates forces at a midpoint (RK2), the farthest the next half
 // step can take the particle, |v| min(dtMax, C_a h / (c0 + |v|)) / 2.
 // Any vector c common to all slots keeps the test valid: two particles' separation has
-// changed by |d_i - d_j| <= |d_i - c| + |d_j - c| <= 2 max reach, so the list holds every
-// pair within the support while the largest reach stays under half the skin. Taking c in the
-// middle of the flow's displacements halves the reach of a uniform or parabolic drift along x
+// changed by |d_i - d_j| <= |d_i - c| + |d_j - c| <= r1 + r2, the two largest reaches, so
+// the list holds every pair within the support while r1 + r2 stays under the skin (the test
+// below). Taking c in the middle of the flow's displacements halves the reach of a uniform or parabolic drift along x
 // (a vessel's axis), which does not change who neighbours whom. Predicting the middle lets
 // this pass compute the reach (no pass of its own, docs/benchmarks.md "Session 17"); the
 // previous step's middle alone lagged the dam break's front by a step's motion, 15% of the
 // threshold, and rebuilt the list 30 times in 600 steps against 21. After a rebuild both
-// middles restart at 0 (sph/rebuild_check.comp).
+// middles restart at 0 (hemo_finish_rebuild_test).
 // The middle c of this step's x-displacement range, predicted from the two steps before.
 float hemo_predicted_middle() {
   const float c = (lastCheck.x + lastCheck.y) - lastCheck.w;  // 2 m1 - m2
@@ -133,47 +133,68 @@ vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v) {
   return vec2(d.x, r);
 }
 
-shared vec3 s_subgroup[gl_WorkGroupSize.x];
+shared vec4 s_subgroup[gl_WorkGroupSize.x];
 shared bool s_nan[gl_WorkGroupSize.x];
 shared bool s_last;
 
-// (min d.x, max d.x, max reach) of the workgroup's m, NaN if any invocation saw one; valid in
-// invocation 0. Called in uniform control flow (it has a barrier).
-vec3 hemo_workgroup_check(vec3 m, bool nan) {
-  const vec3 sub = vec3(subgroupMin(m.x), subgroupMax(m.y), subgroupMax(m.z));
+// The two largest of a1 >= a2 and b1 >= b2.
+vec2 hemo_top2(vec2 a, vec2 b) {
+  return vec2(max(a.x, b.x), max(min(a.x, b.x), max(a.y, b.y)));
+}
+
+// The subgroup's two largest reaches, each invocation holding its own two (t.x >= t.y): the
+// largest, and the larger of the other invocations' largest and its holder's second (the
+// largest again when two invocations hold it).
+vec2 hemo_subgroup_top2(vec2 t) {
+  const float first = subgroupMax(t.x);
+  const bool holder = t.x == first;
+  const float second = subgroupMax(holder ? t.y : t.x);
+  return vec2(first, subgroupAdd(holder ? 1u : 0u) > 1u ? first : second);
+}
+
+// (min d.x, max d.x, the two largest reaches) of the workgroup's m, NaN if any invocation saw
+// one; valid in invocation 0. Called in uniform control flow (it has a barrier).
+vec4 hemo_workgroup_check(vec4 m, bool nan) {
+  const vec4 sub = vec4(subgroupMin(m.x), subgroupMax(m.y), hemo_subgroup_top2(m.zw));
   const bool subNan = subgroupAny(nan);
   if (subgroupElect()) {
     s_subgroup[gl_SubgroupID] = sub;
     s_nan[gl_SubgroupID] = subNan;
   }
   barrier();
-  vec3 r = s_subgroup[0];
+  vec4 r = s_subgroup[0];
   bool anyNan = s_nan[0];
   if (gl_LocalInvocationID.x == 0u) {
     for (uint s = 1u; s < gl_NumSubgroups; ++s) {
-      r = vec3(min(r.x, s_subgroup[s].x), max(r.y, s_subgroup[s].y), max(r.z, s_subgroup[s].z));
+      const vec4 o = s_subgroup[s];
+      r = vec4(min(r.x, o.x), max(r.y, o.y), hemo_top2(r.zw, o.zw));
       anyNan = anyNan || s_nan[s];
     }
   }
-  return anyNan ? vec3(uintBitsToFloat(0x7fc00000u)) : r;
+  return anyNan ? vec4(uintBitsToFloat(0x7fc00000u)) : r;
 }
 
 // The rebuild test's reduction, in uniform control flow: each workgroup stores its partial
 // and counts itself finished; the last reduces the partials (the result does not depend on
 // which one that is: min and max are exact), keeps the middle of the step before's range (w)
-// for the next prediction, and arms the gate: rebuild when the largest reach exceeds the
-// threshold, or is NaN. When the gate opens, the range becomes (0, 0) with w = 0: the next
-// step rebuilds, and displacements start again from the new build. Any NaN makes the whole
-// result NaN. (Folded into this pass, the test costs llvmpipe no dispatch of its own:
-// docs/benchmarks.md, "Session 21".)
+// for the next prediction, and arms the gate. Two particles' separation has changed by at
+// most the sum of their reaches, so the list holds every pair within the support while the
+// two largest reaches r1 >= r2 sum to less than the skin: the test compares their half-sum
+// (r1 + r2) / 2 with the threshold, half the skin (result.z), and rebuilds past it or on a
+// NaN. The largest reach alone (twice it against the skin, until session 21) counted the
+// fastest particle twice: the dam break's splash rebuilt 994 times in 5,890 steps, now 866
+// in 5,867; the aneurysm 624 times in 3,546 steps, now 539 in 3,534. When the gate opens, the range
+// becomes (0, 0) with w = 0: the next step rebuilds, and displacements start again from the
+// new build. Any NaN makes the whole result NaN. (Folded into this pass, the test costs
+// llvmpipe no dispatch of its own: docs/benchmarks.md, "Session 21".)
 void hemo_finish_rebuild_test(vec2 test, bool valid) {
   const float inf = uintBitsToFloat(0x7f800000u);
   const bool nan = valid && (isnan(test.x) || isnan(test.y));
-  const vec3 m = valid ? vec3(test.x, test.x, test.y) : vec3(inf, -inf, -inf);
-  const vec3 partial = hemo_workgroup_check(m, nan);
+  const vec4 m = valid ? vec4(test.x, test.x, test.y, -inf) : vec4(inf, -inf, -inf, -inf);
+  const vec4 partial = hemo_workgroup_check(m, nan);
   const uint groups = gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z;
   if (gl_LocalInvocationID.x == 0u) {
-    partials[hemo_group_index()] = vec4(partial, 0.0);
+    partials[hemo_group_index()] = partial;
     memoryBarrierBuffer();  // the partial is visible before the count says so
     s_last = atomicAdd(finished, 1u) == groups - 1u;
   }
@@ -182,24 +203,27 @@ void hemo_finish_rebuild_test(vec2 test, bool valid) {
     return;  // the same for the whole workgroup
   }
   memoryBarrierBuffer();
-  vec3 r = vec3(inf, -inf, -inf);
+  vec4 r = vec4(inf, -inf, -inf, -inf);
   bool anyNan = false;
   for (uint p = gl_LocalInvocationID.x; p < groups; p += gl_WorkGroupSize.x) {
-    const vec3 v = partials[p].xyz;
+    const vec4 v = partials[p];
     anyNan = anyNan || any(isnan(v));
-    r = vec3(min(r.x, v.x), max(r.y, v.y), max(r.z, v.z));
+    r = vec4(min(r.x, v.x), max(r.y, v.y), hemo_top2(r.zw, v.zw));
   }
   // (The first round's shared values were all read before the barrier after s_last.)
-  vec3 total = hemo_workgroup_check(r, anyNan);
+  vec4 total = hemo_workgroup_check(r, anyNan);
   if (gl_LocalInvocationID.x == 0u) {
     if (pc.staticSlots != 0u && !isnan(total.z)) {
       // Slots left out (SphSolver::movingSlots): rigid boundary particles, displacement 0, so
-      // their reach is |c|.
-      total = vec3(min(total.x, 0.0), max(total.y, 0.0), max(total.z, abs(hemo_predicted_middle())));
+      // their reach is |c| (many of them: twice).
+      const float c = abs(hemo_predicted_middle());
+      total = vec4(min(total.x, 0.0), max(total.y, 0.0), hemo_top2(total.zw, vec2(c)));
     }
-    const bool open = hemo_gate_open(total.z, pc.threshold);
+    // Fewer than two particles: no pair, nothing to rebuild for.
+    const float pairReach = total.w == -inf ? -inf : 0.5 * (total.z + total.w);
+    const bool open = hemo_gate_open(pairReach, pc.threshold);
     const float lastMiddle = 0.5 * (lastCheck.x + lastCheck.y);  // the step before's, for the extrapolation
-    checkResult = open ? vec4(0.0, 0.0, total.z, 0.0) : vec4(total.xy, total.z, lastMiddle);
+    checkResult = open ? vec4(0.0, 0.0, pairReach, 0.0) : vec4(total.xy, pairReach, lastMiddle);
     hemo_gate_arm(open, pc.gateSlots);
     finished = 0u;  // every other workgroup has counted itself: ready for the next use
   }

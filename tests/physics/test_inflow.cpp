@@ -206,7 +206,7 @@ TEST_F(InflowTest, FluxDownstreamMatchesTheZone) {
 // (its density falls 3%); with the zone as the supply, the fluid's mean density stays within
 // 1% of rho0 (measured: -0.6%; the supply acts away from the wall only, see integrate.comp).
 // The neighbour list is rebuilt only when particles may have moved by half the skin relative
-// to the middle of the flow's x displacements (sph/integrate.comp, sph/rebuild_check.comp). While the pulsatile flow
+// to the middle of the flow's x displacements (sph/integrate.comp). While the pulsatile flow
 // drifts down the tube, after every step each fluid particle's list must still hold every
 // particle within the kernel's support (brute force, minimum image across the seam).
 TEST_F(InflowTest, NeighbourListStaysCompleteWhileTheBloodDrifts) {

@@ -201,7 +201,8 @@ class SphSolver {
   const gpu::Buffer& interactingPairs() const { return pairList_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
   // The last step's rebuild test: vec4 (min, max of the x displacements since the list
-  // build, largest reach, the middle of the range a step before), m (sph/integrate.comp).
+  // build, the half-sum of the two largest reaches, the middle of the range a step before), m
+  // (sph/integrate.comp).
   const gpu::Buffer& rebuildCheck() const { return checkResult_; }
   const gpu::Buffer& paramsBuffer() const { return paramsBuffer_; }
   // The clock's two records and which one holds the current time (after the recorded steps).
