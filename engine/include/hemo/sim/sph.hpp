@@ -208,8 +208,9 @@ class SphSolver {
   // The clock's two records and which one holds the current time (after the recorded steps).
   const gpu::Buffer& clockBuffer() const { return clock_; }
   std::uint32_t clockParity() const { return clockParity_; }
-  // Largest distance a particle may move from where the list was built before recordStep
-  // rebuilds it (half the list's skin), m.
+  // Half the list's skin, m: recordStep rebuilds the list once the two largest reaches (the
+  // distances particles moved since the build, relative to the drift of the middle) sum to
+  // more than twice this.
   float rebuildThreshold() const;
 
   SphStatus readStatus() const;
