@@ -196,11 +196,11 @@ Json primitives(Context& ctx, int repeat) {
     }
     // The same loop reading the list and the data as uniform texel buffers
     // (bench/pair_gather_texel.comp), both layouts.
-    for (std::uint32_t layout = 0; layout <= 1; ++layout)
+    for (std::uint32_t layout = 0; layout <= 2; ++layout)
     for (std::uint32_t loads = 0; loads <= 4; ++loads) {
       const std::uint32_t texels = 0x1fu;  // slots LIST and A..D
       const auto& probe = ctx.pipelines().get(
-          {"bench/pair_gather_texel", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {loads, layout}, 0u, texels});
+          {"bench/pair_gather_texel", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {loads, layout & 1u, layout >> 1}, 0u, texels});
       using hemo::gpu::texelBinding;
       const auto set = probe.makeSet({texelBinding(HEMO_BENCH_BINDING_LIST, layout ? &contiguousBuffer : &listBuffer, VK_FORMAT_R32_UINT),
                                       texelBinding(HEMO_BENCH_BINDING_A, &data[0], VK_FORMAT_R32G32B32A32_SFLOAT),
@@ -214,7 +214,33 @@ Json primitives(Context& ctx, int repeat) {
       });
       row("pair_gather", std::uint64_t(n) * entries, ms,
           {{"vec4_loads_per_pair", loads}, {"list_layout", layout ? "contiguous" : "interleaved"},
-           {"gathers", "texel buffer"}, {"particles", n}, {"entries_per_particle", entries}});
+           {"gathers", layout == 2 ? "texel buffer, uniform index" : "texel buffer"}, {"particles", n}, {"entries_per_particle", entries}});
+    }
+  }
+
+  // What a per-lane store costs (bench/store_scatter.comp): 10,648 invocations (the
+  // pair_gather lattice's count) x 92 stores, through a storage buffer or a storage texel
+  // buffer, both list layouts, every store kept or a candidate's advance under a data mask.
+  {
+    const std::uint32_t n = 10648, entries = 92;
+    hemo::gpu::Buffer out(ctx, std::uint64_t(n) * entries * 4, hemo::gpu::MemoryUse::Device, "store_scatter out");
+    struct Push {
+      std::uint32_t n, entries;
+    };
+    for (std::uint32_t texel = 0; texel <= 1; ++texel)
+    for (std::uint32_t layout = 0; layout <= 1; ++layout)
+    for (std::uint32_t masked = 0; masked <= 1; ++masked) {
+      const auto& probe = ctx.pipelines().get({"bench/store_scatter", HEMO_BENCH_STORE_BINDING_COUNT, sizeof(Push), 64,
+                                               {layout, texel, masked}, 0u, 0u, 1u << HEMO_BENCH_STORE_BINDING_IMAGE});
+      const auto set = probe.makeSet({{HEMO_BENCH_STORE_BINDING_OUT, &out},
+                                      hemo::gpu::texelBinding(HEMO_BENCH_STORE_BINDING_IMAGE, &out, hemo::gpu::texel::kUint)});
+      const Push push{n, entries};
+      const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+        rec.dispatch(probe, set, push, probe.groupsFor(n));
+      });
+      row("store_scatter", std::uint64_t(n) * entries, ms,
+          {{"through", texel ? "storage texel buffer" : "storage buffer"}, {"list_layout", layout ? "contiguous" : "interleaved"},
+           {"slot", masked ? "advances under a data mask" : "every store kept"}, {"particles", n}, {"entries_per_particle", entries}});
     }
   }
 

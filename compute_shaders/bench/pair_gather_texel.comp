@@ -8,6 +8,7 @@
 
 layout(constant_id = 1) const uint kLoads = 1u;
 layout(constant_id = 2) const uint kContiguous = 0u;  // 1: entries of a particle adjacent
+layout(constant_id = 3) const uint kVariant = 0u;
 
 layout(binding = HEMO_BENCH_BINDING_LIST) uniform usamplerBuffer list;
 layout(binding = HEMO_BENCH_BINDING_A) uniform samplerBuffer a;
@@ -28,7 +29,7 @@ void main() {
   const vec4 self = vec4(float(i) * 1e-3, 0.5, 0.25, 1.0);
   vec4 sum = vec4(0.0);
   for (uint k = 0u; k < pc.entries; ++k) {
-    const int j = int(texelFetch(list, int(kContiguous != 0u ? i * pc.entries + k : k * pc.n + i)).x);
+    const int j = kVariant == 1u ? int(texelFetch(list, int(gl_WorkGroupID.x * pc.entries + k)).x) : int(texelFetch(list, int(kContiguous != 0u ? i * pc.entries + k : k * pc.n + i)).x);
     vec4 x = kLoads >= 1u ? texelFetch(a, j) : vec4(float(j) * 1e-3, 0.0, 0.0, 1.0);
     if (kLoads >= 2u) x += texelFetch(b, j);
     if (kLoads >= 3u) x += texelFetch(c, j);

@@ -28,4 +28,13 @@
 #define HEMO_BENCH_PARAM_VEC4S 8
 // push constants: vec4 p[HEMO_BENCH_PARAM_VEC4S - 1]; uint n; uint reads  (120 bytes)
 
+// bench/store_scatter.comp: invocation i of n writes `entries` uints, entry k at k * n + i
+// (interleaved) or at i * entries + k (contiguous, specialization constant 1), through a
+// storage buffer (OUT) or a storage texel buffer of R32_UINT texels (IMAGE; specialization
+// constant 2 set), each store under a data-dependent mask like a list build's.
+#define HEMO_BENCH_STORE_BINDING_OUT 0
+#define HEMO_BENCH_STORE_BINDING_IMAGE 1
+#define HEMO_BENCH_STORE_BINDING_COUNT 2
+// push constants: uint n; uint entries  (8 bytes)
+
 #endif

@@ -73,7 +73,11 @@ void main() {
   // Cells are trimmed against a slightly larger radius, so rounding never drops a cell that
   // holds a neighbour; the distance test below is exact.
   const float trim2 = list2 * 1.0001;
-  uint count = 0u;
+  // The non-empty ranges of slots to scan, in list order: [x, y) with y carrying
+  // HEMO_LIST_BOUNDARY_BIT for the boundary part. At most 5 x 5 rows, two ranges each where a
+  // periodic x axis wraps, in each of the two parts.
+  uvec2 ranges[100];
+  uint rangeCount = 0u;
   for (int dz = -2; dz <= 2; ++dz) {
     const int kz = c.z + dz;
     const float gz = hemo_cell_gap(kz, u.z, dims.z, pc.grid.periodic.z) * cellM.z;
@@ -121,8 +125,8 @@ void main() {
       ivec2 xr[2];
       xr[0] = ivec2(max(lo, 0), min(hi, hiX));
       xr[1] = lo < 0 ? ivec2(lo + int(dims.x), hiX) : ivec2(0, hi - int(dims.x));
-      const int ranges = pc.grid.periodic.x != 0u ? 2 : 1;
-      for (int s = 0; s < ranges; ++s) {
+      const int segments = pc.grid.periodic.x != 0u ? 2 : 1;
+      for (int s = 0; s < segments; ++s) {
         if (xr[s].x > xr[s].y) {
           continue;
         }
@@ -131,23 +135,46 @@ void main() {
         for (uint part = 0u; part < parts; ++part) {
           // part 0: the fluid, plain slots; part 1: boundary and wall particles, marked
           const uint base = part * cellCount;
-          const uint mark = part == 0u ? 0u : HEMO_LIST_BOUNDARY_BIT;
+          const uint jBegin = texelFetch(cellStart, int(base + first)).x;
           const uint jEnd = texelFetch(cellStart, int(base + last + 1u)).x;
-          for (uint j = texelFetch(cellStart, int(base + first)).x; j < jEnd; ++j) {
-            const vec3 d = hemo_min_image(xi - texelFetch(positions, int(j)).xyz, pp);
-            // Every candidate is written to the next free slot, and the slot is kept (count
-            // advances) only if the candidate is a neighbour: a store under a data-dependent
-            // condition cost llvmpipe more than the candidate test itself (dam break: list
-            // build 20 -> 14 ms, docs/benchmarks.md). Past the capacity the last slot is
-            // overwritten; that overflow stops the run at the end of the batch (status).
-            neighbourList[hemo_list_slot(i, min(count, capacity - 1u), pp)] = j | mark;
-            if (j != i && dot(d, d) < list2) {
-              ++count;
-            }
+          if (jBegin < jEnd) {
+            ranges[rangeCount] = uvec2(jBegin, jEnd | (part == 0u ? 0u : HEMO_LIST_BOUNDARY_BIT));
+            ++rangeCount;
           }
         }
       }
     }
+  }
+  // The candidates: every slot of the ranges in order, as one flat loop. A loop per range
+  // ran, per SIMD group, each range as long as its longest lane's; this one runs as long as
+  // the group's largest total (docs/benchmarks.md, "Session 22").
+  uint count = 0u;
+  uint next = 0u;  // the next range
+  uint j = 0u;
+  uint jEnd = 0u;
+  uint mark = 0u;
+  for (;;) {
+    if (j == jEnd) {
+      if (next == rangeCount) {
+        break;
+      }
+      const uvec2 r = ranges[next];
+      ++next;
+      j = r.x;
+      jEnd = r.y & ~HEMO_LIST_BOUNDARY_BIT;
+      mark = r.y & HEMO_LIST_BOUNDARY_BIT;
+    }
+    const vec3 d = hemo_min_image(xi - texelFetch(positions, int(j)).xyz, pp);
+    // Every candidate is written to the next free slot, and the slot is kept (count
+    // advances) only if the candidate is a neighbour: a store under a data-dependent
+    // condition cost llvmpipe more than the candidate test itself (dam break: list
+    // build 20 -> 14 ms, docs/benchmarks.md). Past the capacity the last slot is
+    // overwritten; that overflow stops the run at the end of the batch (status).
+    neighbourList[hemo_list_slot(i, min(count, capacity - 1u), pp)] = j | mark;
+    if (j != i && dot(d, d) < list2) {
+      ++count;
+    }
+    ++j;
   }
   neighbourCount[i] = min(count, capacity);
   if (count > capacity) {

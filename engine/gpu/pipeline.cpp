@@ -37,6 +37,7 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
       bindingCount_(desc.bindingCount),
       uniformSlots_(desc.uniformSlots),
       texelSlots_(desc.texelSlots),
+      storageTexelSlots_(desc.storageTexelSlots),
       pushBytes_(desc.pushConstantBytes),
       workgroupSize_(desc.workgroupSize),
       name_(desc.shader) {
@@ -47,12 +48,12 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
                    "' is outside the device's limits (max " +
                    std::to_string(limits.maxComputeWorkGroupSize[0]) + ")");
   }
-  if (bindingCount_ < 32 && ((uniformSlots_ | texelSlots_) >> bindingCount_) != 0) {
+  if (bindingCount_ < 32 && ((uniformSlots_ | texelSlots_ | storageTexelSlots_) >> bindingCount_) != 0) {
     throw GpuError("uniform or texel slots of '" + name_ + "' name a slot beyond its " +
                    std::to_string(bindingCount_) + " bindings");
   }
-  if ((uniformSlots_ & texelSlots_) != 0) {
-    throw GpuError("'" + name_ + "' declares a slot both uniform and texel");
+  if ((uniformSlots_ & texelSlots_) != 0 || (storageTexelSlots_ & (uniformSlots_ | texelSlots_)) != 0) {
+    throw GpuError("'" + name_ + "' declares a slot of two kinds (uniform, texel, storage texel)");
   }
   if (pushBytes_ > limits.maxPushConstantsSize) {
     throw GpuError("push constants of '" + name_ + "' exceed the device's " +
@@ -131,6 +132,7 @@ ComputePipeline& ComputePipeline::operator=(ComputePipeline&& other) noexcept {
     bindingCount_ = other.bindingCount_;
     uniformSlots_ = other.uniformSlots_;
     texelSlots_ = other.texelSlots_;
+    storageTexelSlots_ = other.storageTexelSlots_;
     pushBytes_ = other.pushBytes_;
     workgroupSize_ = other.workgroupSize_;
     name_ = std::move(other.name_);
@@ -169,6 +171,7 @@ Groups ComputePipeline::groupsFor(std::uint64_t items, std::uint32_t itemsPerInv
 
 VkDescriptorType ComputePipeline::descriptorType(std::uint32_t slot) const {
   if ((texelSlots_ >> slot) & 1u) return VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+  if ((storageTexelSlots_ >> slot) & 1u) return VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
   return (uniformSlots_ >> slot) & 1u ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
 }
 
@@ -224,16 +227,20 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
                                   ": buffer '" + b.buffer->name() + "' is not a device buffer");
     }
     const std::string where = "'" + name_ + "' binding slot " + std::to_string(b.slot);
-    if (descriptorType(b.slot) == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+    const VkDescriptorType type = descriptorType(b.slot);
+    if (type == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER || type == VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER) {
+      const bool storage = type == VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER;
       const VkDeviceSize bytes = texelBytes(b.format);
       if (bytes == 0) {
         throw std::invalid_argument(where + " is a texel slot and needs a 32-bit-channel format (R32, R32G32 or R32G32B32A32)");
       }
       VkFormatProperties props{};
       vkGetPhysicalDeviceFormatProperties(context_->physicalDevice(), b.format, &props);
-      if (!(props.bufferFeatures & VK_FORMAT_FEATURE_UNIFORM_TEXEL_BUFFER_BIT)) {
-        throw std::invalid_argument(where + ": the device cannot read format " + std::to_string(b.format) +
-                                    " as a uniform texel buffer");
+      const VkFormatFeatureFlags feature =
+          storage ? VK_FORMAT_FEATURE_STORAGE_TEXEL_BUFFER_BIT : VK_FORMAT_FEATURE_UNIFORM_TEXEL_BUFFER_BIT;
+      if (!(props.bufferFeatures & feature)) {
+        throw std::invalid_argument(where + ": the device cannot use format " + std::to_string(b.format) +
+                                    (storage ? " as a storage texel buffer" : " as a uniform texel buffer"));
       }
       if (b.offset % std::max<VkDeviceSize>(limits.minTexelBufferOffsetAlignment, 1) != 0) {
         throw std::invalid_argument(where + ": offset " + std::to_string(b.offset) +
@@ -290,13 +297,15 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
   set.device_ = context_->device();
   const auto uniformCount = static_cast<std::uint32_t>(std::popcount(uniformSlots_));
   const auto texelCount = static_cast<std::uint32_t>(std::popcount(texelSlots_));
-  const VkDescriptorPoolSize sizes[3] = {
-      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(bindingCount_ - uniformCount - texelCount, 1u)},
+  const auto storageTexelCount = static_cast<std::uint32_t>(std::popcount(storageTexelSlots_));
+  const VkDescriptorPoolSize sizes[4] = {
+      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(bindingCount_ - uniformCount - texelCount - storageTexelCount, 1u)},
       {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, std::max(uniformCount, 1u)},
-      {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, std::max(texelCount, 1u)}};
+      {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, std::max(texelCount, 1u)},
+      {VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, std::max(storageTexelCount, 1u)}};
   VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   poolInfo.maxSets = 1;
-  poolInfo.poolSizeCount = 3;
+  poolInfo.poolSizeCount = 4;
   poolInfo.pPoolSizes = sizes;
   check(vkCreateDescriptorPool(set.device_, &poolInfo, nullptr, &set.pool_), "vkCreateDescriptorPool");
   VkDescriptorSetAllocateInfo alloc{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
@@ -315,7 +324,8 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
     writes[i].dstBinding = i;
     writes[i].descriptorCount = 1;
     writes[i].descriptorType = descriptorType(i);
-    if (writes[i].descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER) {
+    if (writes[i].descriptorType == VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER ||
+        writes[i].descriptorType == VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER) {
       // Whole texels only: a range that is not a multiple of the texel size is cut down.
       const VkDeviceSize bytes = texelBytes(b.format);
       const VkDeviceSize range = texelRange(b, bytes);

@@ -7,7 +7,8 @@ namespace hemo::gpu {
 const ComputePipeline& PipelineCache::get(const PipelineDesc& desc) {
   std::ostringstream keyText;
   keyText << desc.shader << "|wg=" << desc.workgroupSize << "|push=" << desc.pushConstantBytes
-          << "|bind=" << desc.bindingCount << "|uniform=" << desc.uniformSlots << "|texel=" << desc.texelSlots;
+          << "|bind=" << desc.bindingCount << "|uniform=" << desc.uniformSlots << "|texel=" << desc.texelSlots
+          << "|stexel=" << desc.storageTexelSlots;
   for (std::uint32_t v : desc.specialization) keyText << '|' << v;
   const std::string key = keyText.str();
   std::lock_guard<std::mutex> lock(mutex_);

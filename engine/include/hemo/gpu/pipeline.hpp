@@ -21,9 +21,9 @@ struct Groups {
   std::uint64_t total() const { return std::uint64_t(x) * y; }
 };
 
-// A buffer (or a byte range of one) bound to one slot (storage, uniform or uniform texel
-// buffer, as the pipeline declares it). A texel slot reads the range as an array of
-// `format` texels (a buffer view); the other slots take no format.
+// A buffer (or a byte range of one) bound to one slot (storage, uniform, uniform texel or
+// storage texel buffer, as the pipeline declares it). A texel slot sees the range as an
+// array of `format` texels (a buffer view); the other slots take no format.
 struct Binding {
   std::uint32_t slot = 0;
   const Buffer* buffer = nullptr;
@@ -82,6 +82,11 @@ struct PipelineDesc {
   // invocation. llvmpipe fetches texels as one unrolled vector gather, where a storage-buffer
   // load walks the SIMD lanes one by one (docs/benchmarks.md, "texel gathers").
   std::uint32_t texelSlots = 0;
+  // Bit i set: slot i is a storage texel buffer (GLSL imageBuffer / uimageBuffer with an
+  // explicit format, written with imageStore): per-item output written at a different index
+  // by every invocation. llvmpipe stores texels as one vector scatter, where a storage-buffer
+  // store walks the SIMD lanes one by one (docs/benchmarks.md, "texel stores").
+  std::uint32_t storageTexelSlots = 0;
 };
 
 class ComputePipeline {
@@ -109,7 +114,7 @@ class ComputePipeline {
   // Binds every slot exactly once; throws std::invalid_argument naming the slot otherwise,
   // and when a uniform slot's range exceeds maxUniformBufferRange or its offset is not a
   // multiple of minUniformBufferOffsetAlignment (storage slots likewise with theirs), and
-  // when a texel slot has no format, a format the device cannot read as a uniform texel
+  // when a texel slot has no format, a format the device cannot use as that kind of texel
   // buffer, a misaligned offset or more texels than maxTexelBufferElements.
   DescriptorSet makeSet(std::initializer_list<Binding> bindings) const;
 
@@ -123,6 +128,7 @@ class ComputePipeline {
   std::uint32_t bindingCount_ = 0;
   std::uint32_t uniformSlots_ = 0;
   std::uint32_t texelSlots_ = 0;
+  std::uint32_t storageTexelSlots_ = 0;
   std::uint32_t pushBytes_ = 0;
   std::uint32_t workgroupSize_ = 0;
   std::string name_;
