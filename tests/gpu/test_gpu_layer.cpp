@@ -272,6 +272,68 @@ TEST_F(GpuLayerTest, TexelSlotsGatherTheBoundBuffers) {
                gpu::GpuError);
 }
 
+// Storage texel slots: bench/store_scatter.comp writes one R32_UINT texel per iteration
+// through imageStore (or, as the control, through a storage buffer), in both layouts, every
+// store kept or the slot advancing under a data mask (later stores then overwrite earlier
+// ones); against the same sequence on the CPU. Slots not written keep their old value.
+TEST_F(GpuLayerTest, StorageTexelSlotsWriteTheBoundBuffer) {
+  struct Push {
+    std::uint32_t n, entries;
+  };
+  const std::uint32_t n = 300, entries = 7;
+  const std::uint32_t untouched = 0xdeadbeefu;
+  const std::vector<std::uint32_t> fill(std::size_t(n) * entries, untouched);
+  gpu::Buffer out(ctx(), fill.size() * 4, gpu::MemoryUse::Device, "out");
+  gpu::Buffer image(ctx(), fill.size() * 4, gpu::MemoryUse::Device, "image");
+  for (std::uint32_t texel = 0; texel <= 1; ++texel)
+  for (std::uint32_t contiguous = 0; contiguous <= 1; ++contiguous)
+  for (std::uint32_t masked = 0; masked <= 1; ++masked) {
+    SCOPED_TRACE("texel " + std::to_string(texel) + ", contiguous " + std::to_string(contiguous) + ", masked " +
+                 std::to_string(masked));
+    out.upload(fill);
+    image.upload(fill);
+    const auto& p = ctx().pipelines().get({"bench/store_scatter", HEMO_BENCH_STORE_BINDING_COUNT, sizeof(Push), 64,
+                                           {contiguous, texel, masked}, 0u, 0u, 1u << HEMO_BENCH_STORE_BINDING_IMAGE});
+    const auto set = p.makeSet({{HEMO_BENCH_STORE_BINDING_OUT, &out},
+                                gpu::texelBinding(HEMO_BENCH_STORE_BINDING_IMAGE, &image, VK_FORMAT_R32_UINT)});
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    rec.dispatch(p, set, Push{n, entries}, p.groupsFor(n));
+    rec.end();
+    rec.submitAndWait();
+    std::vector<std::uint32_t> expected = fill;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      std::uint32_t h = i * 2654435761u;
+      std::uint32_t count = 0;
+      for (std::uint32_t k = 0; k < entries; ++k) {
+        h = h * 1664525u + 1013904223u;
+        const std::uint32_t slot = masked ? count : k;
+        expected[contiguous ? std::size_t(i) * entries + slot : std::size_t(slot) * n + i] = h;
+        count += masked ? (h >> 31) : 1u;
+      }
+    }
+    const auto written = (texel ? image : out).readback<std::uint32_t>(fill.size());
+    const auto other = (texel ? out : image).readback<std::uint32_t>(fill.size());
+    for (std::size_t e = 0; e < fill.size(); ++e) {
+      ASSERT_EQ(written[e], expected[e]) << "texel " << e;
+      ASSERT_EQ(other[e], untouched) << "the other binding, texel " << e;
+    }
+  }
+  const auto& p = ctx().pipelines().get({"bench/store_scatter", HEMO_BENCH_STORE_BINDING_COUNT, sizeof(Push), 64,
+                                         {0u, 1u, 0u}, 0u, 0u, 1u << HEMO_BENCH_STORE_BINDING_IMAGE});
+  // A storage texel slot without a format.
+  try {
+    p.makeSet({{HEMO_BENCH_STORE_BINDING_OUT, &out}, {HEMO_BENCH_STORE_BINDING_IMAGE, &image}});
+    ADD_FAILURE() << "a storage texel slot without a format was accepted";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("slot 1 is a texel slot"), std::string::npos) << e.what();
+  }
+  // A slot declared both a uniform texel and a storage texel slot.
+  EXPECT_THROW(ctx().pipelines().get({"bench/store_scatter", HEMO_BENCH_STORE_BINDING_COUNT, sizeof(Push), 64, {0u, 1u, 0u}, 0u,
+                                      1u << HEMO_BENCH_STORE_BINDING_IMAGE, 1u << HEMO_BENCH_STORE_BINDING_IMAGE}),
+               gpu::GpuError);
+}
+
 TEST_F(GpuLayerTest, PushConstantSizeMismatchIsRejected) {
   const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
   gpu::Buffer a(ctx(), 64, gpu::MemoryUse::Device, "a");
