@@ -57,11 +57,11 @@ void main() {
   const uint cellCount = dims.x * dims.y * dims.z;
   const uint parts = fluidI ? 2u : 1u;  // boundary particles list fluid only
 
-  // The grid's cells are half the list radius R wide (sph.cpp), so every neighbour lies in
-  // the 5 x 5 rows (dz, dy in -2..2) around the particle's cell, each within 2 cells in x.
-  // A row is skipped when its nearest point is R or more away in (y, z), and its x-cells are
-  // trimmed to those within the remaining reach sqrt(R^2 - gy^2 - gz^2): about half the
-  // candidates of the 27 cells of R that the same list needed before.
+  // The grid's cells are at least half the list radius R wide along y and z and narrower
+  // along x (sph.cpp, gridFor), so every neighbour lies in the 5 x 5 rows (dz, dy in -2..2)
+  // around the particle's cell, each within reachX cells in x. A row is skipped when its
+  // nearest point is R or more away in (y, z), and its x-cells are trimmed to those within the
+  // remaining reach sqrt(R^2 - gy^2 - gz^2).
   bool outside;
   const ivec3 c = hemo_cell_coords(xi, pc.grid, outside);
   // Position in cell units, in the same period as c on periodic axes.
@@ -70,6 +70,8 @@ void main() {
   u = mix(u, u - dimsF * floor(u / dimsF), notEqual(pc.grid.periodic.xyz, uvec3(0u)));
   const vec3 cellM = 1.0 / pc.grid.invCell.xyz;  // cell size per axis, m
   const int hiX = int(dims.x) - 1;
+  // The x-cells within the list radius either way of the particle's
+  const int reachX = int(ceil(params.listRadius * pc.grid.invCell.x));
   // Cells are trimmed against a slightly larger radius, so rounding never drops a cell that
   // holds a neighbour; the distance test below is exact.
   const float trim2 = list2 * 1.0001;
@@ -118,8 +120,8 @@ void main() {
         lo = clamp(lo, 0, hiX);
         hi = clamp(hi, 0, hiX);
       }
-      lo = max(lo, c.x - 2);
-      hi = min(hi, c.x + 2);
+      lo = max(lo, c.x - reachX);
+      hi = min(hi, min(c.x + reachX, lo + hiX));  // never a cell twice round a periodic x axis
       // The x-cells [lo, hi] as up to two contiguous ranges on the grid (the second, empty
       // unless a periodic x axis wraps, holds the cells past the seam).
       ivec2 xr[2];

@@ -51,6 +51,12 @@ void GridSpec::validate() const {
   if (!std::isfinite(cellSize) || cellSize <= 0.0f) {
     throw std::invalid_argument("grid cell size must be a positive finite length in m, got " + std::to_string(cellSize));
   }
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(cellScale[a]) || cellScale[a] < 1.0f) {
+      throw std::invalid_argument(std::string("grid cell scale along ") + "xyz"[a] + " must be finite and >= 1, got " +
+                                  std::to_string(cellScale[a]));
+    }
+  }
   if (!std::isfinite(origin.x) || !std::isfinite(origin.y) || !std::isfinite(origin.z)) {
     throw std::invalid_argument("grid origin must be finite");
   }
@@ -61,8 +67,8 @@ void GridSpec::validate() const {
     if (!std::isfinite(period[a]) || period[a] < 0.0f) throw std::invalid_argument("grid period must be finite and >= 0");
     if (periodic(a) && dims[a] < 3) {
       throw std::invalid_argument(std::string("periodic axis ") + "xyz"[a] + " of " + std::to_string(period[a]) +
-                                  " m holds only " + std::to_string(dims[a]) + " cells of " + std::to_string(cellSize) +
-                                  " m; it needs at least 3 (a period of at least " + std::to_string(3.0f * cellSize) +
+                                  " m holds only " + std::to_string(dims[a]) + " cells of " + std::to_string(cellSize * cellScale[a]) +
+                                  " m; it needs at least 3 (a period of at least " + std::to_string(3.0f * cellSize * cellScale[a]) +
                                   " m)");
     }
   }
@@ -78,23 +84,25 @@ void GridSpec::validate() const {
 
 glm::vec3 GridSpec::invCellSize() const {
   glm::vec3 inv;
-  for (int a = 0; a < 3; ++a) inv[a] = periodic(a) ? float(double(dims[a]) / period[a]) : 1.0f / cellSize;
+  for (int a = 0; a < 3; ++a) inv[a] = periodic(a) ? float(double(dims[a]) / period[a]) : 1.0f / (cellSize * cellScale[a]);
   return inv;
 }
 
-GridSpec GridSpec::covering(glm::vec3 lo, glm::vec3 hi, float cellSize, glm::bvec3 periodic) {
+GridSpec GridSpec::covering(glm::vec3 lo, glm::vec3 hi, float cellSize, glm::bvec3 periodic, glm::vec3 cellScale) {
   GridSpec spec;
   spec.origin = lo;
   spec.cellSize = cellSize;
-  if (!(cellSize > 0.0f) || !std::isfinite(cellSize)) {
-    spec.validate();  // throws with the message about the cell size
+  spec.cellScale = cellScale;
+  if (!(cellSize > 0.0f) || !std::isfinite(cellSize) || !(glm::all(glm::greaterThanEqual(cellScale, glm::vec3(1.0f))))) {
+    spec.validate();  // throws with the message about the cell size or scale
   }
   for (int a = 0; a < 3; ++a) {
     if (!std::isfinite(lo[a]) || !std::isfinite(hi[a]) || hi[a] < lo[a]) {
       throw std::invalid_argument("grid bounds must be finite with min <= max on every axis");
     }
     const double extent = double(hi[a]) - lo[a];
-    const double cells = periodic[a] ? std::floor(extent / cellSize) : std::ceil(extent / cellSize);
+    const double size = double(cellSize) * cellScale[a];
+    const double cells = periodic[a] ? std::floor(extent / size) : std::ceil(extent / size);
     if (cells > 4.0e9) throw std::invalid_argument("grid bounds span too many cells");
     spec.dims[a] = static_cast<std::uint32_t>(std::max(periodic[a] ? 0.0 : 1.0, cells));
     if (periodic[a]) spec.period[a] = float(extent);

@@ -148,21 +148,34 @@ SphParams makeParams(const SphSettings& s) {
 }
 
 namespace {
-// Cells of half the list radius: the list build (sph/build_list.comp) scans the 5 x 5 rows
-// around a particle's cell, trimmed to the sphere of the list radius, which tests about half
-// the candidates of the 27 cells of a full radius. Periodic axes need 5 distinct cells. Two
-// parts: the fluid's slots first, so the fluid passes' SIMD groups hold fluid only (mixed
-// groups ran their boundary lanes idle: 16% of the dam break's fluid lanes, docs/benchmarks.md).
+// The list build (sph/build_list.comp) scans the 5 x 5 rows of cells along x around a
+// particle's cell, skips the rows whose nearest point is the list radius R or more away in
+// (y, z), and trims each row's x-cells to the remaining reach sqrt(R^2 - gy^2 - gz^2). Cells
+// are a quarter of R along x, so the trimmed rows hold few candidates beyond the sphere, and
+// two thirds of R along y and z, the widest for which five rows still reach R, so fewer rows
+// remain: a dam-break list pass 10% cheaper than with cells of R / 2 on all axes (which test
+// about half the candidates of the 27 cells of R), at the same sort cost (docs/benchmarks.md,
+// "Session 22"). A periodic y or z axis too short for five such cells gets cells of R / 2
+// (five distinct rows need a period of 2.5 R). Two parts: the fluid's slots first, so the
+// fluid passes' SIMD groups hold fluid only (mixed groups ran their boundary lanes idle: 16%
+// of the dam break's fluid lanes, docs/benchmarks.md).
 GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
   s.validate();
-  GridSpec spec = GridSpec::covering(lo, hi, 0.5f * s.listRadius(), s.periodic);
+  const float radius = s.listRadius();
+  glm::vec3 scale(1.0f, 8.0f / 3.0f, 8.0f / 3.0f);  // cells of R/4, 2R/3, 2R/3
+  for (int a = 1; a < 3; ++a) {
+    if (s.periodic[a] && double(hi[a]) - lo[a] < 5.0 * (2.0 / 3.0) * radius) scale[a] = 2.0f;  // R/2
+  }
+  GridSpec spec = GridSpec::covering(lo, hi, 0.25f * radius, s.periodic, scale);
   spec.parts = 2;
   spec.validate();
   for (int a = 0; a < 3; ++a) {
-    if (spec.periodic(a) && spec.dims[a] < 5) {
+    // x: the cells within R either way of a particle's (four of R/4) distinct; y, z: five rows
+    const std::uint32_t needed = a == 0 ? 9u : 5u;
+    if (spec.periodic(a) && spec.dims[a] < needed) {
       throw std::invalid_argument(std::string("periodic axis ") + "xyz"[a] + " of " + std::to_string(spec.period[a]) +
                                   " m is shorter than 2.5 neighbour-list radii (" +
-                                  std::to_string(2.5f * s.listRadius()) + " m)");
+                                  std::to_string(2.5f * radius) + " m)");
     }
   }
   return spec;

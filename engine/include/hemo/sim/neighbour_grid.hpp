@@ -26,6 +26,8 @@ namespace hemo::sim {
 struct GridSpec {
   glm::vec3 origin{0.0f};  // m, corner of cell (0,0,0)
   float cellSize = 0.0f;   // m, on bounded axes; periodic axes have cells of period / dims >= this
+  // Cells along axis a are cellSize * cellScale[a] wide (>= 1: cellSize is the narrowest).
+  glm::vec3 cellScale{1.0f};
   glm::uvec3 dims{0u};     // cells per axis
   glm::vec3 period{0.0f};  // m on periodic axes (the grid spans exactly one period), 0 on bounded ones
   // 1: particles sorted by cell. 2: fluid particles first, by cell, then all others, by
@@ -38,14 +40,15 @@ struct GridSpec {
   std::uint64_t keyCount() const { return cellCount() * parts; }  // cellStart has keyCount() + 1 entries
   bool periodic(int axis) const { return period[axis] > 0.0f; }
   glm::vec3 invCellSize() const;  // cells per m along each axis
-  // Throws std::invalid_argument naming the problem (non-positive or non-finite size,
-  // zero dims, too many cells for 32-bit indices, a periodic axis of fewer than 3 cells,
+  // Throws std::invalid_argument naming the problem (non-positive or non-finite size, a
+  // cell scale below 1 or not finite, zero dims, too many cells for 32-bit indices, a periodic axis of fewer than 3 cells,
   // parts other than 1 or 2).
   void validate() const;
-  // The smallest grid of cells of `cellSize` that covers the box [lo, hi]; on the axes
-  // flagged `periodic`, [lo, hi) is one period, split into as many whole cells of at least
-  // `cellSize` as fit (at least 3).
-  static GridSpec covering(glm::vec3 lo, glm::vec3 hi, float cellSize, glm::bvec3 periodic = glm::bvec3(false));
+  // The smallest grid of cells of `cellSize` (times `cellScale` per axis) that covers the box
+  // [lo, hi]; on the axes flagged `periodic`, [lo, hi) is one period, split into as many whole
+  // cells of at least that size as fit (at least 3).
+  static GridSpec covering(glm::vec3 lo, glm::vec3 hi, float cellSize, glm::bvec3 periodic = glm::bvec3(false),
+                           glm::vec3 cellScale = glm::vec3(1.0f));
 };
 
 // Counters the hash stage accumulates (read back only when the caller asks).
