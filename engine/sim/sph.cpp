@@ -163,10 +163,15 @@ GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
   s.validate();
   const float radius = s.listRadius();
   glm::vec3 scale(1.0f, 8.0f / 3.0f, 8.0f / 3.0f);  // cells of R/4, 2R/3, 2R/3
-  for (int a = 1; a < 3; ++a) {
-    if (s.periodic[a] && double(hi[a]) - lo[a] < 5.0 * (2.0 / 3.0) * radius) scale[a] = 2.0f;  // R/2
-  }
   GridSpec spec = GridSpec::covering(lo, hi, 0.25f * radius, s.periodic, scale);
+  bool narrowed = false;
+  for (int a = 1; a < 3; ++a) {
+    if (spec.periodic(a) && spec.dims[a] < 5) {
+      scale[a] = 2.0f;  // R/2
+      narrowed = true;
+    }
+  }
+  if (narrowed) spec = GridSpec::covering(lo, hi, 0.25f * radius, s.periodic, scale);
   spec.parts = 2;
   spec.validate();
   for (int a = 0; a < 3; ++a) {

@@ -270,7 +270,11 @@ TEST_F(SphStageTest, PeriodicAxesMatchReferenceAcrossTheSeams) {
   auto rng = rngFor();
   sim::SphSettings s = settings();
   s.periodic = {true, true, false};
-  const int nx = 9, ny = 10;  // periods of 9 and 10 spacings: at least three list radii (8.6 dp)
+  // Periods of 9 and 10 spacings (3.1 and 3.5 list radii of 2.86 dp), then of 9 and 8 (2.8 list
+  // radii): the list grid's cells along y are then R / 2, as five of 2R/3 do not fit.
+  for (const int ny : {10, 8}) {
+  SCOPED_TRACE("period along y of " + std::to_string(ny) + " spacings");
+  const int nx = 9;
   const Case c = makeCase(rng, s, nx, ny, 6, 0.3f, true);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
   const glm::vec3 lo(0.0f, 0.0f, -0.05f), hi(float(nx) * s.spacing, float(ny) * s.spacing, 0.15f);
@@ -279,6 +283,7 @@ TEST_F(SphStageTest, PeriodicAxesMatchReferenceAcrossTheSeams) {
   ASSERT_NEAR(model.period.x, nx * s.spacing, 1e-7);
   ASSERT_NEAR(model.period.y, ny * s.spacing, 1e-7);
   ASSERT_EQ(model.period.z, 0.0);
+  EXPECT_FLOAT_EQ(st.solver->grid().spec().cellScale.y, ny == 10 ? 8.0f / 3.0f : 2.0f);
   // The case must have pairs that interact only across a seam.
   std::size_t seamPairs = 0;
   for (std::size_t i = 0; i < c.ref.size(); ++i)
@@ -301,6 +306,7 @@ TEST_F(SphStageTest, PeriodicAxesMatchReferenceAcrossTheSeams) {
     EXPECT_NEAR(state[slot].y, rp[i].y, 7.0 * model.taitB * 4e-6 + 1e-5 * std::abs(rp[i].y)) << "pressure " << i;
     if (c.ref[i].kind != 0) continue;
     EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - acc[i]), 2e-4 * accelScale) << "acceleration of particle " << i;
+  }
   }
 }
 
