@@ -55,7 +55,6 @@ void main() {
   const HemoPairParams pp = hemo_pair_params();
   const uvec3 dims = pc.grid.dimsN.xyz;
   const uint cellCount = dims.x * dims.y * dims.z;
-  const uint parts = fluidI ? 2u : 1u;  // boundary particles list fluid only
 
   // The grid's cells are at least half the list radius R wide along y and z and narrower
   // along x (sph.cpp, gridFor), so every neighbour lies in the 5 x 5 rows (dz, dy in -2..2)
@@ -87,24 +86,26 @@ void main() {
     if (z < 0 || gz * gz >= trim2) {
       continue;
     }
-    if (!fluidI) {
-      // A boundary particle lists fluid only, and most wall particles of a tank sit far from
-      // it: skip the plane's five rows at once when the block of whole x rows that holds them
-      // (x fastest, so rows yLo .. yHi of plane z are one range of cells) has no fluid.
-      int yLo = c.y - 2;
-      int yHi = c.y + 2;
-      if (pc.grid.periodic.y != 0u && (yLo < 0 || yHi >= int(dims.y))) {
-        yLo = 0;  // the rows wrap: the whole plane
-        yHi = int(dims.y) - 1;
-      }
-      yLo = clamp(yLo, 0, int(dims.y) - 1);
-      yHi = clamp(yHi, 0, int(dims.y) - 1);
-      const uint planeFirst = hemo_cell_linear(ivec3(0, yLo, z), dims);
-      const uint planeLast = hemo_cell_linear(ivec3(hiX, yHi, z), dims);
-      if (texelFetch(cellStart, int(planeFirst)).x == texelFetch(cellStart, int(planeLast + 1u)).x) {
-        continue;
-      }
+    // The plane's five rows (x fastest, so rows yLo .. yHi of plane z are one block of cells):
+    // a part with no particle in the block is skipped in all of them. Boundary particles list
+    // fluid only, and most sit far from it (a tank's walls); most fluid particles sit far from
+    // any boundary particle. Two texel fetches per plane save two per row and part.
+    int yLo = c.y - 2;
+    int yHi = c.y + 2;
+    if (pc.grid.periodic.y != 0u && (yLo < 0 || yHi >= int(dims.y))) {
+      yLo = 0;  // the rows wrap: the whole plane
+      yHi = int(dims.y) - 1;
     }
+    yLo = clamp(yLo, 0, int(dims.y) - 1);
+    yHi = clamp(yHi, 0, int(dims.y) - 1);
+    const uint planeFirst = hemo_cell_linear(ivec3(0, yLo, z), dims);
+    const uint planeLast = hemo_cell_linear(ivec3(hiX, yHi, z), dims);
+    const uint tested = fluidI ? cellCount : 0u;  // fluid: the boundary part; boundary: the fluid part
+    const bool occupied = texelFetch(cellStart, int(tested + planeFirst)).x != texelFetch(cellStart, int(tested + planeLast + 1u)).x;
+    if (!fluidI && !occupied) {
+      continue;
+    }
+    const uint parts = fluidI && occupied ? 2u : 1u;
     for (int dy = -2; dy <= 2; ++dy) {
       const int ky = c.y + dy;
       const float gy = hemo_cell_gap(ky, u.y, dims.y, pc.grid.periodic.y) * cellM.y;
