@@ -163,15 +163,11 @@ GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
   s.validate();
   const float radius = s.listRadius();
   glm::vec3 scale(1.0f, 8.0f / 3.0f, 8.0f / 3.0f);  // cells of R/4, 2R/3, 2R/3
-  GridSpec spec = GridSpec::covering(lo, hi, 0.25f * radius, s.periodic, scale);
-  bool narrowed = false;
+  const GridSpec wide = GridSpec::covering(lo, hi, 0.25f * radius, s.periodic, scale);
   for (int a = 1; a < 3; ++a) {
-    if (spec.periodic(a) && spec.dims[a] < 5) {
-      scale[a] = 2.0f;  // R/2
-      narrowed = true;
-    }
+    if (wide.periodic(a) && wide.dims[a] < 5) scale[a] = 2.0f;  // R/2
   }
-  if (narrowed) spec = GridSpec::covering(lo, hi, 0.25f * radius, s.periodic, scale);
+  GridSpec spec = GridSpec::covering(lo, hi, 0.25f * radius, s.periodic, scale);
   spec.parts = 2;
   spec.validate();
   for (int a = 0; a < 3; ++a) {

@@ -83,9 +83,9 @@ struct PipelineDesc {
   // load walks the SIMD lanes one by one (docs/benchmarks.md, "texel gathers").
   std::uint32_t texelSlots = 0;
   // Bit i set: slot i is a storage texel buffer (GLSL imageBuffer / uimageBuffer with an
-  // explicit format, written with imageStore): per-item output written at a different index
-  // by every invocation. llvmpipe stores texels as one vector scatter, where a storage-buffer
-  // store walks the SIMD lanes one by one (docs/benchmarks.md, "texel stores").
+  // explicit format, written with imageStore). Unlike texel reads, texel stores cost llvmpipe
+  // more than storage-buffer stores (hemo-bench primitives, store_scatter; docs/benchmarks.md
+  // "Session 22"), so the engine's passes write storage buffers; the probe uses this slot kind.
   std::uint32_t storageTexelSlots = 0;
 };
 

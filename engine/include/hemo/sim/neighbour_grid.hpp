@@ -41,8 +41,8 @@ struct GridSpec {
   bool periodic(int axis) const { return period[axis] > 0.0f; }
   glm::vec3 invCellSize() const;  // cells per m along each axis
   // Throws std::invalid_argument naming the problem (non-positive or non-finite size, a
-  // cell scale below 1 or not finite, zero dims, too many cells for 32-bit indices, a periodic axis of fewer than 3 cells,
-  // parts other than 1 or 2).
+  // cell scale below 1 or not finite, zero dims, too many cells for 32-bit indices, a
+  // periodic axis of fewer than 3 cells, parts other than 1 or 2).
   void validate() const;
   // The smallest grid of cells of `cellSize` (times `cellScale` per axis) that covers the box
   // [lo, hi]; on the axes flagged `periodic`, [lo, hi) is one period, split into as many whole
