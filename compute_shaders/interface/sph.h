@@ -218,7 +218,7 @@
 // fraction of a storage read; no record is read after it is written in the pass).
 #define HEMO_INTEGRATE_BINDING_POSITIONS_IN 16
 #define HEMO_INTEGRATE_BINDING_VELOCITIES_IN 17
-#define HEMO_INTEGRATE_BINDING_COUNT 24
+#define HEMO_INTEGRATE_BINDING_COUNT 27
 
 // The rebuild test (docs/architecture.md, "the rebuild test"), in the integrator's full
 // stages (symplectic Euler, RK2's second): each slot's x displacement d.x since the list
@@ -227,6 +227,7 @@
 // a partial (min d.x, max d.x, the two largest reaches), and the last workgroup to finish
 // reduces the partials to the result and arms the neighbour-rebuild gate for the next step
 // (common/gate.glsl): rebuild when the two largest reaches' half-sum exceeds half the skin.
+// After a symplectic step the tile pass (below) arms it instead, with both tests.
 #define HEMO_INTEGRATE_BINDING_DRIFT_RANGE 18  // uniform vec4: the result as the step found it
 #define HEMO_INTEGRATE_BINDING_CHECK_COUNTER 19  // uint: workgroups finished (starts and ends at 0)
 #define HEMO_INTEGRATE_BINDING_CHECK_RESULT 20   // vec4 (min d.x, max d.x, half-sum of the two largest reaches, middle of the range a step before); NaN if any is
@@ -234,6 +235,47 @@
 #define HEMO_INTEGRATE_BINDING_GATE_ARGS 22
 #define HEMO_INTEGRATE_BINDING_GATE_OPENED 23
 #define HEMO_CHECK_RESULT_REACH 2      // the float index of the reach the gate compares (the half-sum) in the result
+// The tile test (symplectic Euler only; docs/architecture.md, "the rebuild test"): space is cut
+// into tiles of at least 1.5 list radii (common/tiles.glsl, the grid as it was at the build);
+// each tile collects the bounding box of its particles' displacements since the build (rigid
+// boundary particles: the point 0), and the list still holds every pair within the support
+// while no two neighbouring tiles' boxes (a tile and itself included) are further apart than
+// the skin and the two largest reaches sum to less than a tile less the support. The rebuild
+// gate opens only when this test and the reach test both fail. The integrator collects the
+// boxes; sph/rebuild_tiles.comp, one workgroup dispatched after it, compares them, decides and
+// arms the gate. (In the integrator's last workgroup the comparison cost the dam break's
+// step 0.4 ms: llvmpipe runs the code after the other workgroups' early return under an
+// empty mask.)
+#define HEMO_INTEGRATE_BINDING_TILE_GRID 24   // uniform TileGrid (common/tiles.glsl)
+#define HEMO_INTEGRATE_BINDING_TILE_BOXES 25  // uint[HEMO_TILE_WORDS] per tile (below)
+#define HEMO_INTEGRATE_BINDING_TILE_OCCUPIED 26  // uint count, uint collected, then the indices of the tiles with moving particles (count and collected start and end at 0)
+// A tile's words: 0-2 the largest -d (so the smallest d) and 4-6 the largest d per axis, as
+// order keys (hemo_order_key: unsigned order = float order, 0 = empty); word 3 is nonzero
+// when rigid boundary particles lie in the tile (sph/tile_static.comp), whose displacement is 0.
+#define HEMO_TILE_WORDS 8
+// The integrator collects the boxes in a step only when the last step's half-sum of the two
+// largest reaches passed this fraction of the threshold (half the skin): the tiles decide only
+// where the reach test fails.
+#define HEMO_TILE_COLLECT_FROM 0.75
+#define HEMO_TILE_STATIC_WORD 3
+
+// sph/rebuild_tiles.comp: the tile test's comparison and the gate (one workgroup).
+#define HEMO_RTILES_BINDING_TILE_GRID 0     // uniform TileGrid
+#define HEMO_RTILES_BINDING_TILE_BOXES 1
+#define HEMO_RTILES_BINDING_TILE_OCCUPIED 2
+#define HEMO_RTILES_BINDING_CHECK_RESULT 3  // the integrator's result (HEMO_INTEGRATE_BINDING_CHECK_RESULT)
+#define HEMO_RTILES_BINDING_TILE_RESULT 4   // float: the largest box separation of neighbouring tiles (m), for tests
+#define HEMO_RTILES_BINDING_GATE_ARMED 5
+#define HEMO_RTILES_BINDING_GATE_ARGS 6
+#define HEMO_RTILES_BINDING_GATE_OPENED 7
+#define HEMO_RTILES_BINDING_COUNT 8
+
+// sph/tile_static.comp: marks the tiles that hold rigid boundary particles (once per upload).
+#define HEMO_TILE_STATIC_BINDING_POSITIONS 0  // texel vec4
+#define HEMO_TILE_STATIC_BINDING_VELOCITIES 1 // texel vec4 (w: kind)
+#define HEMO_TILE_STATIC_BINDING_TILE_GRID 2  // uniform TileGrid
+#define HEMO_TILE_STATIC_BINDING_TILE_BOXES 3
+#define HEMO_TILE_STATIC_BINDING_COUNT 4
 
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).

@@ -25,6 +25,7 @@
 #include "common/sph_params.glsl"
 #include "common/clock.glsl"
 #include "common/inflow.glsl"
+#include "common/tiles.glsl"
 
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POSITIONS) buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_VELOCITIES) buffer Velocities { vec4 velocities[]; };
@@ -63,6 +64,17 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_GATE_ARGS) writeonly buffer Gate
 layout(std430, binding = HEMO_INTEGRATE_BINDING_GATE_OPENED) buffer GateOpened { uint gateOpened; };
 layout(std140, binding = HEMO_INTEGRATE_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
 layout(binding = HEMO_INTEGRATE_BINDING_STATE) uniform samplerBuffer stateT;
+// The tile test (symplectic Euler; interface/sph.h): every invocation widens its particle's
+// tile's box, and lists the tile when it is the first; sph/rebuild_tiles.comp reads them.
+layout(std140, binding = HEMO_INTEGRATE_BINDING_TILE_GRID) uniform TileGridBlock { TileGrid tiles; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_TILE_BOXES) buffer TileBoxes { uint tileBox[]; };
+// The tiles with moving particles this step: their number, whether this step collected the
+// boxes, then their indices.
+layout(std430, binding = HEMO_INTEGRATE_BINDING_TILE_OCCUPIED) buffer TileOccupied {
+  uint tileOccupied;
+  uint tilesCollected;
+  uint occupiedTiles[];
+};
 #define state(k) texelFetch(stateT, int(k))
 layout(std430, binding = HEMO_INTEGRATE_BINDING_NORMALS) buffer Normals { vec4 normals[]; };
 // Continuity density (sph/density.comp): fluid particles carry their density in normals[i].w.
@@ -122,9 +134,10 @@ float hemo_predicted_middle() {
   return abs(c) < 1.0e30 ? c : 0.0;  // NaN (some particle was non-finite; its own reach is NaN and opens the gate)
 }
 
-// (d.x, reach) of slot i at x, moving at v.
-vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v) {
-  const vec3 d = hemo_min_image(x - texelFetch(posAtBuildT, int(i)).xyz, hemo_pair_params());
+// (d.x, reach) of slot i at x, moving at v; its displacement d and position x0 at the build.
+vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v, out vec3 d, out vec3 x0) {
+  x0 = texelFetch(posAtBuildT, int(i)).xyz;
+  d = hemo_min_image(x - x0, hemo_pair_params());
   float r = length(d - vec3(hemo_predicted_middle(), 0.0, 0.0));
   if (kMode == HEMO_INTEGRATE_RK2_FULL) {
     const float speed = length(v);
@@ -174,10 +187,65 @@ vec4 hemo_workgroup_check(vec4 m, bool nan) {
   return anyNan ? vec4(uintBitsToFloat(0x7fc00000u)) : r;
 }
 
+// The tile test (interface/sph.h). Two particles i, j that were more than the list radius R
+// apart at the build and are now within the support 2h have closed in by more than the skin:
+// |d_i - d_j| > R - 2h. If their build positions lie in neighbouring tiles A, B (or one tile),
+// |d_i - d_j| is at most the separation of the tiles' displacement boxes,
+// |max(hi_A - lo_B, hi_B - lo_A)| per axis; if not, the tiles are at least a tile apart, so
+// the pair has closed in by more than a tile less the support, and the two largest reaches
+// sum to more than that. Where the flow carries whole neighbourhoods along (the dam break's
+// surge) the boxes stay small while single particles travel far: the reach test alone rebuilt
+// the list for displacements common to both particles of every pair.
+
+// Whether this step collects the tile boxes: only where the reach test may fail, which the
+// last step's half-sum predicts (past HEMO_TILE_COLLECT_FROM of the threshold; the same for
+// every invocation). Collecting cost the dam break's integrator 0.4-0.6 ms a step (subgroup
+// reductions and atomics); the tiles decide only where the reach test has failed. A step
+// whose half-sum jumps past the threshold without having collected rebuilds
+// (sph/rebuild_tiles.comp).
+bool hemo_collect_tiles() {
+  return kMode == HEMO_INTEGRATE_SYMPLECTIC_EULER && !(lastCheck.z <= float(HEMO_TILE_COLLECT_FROM) * pc.threshold);
+}
+bool gCollectTiles;  // read at the start of main, before the last workgroup writes lastCheck's buffer
+
+// Widens tile t's box by [lo, hi]; the first to widen it lists the tile as occupied (the
+// list's order varies from run to run, the check's maximum over it does not).
+void hemo_tile_widen(uint t, vec3 lo, vec3 hi) {
+  const uint b = t * HEMO_TILE_WORDS;
+  const uint before = atomicMax(tileBox[b + 4u], hemo_order_key(hi.x));
+  atomicMax(tileBox[b + 5u], hemo_order_key(hi.y));
+  atomicMax(tileBox[b + 6u], hemo_order_key(hi.z));
+  atomicMax(tileBox[b], hemo_order_key(-lo.x));
+  atomicMax(tileBox[b + 1u], hemo_order_key(-lo.y));
+  atomicMax(tileBox[b + 2u], hemo_order_key(-lo.z));
+  if (before == 0u) {
+    const uint k = atomicAdd(tileOccupied, 1u);
+    if (k < tiles.count.x * tiles.count.y * tiles.count.z) {  // (a NaN's key may be 0: listed twice)
+      occupiedTiles[k] = t;
+    }
+  }
+}
+
+// A moving slot's displacement d into the box of the tile of its build position x0. Slots
+// next to each other were sorted by cell at the build and mostly share a tile: a SIMD group
+// whose lanes all do widens it once (on lavapipe an atomic costs each lane its own).
+void hemo_tile_collect(vec3 x0, vec3 d) {
+  const uint t = hemo_tile_index(hemo_tile_cell(x0, tiles), tiles);
+  if (subgroupAllEqual(t)) {
+    const vec3 lo = subgroupMin(d), hi = subgroupMax(d);
+    if (subgroupElect()) {
+      hemo_tile_widen(t, lo, hi);
+    }
+  } else {
+    hemo_tile_widen(t, d, d);
+  }
+}
+
 // The rebuild test's reduction, in uniform control flow: each workgroup stores its partial
 // and counts itself finished; the last reduces the partials (the result does not depend on
 // which one that is: min and max are exact), keeps the middle of the step before's range (w)
-// for the next prediction, and arms the gate. Two particles' separation has changed by at
+// for the next prediction, and arms the gate (RK2; after symplectic Euler the tile pass,
+// sph/rebuild_tiles.comp, decides with both tests and arms it). Two particles' separation has changed by at
 // most the sum of their reaches, so the list holds every pair within the support while the
 // two largest reaches r1 >= r2 sum to less than the skin: the test compares their half-sum
 // (r1 + r2) / 2 with the threshold, half the skin (result.z), and rebuilds past it or on a
@@ -221,10 +289,15 @@ void hemo_finish_rebuild_test(vec2 test, bool valid) {
     }
     // Fewer than two particles: no pair, nothing to rebuild for.
     const float pairReach = total.w == -inf ? -inf : 0.5 * (total.z + total.w);
-    const bool open = hemo_gate_open(pairReach, pc.threshold);
+    // With symplectic Euler the tile pass (sph/rebuild_tiles.comp) decides after this one.
+    const bool open = kMode != HEMO_INTEGRATE_SYMPLECTIC_EULER && hemo_gate_open(pairReach, pc.threshold);
     const float lastMiddle = 0.5 * (lastCheck.x + lastCheck.y);  // the step before's, for the extrapolation
     checkResult = open ? vec4(0.0, 0.0, pairReach, 0.0) : vec4(total.xy, pairReach, lastMiddle);
-    hemo_gate_arm(open, pc.gateSlots);
+    if (kMode != HEMO_INTEGRATE_SYMPLECTIC_EULER) {
+      hemo_gate_arm(open, pc.gateSlots);
+    } else {
+      tilesCollected = gCollectTiles ? 1u : 0u;
+    }
     finished = 0u;  // every other workgroup has counted itself: ready for the next use
   }
 }
@@ -263,11 +336,11 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
 }
 
 // The full stages' update of slot i (< n); returns its rebuild test (d.x, reach).
-vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running) {
+vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running, out vec3 d, out vec3 x0) {
   vec4 v = texelFetch(velocitiesIn, int(i));
   vec4 x = texelFetch(positionsIn, int(i));
   if (!running || !hemo_moves(v.w)) {
-    return hemo_rebuild_test(i, x.xyz, v.xyz);
+    return hemo_rebuild_test(i, x.xyz, v.xyz, d, x0);
   }
   // Where the step started (the inflow zone is judged there).
   const vec3 start = kMode == HEMO_INTEGRATE_RK2_FULL ? savedPos[i].xyz : x.xyz;
@@ -324,11 +397,12 @@ vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running) {
   velocities[i] = v;
   x.w = hemo_sph_mass(x.w, accel(i).w);
   positions[i] = x;
-  return hemo_rebuild_test(i, x.xyz, v.xyz);
+  return hemo_rebuild_test(i, x.xyz, v.xyz, d, x0);
 }
 
 void main() {
   const uint i = hemo_global_index();
+  gCollectTiles = hemo_collect_tiles();
   const ClockRecord clock = clocks[pc.clockIn];
   // The step's dt: from the reduction (Euler, RK2 first stage), or the one the first stage
   // stored (RK2 second stage, so both stages use the same dt).
@@ -383,7 +457,11 @@ void main() {
   const bool valid = i < pc.n;
   vec2 test = vec2(0.0);
   if (valid) {
-    test = hemo_advance(i, clock, dt, running);
+    vec3 d, x0;
+    test = hemo_advance(i, clock, dt, running, d, x0);
+    if (gCollectTiles) {
+      hemo_tile_collect(x0, d);
+    }
   }
   hemo_finish_rebuild_test(test, valid);  // every invocation: it has barriers
 }

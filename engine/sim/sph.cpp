@@ -6,6 +6,7 @@
 #include "interface/sph.h"
 #include "interface/grid.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
@@ -39,6 +40,10 @@ struct IntegratePush {
   std::uint32_t staticSlots;  // 1: slots past n hold rigid boundary particles (displacement 0)
 };
 static_assert(sizeof(IntegratePush) == 32);
+struct TilePush {  // sph/rebuild_tiles.comp
+  float threshold;  // half the skin, m
+  std::uint32_t gateSlots;
+};
 static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
 static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
 
@@ -147,6 +152,39 @@ SphParams makeParams(const SphSettings& s) {
   return p;
 }
 
+TileGrid TileGrid::covering(glm::vec3 lo, glm::vec3 hi, std::uint32_t periodicAxes, float minSize, float support,
+                           float skin) {
+  require(finitePositive(minSize) && minSize > support, "tile size must exceed the kernel support");
+  TileGrid g{};
+  for (float size = minSize;; size *= 1.25f) {
+    float allowed = 3.0e38f;  // the smallest tile of an axis with non-neighbouring tiles
+    for (int a = 0; a < 3; ++a) {
+      const float extent = hi[a] - lo[a];
+      require(std::isfinite(extent) && extent > 0.0f, "the domain must have a positive extent");
+      const double n = std::floor(double(extent) / size);
+      g.count[a] = std::uint32_t(std::clamp(n, 1.0, double(kMaxTiles)));
+      g.origin[a] = lo[a];
+      g.invSize[a] = float(double(g.count[a]) / extent);
+      if (g.count[a] >= 3) allowed = std::min(allowed, extent / float(g.count[a]));
+    }
+    g.count[3] = periodicAxes & 7u;
+    // (a hundred-thousandth less: the tiles' edges are float products)
+    g.origin[3] = allowed < 3.0e38f ? 0.5f * (allowed * (1.0f - 1.0e-5f) - support) : 3.0e38f;
+    g.invSize[3] = skin * skin;
+    if (std::uint64_t(g.count[0]) * g.count[1] * g.count[2] <= kMaxTiles) return g;
+  }
+}
+
+glm::uvec3 TileGrid::cellOf(glm::vec3 x) const {
+  glm::uvec3 c;
+  for (int a = 0; a < 3; ++a) {
+    const float t = std::floor((x[a] - origin[a]) * invSize[a]);
+    const float clamped = std::clamp(t, -1.0f, float(count[a]));
+    c[a] = std::uint32_t(std::clamp(int(clamped), 0, int(count[a]) - 1));
+  }
+  return c;
+}
+
 namespace {
 // The list build (sph/build_list.comp) scans the 5 x 5 rows of cells along x around a
 // particle's cell, skips the rows whose nearest point is the list radius R or more away in
@@ -180,6 +218,23 @@ GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
     }
   }
   return spec;
+}
+
+// The tile test's grid: tiles of at least 1.5 list radii over the domain (on periodic axes the
+// grid's period). Replayed offline on the whole dam break (positions of every step), the
+// reach test alone rebuilt 860 times, with tiles of 1.5 R 731 times, of 2 R 750 (the tiles
+// alone; docs/benchmarks.md, "Session 23").
+TileGrid tilesFor(const GridSpec& spec, glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
+  std::uint32_t periodic = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (spec.periodic(a)) {
+      periodic |= 1u << a;
+      lo[a] = spec.origin[a];
+      hi[a] = spec.origin[a] + spec.period[a];
+    }
+  }
+  return TileGrid::covering(lo, hi, periodic, 1.5f * s.listRadius(), s.supportRadius(),
+                            s.listRadius() - s.supportRadius());
 }
 }  // namespace
 
@@ -223,6 +278,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                      gpu::MemoryUse::Device, "rebuild check partials"),
       checkCounter_(context, 4, gpu::MemoryUse::Device, "rebuild check finished workgroups"),
       checkResult_(context, 16, gpu::MemoryUse::Device, "rebuild check result"),
+      tileSpec_(tilesFor(grid_.spec(), domainMin, domainMax, settings)),
+      tileGrid_(context, sizeof(TileGrid), gpu::MemoryUse::Device, "rebuild tile grid"),
+      tileBoxes_(context, std::uint64_t(tileSpec_.tiles()) * HEMO_TILE_WORDS * 4, gpu::MemoryUse::Device,
+                 "rebuild tile boxes"),
+      tileResult_(context, 4, gpu::MemoryUse::Device, "rebuild tile result"),
+      tileOccupied_(context, (std::uint64_t(tileSpec_.tiles()) + 2) * 4, gpu::MemoryUse::Device, "rebuild tiles occupied"),
       rebuildGate_(context, checkResult_, 64, "neighbour rebuild") {
   // The list's layout (interface/sph.h): on a CPU device each SIMD lane walks its own list,
   // and entries next to each other stream from cache; interleaved entries, which coalesce
@@ -280,12 +341,22 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   for (std::uint32_t mode = 0; mode < 3; ++mode) {
     integrate_[mode] = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity, mode},
                            1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW |
-                               1u << HEMO_INTEGRATE_BINDING_DT | 1u << HEMO_INTEGRATE_BINDING_DRIFT_RANGE,
+                               1u << HEMO_INTEGRATE_BINDING_DT | 1u << HEMO_INTEGRATE_BINDING_DRIFT_RANGE |
+                               1u << HEMO_INTEGRATE_BINDING_TILE_GRID,
                            1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD |
                                1u << HEMO_INTEGRATE_BINDING_STATE | 1u << HEMO_INTEGRATE_BINDING_POSITIONS_IN |
                                1u << HEMO_INTEGRATE_BINDING_VELOCITIES_IN});
   }
+  tileStatic_ = &cache.get({"sph/tile_static", HEMO_TILE_STATIC_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {},
+                            1u << HEMO_TILE_STATIC_BINDING_TILE_GRID,
+                            1u << HEMO_TILE_STATIC_BINDING_POSITIONS | 1u << HEMO_TILE_STATIC_BINDING_VELOCITIES});
+  rebuildTiles_ = &cache.get({"sph/rebuild_tiles", HEMO_RTILES_BINDING_COUNT, sizeof(TilePush), kWorkgroup, {},
+                              1u << HEMO_RTILES_BINDING_TILE_GRID, 0u});
   const ParticleArrays& a = particles.live();
+  tileStaticSet_ = tileStatic_->makeSet({gpu::texelBinding(HEMO_TILE_STATIC_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                         gpu::texelBinding(HEMO_TILE_STATIC_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                         {HEMO_TILE_STATIC_BINDING_TILE_GRID, &tileGrid_},
+                                         {HEMO_TILE_STATIC_BINDING_TILE_BOXES, &tileBoxes_}});
   buildListSet_ = buildList_->makeSet({gpu::texelBinding(HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
                                        {HEMO_BUILD_BINDING_PARAMS, &paramsBuffer_},
@@ -366,10 +437,25 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_STATE, &state_, gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_POSITIONS_IN, &a.positions, gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_VELOCITIES_IN, &a.velocities, gpu::texel::kVec4),
-                                       {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals}});
+                                       {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals},
+                                       {HEMO_INTEGRATE_BINDING_TILE_GRID, &tileGrid_},
+                                       {HEMO_INTEGRATE_BINDING_TILE_BOXES, &tileBoxes_},
+                                       {HEMO_INTEGRATE_BINDING_TILE_OCCUPIED, &tileOccupied_}});
+  rebuildTilesSet_ = rebuildTiles_->makeSet({{HEMO_RTILES_BINDING_TILE_GRID, &tileGrid_},
+                                             {HEMO_RTILES_BINDING_TILE_BOXES, &tileBoxes_},
+                                             {HEMO_RTILES_BINDING_TILE_OCCUPIED, &tileOccupied_},
+                                             {HEMO_RTILES_BINDING_CHECK_RESULT, &checkResult_},
+                                             {HEMO_RTILES_BINDING_TILE_RESULT, &tileResult_},
+                                             {HEMO_RTILES_BINDING_GATE_ARMED, &rebuildGate_.armedCounts()},
+                                             {HEMO_RTILES_BINDING_GATE_ARGS, &rebuildGate_.arguments()},
+                                             {HEMO_RTILES_BINDING_GATE_OPENED, &rebuildGate_.openings()}});
   checkCounter_.upload(std::vector<std::uint32_t>{0u});
   dtCounter_.upload(std::vector<std::uint32_t>{0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
+  tileGrid_.upload(std::vector<TileGrid>{tileSpec_});
+  tileBoxes_.upload(std::vector<std::uint32_t>(std::size_t(tileSpec_.tiles()) * HEMO_TILE_WORDS, 0u));
+  tileResult_.upload(std::vector<float>{0.0f});
+  tileOccupied_.upload(std::vector<std::uint32_t>{0u, 0u});
 }
 
 std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32_t> constants) const {
@@ -513,6 +599,12 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold(), rebuildGate_.slots(),
                            moving < n ? 1u : 0u};
   rec.dispatch(*integrate_[mode], integrateSet_, push, integrate_[mode]->groupsFor(std::max(moving, 1u)));
+  if (mode == HEMO_INTEGRATE_SYMPLECTIC_EULER) {
+    // the tile test's comparison decides and arms the gate (interface/sph.h)
+    rec.computeToCompute();
+    rec.dispatch(*rebuildTiles_, rebuildTilesSet_, TilePush{rebuildThreshold(), rebuildGate_.slots()},
+                 rebuildTiles_->groupsFor(1u));
+  }
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone
     rec.computeToComputeAndIndirect();  // the gate's arguments; the test's result for the next step
@@ -547,6 +639,17 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   auto mark = [&](const char* stage) {
     if (timestamps) timestamps->mark(rec, stage);
   };
+  if (tileUpload_ != particles_->uploads()) {
+    // New particles: mark the tiles of the rigid boundary particles (they never move).
+    rec.computeToTransfer();
+    rec.fill(tileBoxes_, 0u);
+    rec.fill(tileOccupied_, 0u, 0, 8);
+    rec.transferToCompute();
+    const std::uint32_t n = particles_->count();
+    rec.dispatch(*tileStatic_, tileStaticSet_, CountPush{n}, tileStatic_->groupsFor(std::max(n, 1u)));
+    rec.computeToCompute();
+    tileUpload_ = particles_->uploads();
+  }
   // Rebuild the grid and the list only when some particle may have crossed the list's skin.
   // The slots to sort, as the last build left them (the first build after an upload sorts
   // them all).

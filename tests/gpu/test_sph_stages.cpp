@@ -3,11 +3,14 @@
 #include "sph_model.hpp"
 #include "hemo/reference/sph.hpp"
 #include "hemo/sim/sph.hpp"
+#include "interface/sph.h"
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <map>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <memory>
 
@@ -62,6 +65,40 @@ Case makeCase(std::mt19937_64& rng, const sim::SphSettings& s, int nx, int ny, i
   return c;
 }
 
+// The tile test's largest box separation (common/tiles.glsl), in double precision: each
+// particle's displacement since the build goes into the box of the tile its build position
+// lies in (the solver's grid decides which); neighbouring tiles (and each tile with itself)
+// give max(hi_A - lo_B, hi_B - lo_A) per axis.
+double tileBoundReference(const sim::TileGrid& g, const std::vector<glm::vec4>& pos, const std::vector<glm::vec4>& build) {
+  std::map<std::uint32_t, std::pair<glm::dvec3, glm::dvec3>> boxes;
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    const glm::dvec3 d = glm::dvec3(pos[i]) - glm::dvec3(build[i]);
+    const std::uint32_t t = g.indexOf(g.cellOf(glm::vec3(build[i])));
+    auto [it, fresh] = boxes.try_emplace(t, d, d);
+    if (!fresh) it->second = {glm::min(it->second.first, d), glm::max(it->second.second, d)};
+  }
+  double worst = 0.0;
+  for (const auto& [t, a] : boxes) {
+    const int c[3] = {int(t % g.count[0]), int(t / g.count[0] % g.count[1]), int(t / (g.count[0] * g.count[1]))};
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          int o[3] = {c[0] + dx, c[1] + dy, c[2] + dz};
+          bool inside = true;
+          for (int ax = 0; ax < 3; ++ax) {
+            const int cnt = int(g.count[ax]);
+            if (g.count[3] & (1u << ax)) o[ax] = (o[ax] + cnt) % cnt;
+            else inside = inside && o[ax] >= 0 && o[ax] < cnt;
+          }
+          if (!inside) continue;
+          const auto it = boxes.find(g.indexOf(glm::uvec3(o[0], o[1], o[2])));
+          if (it == boxes.end()) continue;
+          const auto& b = it->second;
+          worst = std::max(worst, glm::length(glm::max(a.second - b.first, b.second - a.first)));
+        }
+  }
+  return worst;
+}
 
 class SphStageTest : public GpuTest {
  protected:
@@ -773,7 +810,7 @@ TEST_F(SphStageTest, RebuildCheckMatchesTheCpuReference) {
   std::uniform_real_distribution<float> jitter(-1.0f, 1.0f);
   const float threshold = solver.rebuildThreshold();
   std::uint32_t step = 0;
-  int checked = 0;
+  int checked = 0, tilesCompared = 0;
   for (int round = 0; round < 8; ++round) {
     const auto before = solver.rebuildCheck().readback<float>(4);
     rec.begin();
@@ -786,6 +823,17 @@ TEST_F(SphStageTest, RebuildCheckMatchesTheCpuReference) {
     const auto build = solver.grid().positionsAtBuild().readback<glm::vec4>(n);
     const auto got = solver.rebuildCheck().readback<float>(4);
     const bool rebuiltNext = got[0] == 0.0f && got[1] == 0.0f && got[3] == 0.0f && got[2] > threshold;
+    // The tiles are collected where the last half-sum passed HEMO_TILE_COLLECT_FROM of the
+    // threshold (and after the reset, which sets it to +inf); elsewhere the bound reads +inf.
+    const bool collected = round == 0 || !(before[2] <= float(HEMO_TILE_COLLECT_FROM) * threshold);
+    const double tileRef = collected ? tileBoundReference(solver.tileGrid(), pos, build) : INFINITY;
+    const float tileGot = solver.tileCheck().readback<float>(1)[0];
+    if (collected) {
+      EXPECT_NEAR(tileGot, tileRef, 1e-5 * tileRef + 1e-7) << "tile boxes' largest separation, step " << step;
+      ++tilesCompared;
+    } else {
+      EXPECT_TRUE(std::isinf(tileGot)) << "step " << step << " did not collect the tiles";
+    }
     double lo = 1e300, hi = -1e300;
     std::vector<double> reaches;
     const double cRef = round == 0 ? 0.0 : double(before[0]) + double(before[1]) - double(before[3]);
@@ -801,13 +849,15 @@ TEST_F(SphStageTest, RebuildCheckMatchesTheCpuReference) {
     ASSERT_GT(reaches[0] - reaches[1], 1e-3 * threshold) << "the two largest must differ, or the half-sum is the largest";
     const double tol = 1e-6 * threshold + 1e-5 * reach;
     EXPECT_NEAR(got[2], reach, tol) << "half-sum of the two largest reaches, step " << step;
+    // The gate opens when both tests fail: the reach test (the half-sum past half the skin)
+    // and the tile test (boxes apart by more than the skin, or the reaches past the tiles).
+    const bool tilesHold = tileRef <= 2.0 * threshold && reach <= solver.tileGrid().origin[3];
+    EXPECT_EQ(rebuiltNext, reach > threshold && !tilesHold) << "step " << step << ": reach " << reach << ", tiles " << tileRef;
     if (!rebuiltNext) {
       EXPECT_NEAR(got[0], lo, 1e-6 * threshold) << "min d.x, step " << step;
       EXPECT_NEAR(got[1], hi, 1e-6 * threshold) << "max d.x, step " << step;
       EXPECT_FLOAT_EQ(got[3], round == 0 ? 0.0f : 0.5f * (before[0] + before[1])) << "previous middle";
       ++checked;
-    } else {
-      EXPECT_GT(reach, threshold) << "the check rebuilds only past the threshold";
     }
     // Move every fluid particle randomly by up to 0.3 thresholds, with a common drift along x
     // that grows each round, so the prediction of c matters. Rigid boundary particles stay:
@@ -823,6 +873,101 @@ TEST_F(SphStageTest, RebuildCheckMatchesTheCpuReference) {
     store.live().positions.upload(moved);
   }
   EXPECT_GE(checked, 4);
+  EXPECT_GE(tilesCompared, 4);
+}
+
+// The tile test: the list's pairs must hold for fluid particles carried together far beyond
+// the skin (the reach test alone rebuilds there), next to a rigid wall the fluid runs into. After every step, every pair within the support has to be in the list (of a fluid
+// particle, or a boundary particle's list of fluid).
+TEST_F(SphStageTest, ListHoldsEveryPairWithinTheSupportWhileTheGateStaysClosed) {
+  auto rng = rngFor();
+  sim::SphSettings s = settings();
+  s.gravity = glm::vec3(0.0f);
+  s.viscosity = 0.001f;
+  const float dp = s.spacing, m = s.particleMass();
+  std::uniform_real_distribution<float> jitter(-0.1f * dp, 0.1f * dp);
+  std::normal_distribution<float> noise(0.0f, 0.05f);
+  std::vector<glm::vec4> pos, vel;
+  // A rigid wall of two layers across y = 0.095 m ...
+  for (int layer = 0; layer < 2; ++layer)
+    for (int k = -2; k < 10; ++k)
+      for (int i = -2; i < 10; ++i) {
+        pos.emplace_back((i + 0.5f) * dp, 0.095f + layer * dp, (k + 0.5f) * dp, m);
+        vel.emplace_back(0.0f, 0.0f, 0.0f, float(sim::ParticleKind::Boundary));
+      }
+  // ... and a block of fluid below it moving towards it at 1.2 m/s, turning slowly about x
+  // (a fifth of the threshold a step, so the integrator collects the tiles before the reach
+  // test fails).
+  const glm::vec3 centre(0.04f, 0.04f, 0.04f);
+  for (int k = 0; k < 8; ++k)
+    for (int j = 0; j < 8; ++j)
+      for (int i = 0; i < 8; ++i) {
+        const glm::vec3 x = glm::vec3((i + 0.5f) * dp, (j + 0.5f) * dp, (k + 0.5f) * dp) + glm::vec3(jitter(rng), jitter(rng), jitter(rng));
+        const glm::vec3 r = x - centre;
+        const glm::vec3 v = glm::vec3(0.0f, 1.2f, 0.0f) + glm::cross(glm::vec3(5.0f, 0.0f, 0.0f), r) +
+                            glm::vec3(noise(rng), noise(rng), noise(rng));
+        pos.emplace_back(x, m);
+        vel.emplace_back(v, float(sim::ParticleKind::Fluid));
+      }
+  const auto n = static_cast<std::uint32_t>(pos.size());
+  sim::ParticleStore store(ctx(), n);
+  store.upload(pos, vel);
+  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.17f), s);
+  ASSERT_GE(solver.tileGrid().count[1], 3u) << "the y axis needs tiles that are not neighbours";
+  gpu::CommandRecorder rec(ctx());
+  const double support = s.supportRadius(), threshold = solver.rebuildThreshold();
+  const std::uint32_t capacity = s.neighbourCapacity;
+  int saved = 0, wallPairs = 0;
+  float lastReach = 0.0f;
+  for (std::uint32_t step = 0; step < 90; ++step) {
+    rec.begin();
+    if (step == 0) solver.recordReset(rec);
+    solver.recordStep(rec, step, 0);
+    rec.end();
+    rec.submitAndWait();
+    ASSERT_EQ(solver.readStatus().neighbourOverflow, 0u);
+    // The list the next step will use: this step's, unless the check just opened the gate.
+    const auto check = solver.rebuildCheck().readback<float>(4);
+    const bool rebuildsNext = check[0] == 0.0f && check[1] == 0.0f && check[3] == 0.0f && check[2] > threshold;
+    const auto x = store.readPositions();
+    const bool collected = step == 0 || !(lastReach <= float(HEMO_TILE_COLLECT_FROM) * float(threshold));
+    lastReach = check[2];
+    const double tileRef = collected ? tileBoundReference(solver.tileGrid(), x, solver.grid().positionsAtBuild().readback<glm::vec4>(n)) : INFINITY;
+    const float tileGot = solver.tileCheck().readback<float>(1)[0];
+    if (collected) {
+      EXPECT_NEAR(tileGot, tileRef, 1e-5 * tileRef + 1e-7) << "step " << step;
+    } else {
+      EXPECT_TRUE(std::isinf(tileGot)) << "step " << step;
+    }
+    const bool tilesHold = tileRef <= 2.0 * threshold && check[2] <= solver.tileGrid().origin[3];
+    EXPECT_EQ(rebuildsNext, check[2] > threshold && !tilesHold) << "step " << step;
+    saved += !rebuildsNext && check[2] > threshold;
+    if (rebuildsNext) continue;
+    const auto kinds = store.readVelocities();
+    const auto counts = solver.neighbourCounts().readback<std::uint32_t>(n);
+    const auto list = solver.neighbourList().readback<std::uint32_t>(std::size_t(n) * capacity);
+    const std::uint32_t entryStride = solver.params().listStride, particleStride = solver.params().listParticleStride;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      const bool fluidI = kinds[i].w == float(sim::ParticleKind::Fluid);
+      std::vector<std::uint32_t> listed;
+      for (std::uint32_t k = 0; k < counts[i]; ++k) {
+        listed.push_back(list[std::size_t(i) * particleStride + std::size_t(k) * entryStride] & ~sim::SphSolver::kListBoundaryBit);
+      }
+      std::sort(listed.begin(), listed.end());
+      for (std::uint32_t j = 0; j < n; ++j) {
+        const bool fluidJ = kinds[j].w == float(sim::ParticleKind::Fluid);
+        if (j == i || (!fluidI && !fluidJ)) continue;
+        if (glm::length(glm::dvec3(x[i]) - glm::dvec3(x[j])) >= support) continue;
+        wallPairs += fluidI != fluidJ;
+        ASSERT_TRUE(std::binary_search(listed.begin(), listed.end(), j))
+            << "step " << step << ": slots " << i << " and " << j << " are within the support but not listed";
+      }
+    }
+  }
+  std::printf("tile test: %d of 90 steps kept the list past the reach test, %d fluid-wall pairs checked, %u rebuilds\n",
+              saved, wallPairs, solver.readRebuilds());
+  EXPECT_GE(saved, 5) << "the tile test kept the list where the reach test alone rebuilt it";
+  EXPECT_GT(wallPairs, 0) << "the fluid reached the wall";
 }
 
 }  // namespace

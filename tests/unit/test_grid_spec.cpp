@@ -1,6 +1,7 @@
 // Host-side grid description and helpers (no GPU).
 #include "hemo/gpu/primitives.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
+#include "hemo/sim/sph.hpp"
 
 #include <gtest/gtest.h>
 
@@ -64,6 +65,32 @@ TEST(Primitives, BitsFor) {
   EXPECT_EQ(gpu::RadixSort::passesFor(0), 0u);
   EXPECT_EQ(gpu::RadixSort::passesFor(9), 2u);
   EXPECT_EQ(gpu::RadixSort::passesFor(32), 4u);
+}
+
+// The rebuild test's tiles: whole tiles of at least the minimum size per axis (one where the
+// extent is shorter), the half-sum the tiles allow from the smallest tile of an axis with
+// tiles that are not neighbours, and positions beyond the domain in the edge tiles.
+TEST(TileGrid, CoversTheDomainWithWholeTiles) {
+  const auto g = sim::TileGrid::covering({0, 0, 0}, {1.0f, 0.25f, 0.62f}, 2u, 0.3f, 0.2f, 0.02f);
+  EXPECT_EQ(g.count[0], 3u);  // floor(1 / 0.3): tiles of 0.333
+  EXPECT_EQ(g.count[1], 1u);  // shorter than a tile
+  EXPECT_EQ(g.count[2], 2u);  // two tiles are always neighbours
+  EXPECT_EQ(g.count[3], 2u);  // y periodic
+  EXPECT_NEAR(g.origin[3], 0.5f * (1.0f / 3.0f - 0.2f), 1e-5f);
+  EXPECT_FLOAT_EQ(g.invSize[3], 0.02f * 0.02f);
+  EXPECT_EQ(g.cellOf({0.5f, 0.1f, 0.1f}), glm::uvec3(1, 0, 0));
+  EXPECT_EQ(g.cellOf({-3.0f, 9.0f, 0.4f}), glm::uvec3(0, 0, 1));
+  EXPECT_EQ(g.cellOf({1e30f, -1e30f, NAN}).x, 2u);
+  // no axis with three tiles: every pair of tiles are neighbours, any half-sum will do
+  EXPECT_GT(sim::TileGrid::covering({0, 0, 0}, {0.5f, 0.5f, 0.5f}, 0u, 0.3f, 0.2f, 0.02f).origin[3], 1e37f);
+}
+
+TEST(TileGrid, LargeDomainsGetFewerLargerTiles) {
+  const auto g = sim::TileGrid::covering({0, 0, 0}, {100.0f, 100.0f, 100.0f}, 0u, 0.3f, 0.2f, 0.02f);
+  EXPECT_LE(g.tiles(), sim::TileGrid::kMaxTiles);
+  EXPECT_GE(g.tiles(), sim::TileGrid::kMaxTiles / 4);
+  EXPECT_THROW(sim::TileGrid::covering({0, 0, 0}, {1, 1, 1}, 0u, 0.1f, 0.2f, 0.02f), std::invalid_argument);
+  EXPECT_THROW(sim::TileGrid::covering({0, 0, 0}, {1, NAN, 1}, 0u, 0.3f, 0.2f, 0.02f), std::invalid_argument);
 }
 
 }  // namespace

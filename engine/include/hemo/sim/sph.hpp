@@ -114,6 +114,26 @@ static_assert(sizeof(SphParams) == 192);
 
 SphParams makeParams(const SphSettings& s);
 
+// The rebuild test's tiles (common/tiles.glsl, the uniform block's layout): a regular grid over
+// the domain of tiles at least `minSize` wide (the integrator uses 1.5 list radii), at most
+// kMaxTiles of them. On a bounded axis the domain [lo, hi) is split into floor((hi - lo) /
+// minSize) tiles (at least 1) and particles beyond it belong to the edge tiles; on a periodic
+// axis the period is.
+struct TileGrid {
+  static constexpr std::uint32_t kMaxTiles = 1u << 16;
+  float origin[4];   // xyz m; w: the largest half-sum of the two largest reaches the tiles allow (m)
+  float invSize[4];  // xyz 1/m; w: the skin squared (m^2), for reference
+  std::uint32_t count[4];  // xyz tiles per axis; w: bit a set when axis a is periodic
+  // origin and counts from the domain; w of origin from the support 2h and the skin
+  static TileGrid covering(glm::vec3 lo, glm::vec3 hi, std::uint32_t periodicAxes, float minSize, float support,
+                           float skin);
+  std::uint32_t tiles() const { return count[0] * count[1] * count[2]; }
+  // A position's tile per axis, with the shader's float operations (hemo_tile_cell).
+  glm::uvec3 cellOf(glm::vec3 x) const;
+  std::uint32_t indexOf(glm::uvec3 c) const { return c.x + count[0] * (c.y + count[1] * c.z); }
+};
+static_assert(sizeof(TileGrid) == 48);
+
 struct SphStatus {
   std::uint32_t firstBadStep = 0xffffffffu;  // none
   std::uint32_t nonFinite = 0;
@@ -204,13 +224,18 @@ class SphSolver {
   // build, the half-sum of the two largest reaches, the middle of the range a step before), m
   // (sph/integrate.comp).
   const gpu::Buffer& rebuildCheck() const { return checkResult_; }
+  // The tile test of the last symplectic step (interface/sph.h, "the tile test"): its grid,
+  // and a float, the largest separation of neighbouring tiles' displacement boxes (m; +inf
+  // after an RK2 step, which does not run it).
+  const TileGrid& tileGrid() const { return tileSpec_; }
+  const gpu::Buffer& tileCheck() const { return tileResult_; }
   const gpu::Buffer& paramsBuffer() const { return paramsBuffer_; }
   // The clock's two records and which one holds the current time (after the recorded steps).
   const gpu::Buffer& clockBuffer() const { return clock_; }
   std::uint32_t clockParity() const { return clockParity_; }
   // Half the list's skin, m: recordStep rebuilds the list once the two largest reaches (the
   // distances particles moved since the build, relative to the drift of the middle) sum to
-  // more than twice this.
+  // more than twice this, unless (symplectic Euler) the tile test shows the list still holds.
   float rebuildThreshold() const;
 
   SphStatus readStatus() const;
@@ -260,6 +285,15 @@ class SphSolver {
   // The rebuild test (in sph/integrate.comp): per-workgroup partials, the finished-workgroup
   // counter and the result (min d.x, max d.x, max reach, middle of the range a step before).
   gpu::Buffer checkPartials_, checkCounter_, checkResult_;
+  // The tile test: its grid (uniform), boxes (HEMO_TILE_WORDS per tile), result, occupied
+  // tiles; the pass that marks the tiles of rigid boundary particles, the one that compares
+  // the boxes (sph/rebuild_tiles.comp), and the upload the marks are of.
+  TileGrid tileSpec_;
+  gpu::Buffer tileGrid_, tileBoxes_, tileResult_, tileOccupied_;
+  const gpu::ComputePipeline* tileStatic_;
+  const gpu::ComputePipeline* rebuildTiles_;
+  gpu::DescriptorSet tileStaticSet_, rebuildTilesSet_;
+  std::uint64_t tileUpload_ = ~std::uint64_t(0);
   std::unique_ptr<MassSpring> wall_;
   gpu::DispatchGate rebuildGate_;
   const gpu::ComputePipeline* buildList_;
