@@ -228,16 +228,14 @@ void hemo_tile_widen(uint t, vec3 lo, vec3 hi) {
 
 // A moving slot's displacement d into the box of the tile of its build position x0. Slots
 // next to each other were sorted by cell at the build and mostly share a tile: a SIMD group
-// whose lanes all do widens it once (on lavapipe an atomic costs each lane its own).
+// whose lanes all do widens it once (on lavapipe an atomic costs each lane its own). One
+// call either way: llvmpipe runs both sides of a branch, the atomics of each included.
 void hemo_tile_collect(vec3 x0, vec3 d) {
   const uint t = hemo_tile_index(hemo_tile_cell(x0, tiles), tiles);
-  if (subgroupAllEqual(t)) {
-    const vec3 lo = subgroupMin(d), hi = subgroupMax(d);
-    if (subgroupElect()) {
-      hemo_tile_widen(t, lo, hi);
-    }
-  } else {
-    hemo_tile_widen(t, d, d);
+  const bool together = subgroupAllEqual(t);
+  const vec3 lo = subgroupMin(d), hi = subgroupMax(d);
+  if (!together || subgroupElect()) {
+    hemo_tile_widen(t, together ? lo : d, together ? hi : d);
   }
 }
 
