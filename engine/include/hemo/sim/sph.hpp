@@ -226,7 +226,7 @@ class SphSolver {
   const gpu::Buffer& rebuildCheck() const { return checkResult_; }
   // The tile test of the last symplectic step (interface/sph.h, "the tile test"): its grid,
   // and a float, the largest separation of neighbouring tiles' displacement boxes (m; +inf
-  // after an RK2 step, which does not run it).
+  // when that step did not collect the boxes; RK2 steps do not run the test).
   const TileGrid& tileGrid() const { return tileSpec_; }
   const gpu::Buffer& tileCheck() const { return tileResult_; }
   const gpu::Buffer& paramsBuffer() const { return paramsBuffer_; }
