@@ -243,16 +243,17 @@ void hemo_tile_collect(vec3 x0, vec3 d) {
 // and counts itself finished; the last reduces the partials (the result does not depend on
 // which one that is: min and max are exact), keeps the middle of the step before's range (w)
 // for the next prediction, and arms the gate (RK2; after symplectic Euler the tile pass,
-// sph/rebuild_tiles.comp, decides with both tests and arms it). Two particles' separation has changed by at
-// most the sum of their reaches, so the list holds every pair within the support while the
+// sph/rebuild_tiles.comp, decides with both tests and arms it). Two particles' separation
+// has changed by at most the sum of their reaches, so the list holds every pair within the support while the
 // two largest reaches r1 >= r2 sum to less than the skin: the test compares their half-sum
 // (r1 + r2) / 2 with the threshold, half the skin (result.z), and rebuilds past it or on a
 // NaN. The largest reach alone (twice it against the skin, until session 21) counted the
 // fastest particle twice: the dam break's splash rebuilt 994 times in 5,890 steps, now 866
 // in 5,867; the aneurysm 624 times in 3,546 steps, now 539 in 3,534. When the gate opens, the range
 // becomes (0, 0) with w = 0: the next step rebuilds, and displacements start again from the
-// new build. Any NaN makes the whole result NaN. (Folded into this pass, the test costs
-// llvmpipe no dispatch of its own: docs/benchmarks.md, "Session 21".)
+// new build. Any NaN makes the whole result NaN. (Folded into this pass, the reach test costs
+// llvmpipe no dispatch of its own: docs/benchmarks.md, "Session 21"; the tile test's
+// comparison has its one-workgroup pass, since here it ran in every workgroup's masked tail.)
 void hemo_finish_rebuild_test(vec2 test, bool valid) {
   const float inf = uintBitsToFloat(0x7f800000u);
   const bool nan = valid && (isnan(test.x) || isnan(test.y));
