@@ -59,6 +59,17 @@ struct Args {
   }
 };
 
+// True when the command line asks for help: "--help" or "-h" where an option may stand (not
+// as the value of another option). The apps then print their usage to stdout and exit 0.
+inline bool wantsHelp(int argc, char** argv) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string s = argv[i];
+    if (s == "--help" || s == "-h") return true;
+    if (s.rfind("--", 0) == 0) ++i;  // skip the option's value
+  }
+  return false;
+}
+
 // Parses argv; every option takes exactly one value and must be in `known`.
 inline Args parse(int argc, char** argv, const std::set<std::string>& known) {
   Args a;

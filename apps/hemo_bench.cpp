@@ -718,7 +718,12 @@ int main(int argc, char** argv) {
   const char* usage =
       "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME]\n"
       "  SUITE: primitives | accuracy | table1 | render\n"
-      "  --case NAME  accuracy: only this case (hydrostatic, poiseuille, dam_break)\n";
+      "  --case NAME  accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
+      "  --help       prints this text\n";
+  if (hemo::cli::wantsHelp(argc, argv)) {
+    std::fputs(usage, stdout);
+    return 0;
+  }
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case"});

@@ -45,7 +45,8 @@ const char* kUsage =
     "  --png-every N    render DIR/frame_<step>.png every N steps (and at the end): the blood\n"
     "                   surface, the vessel wall cut open on the camera's side, offscreen\n"
     "  --png-size WxH   frame size in pixels (default 960x540)\n"
-    "hemo-run --describe-scene   prints the scene-file parameter table\n";
+    "hemo-run --describe-scene   prints the scene-file parameter table\n"
+    "hemo-run --help             prints this text\n";
 
 void printProgress(const hemo::sim::Progress& p, bool tty) {
   const double fraction = p.endTime > 0 ? p.time / p.endTime
@@ -62,6 +63,10 @@ void printProgress(const hemo::sim::Progress& p, bool tty) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (hemo::cli::wantsHelp(argc, argv)) {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
   if (argc == 2 && std::string(argv[1]) == "--describe-scene") {
     std::printf("%s", hemo::scene::schemaMarkdown().c_str());  // the table of docs/scene-format.md
     return 0;

@@ -33,7 +33,8 @@ const char* kUsage =
     "  --steps-per-frame K simulation steps between frames (default 8)\n"
     "  --frames N          quit after N presented frames (default: run until closed)\n"
     "mouse: drag to orbit, wheel to zoom; keys: Space pause, N step, S surface, P particles,\n"
-    "W wall, L springs, B boundary, C cutaway, Esc/Q quit\n";
+    "W wall, L springs, B boundary, C cutaway, Esc/Q quit\n"
+    "hemo-view --help prints this text\n";
 
 struct ViewState {
   bool paused = false;
@@ -97,6 +98,10 @@ struct Glfw {
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (hemo::cli::wantsHelp(argc, argv)) {
+    std::fputs(kUsage, stdout);
+    return 0;
+  }
   hemo::cli::Args args;
   std::uint32_t width = 1280, height = 720, stepsPerFrame = 8;
   std::uint64_t maxFrames = 0;
