@@ -59,12 +59,16 @@ struct Args {
   }
 };
 
-// True when the command line asks for help: "--help" or "-h" where an option may stand (not
-// as the value of another option). The apps then print their usage to stdout and exit 0.
-inline bool wantsHelp(int argc, char** argv) {
+// When the command line asks for help ("--help" or "-h" where an option may stand, not as
+// the value of another option), prints `usage` to stdout and returns true: the app then
+// exits 0.
+inline bool printUsageIfAsked(int argc, char** argv, const char* usage) {
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];
-    if (s == "--help" || s == "-h") return true;
+    if (s == "--help" || s == "-h") {
+      std::fputs(usage, stdout);
+      return true;
+    }
     if (s.rfind("--", 0) == 0) ++i;  // skip the option's value
   }
   return false;

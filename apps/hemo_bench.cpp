@@ -720,10 +720,7 @@ int main(int argc, char** argv) {
       "  SUITE: primitives | accuracy | table1 | render\n"
       "  --case NAME  accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
       "  --help       prints this text\n";
-  if (hemo::cli::wantsHelp(argc, argv)) {
-    std::fputs(usage, stdout);
-    return 0;
-  }
+  if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case"});

@@ -19,10 +19,7 @@
 
 int main(int argc, char** argv) {
   const char* usage = "usage: hemo-neighbours [--particles N] [--device SEL] [--seed S] [--help]\n";
-  if (hemo::cli::wantsHelp(argc, argv)) {
-    std::fputs(usage, stdout);
-    return 0;
-  }
+  if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
   try {
     const auto args = hemo::cli::parse(argc, argv, {"--particles", "--device", "--seed"});
     if (!args.positional.empty()) throw hemo::cli::UsageError("unexpected argument '" + args.positional[0] + "'");

@@ -63,10 +63,7 @@ void printProgress(const hemo::sim::Progress& p, bool tty) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (hemo::cli::wantsHelp(argc, argv)) {
-    std::fputs(kUsage, stdout);
-    return 0;
-  }
+  if (hemo::cli::printUsageIfAsked(argc, argv, kUsage)) return 0;
   if (argc == 2 && std::string(argv[1]) == "--describe-scene") {
     std::printf("%s", hemo::scene::schemaMarkdown().c_str());  // the table of docs/scene-format.md
     return 0;

@@ -98,10 +98,7 @@ struct Glfw {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (hemo::cli::wantsHelp(argc, argv)) {
-    std::fputs(kUsage, stdout);
-    return 0;
-  }
+  if (hemo::cli::printUsageIfAsked(argc, argv, kUsage)) return 0;
   hemo::cli::Args args;
   std::uint32_t width = 1280, height = 720, stepsPerFrame = 8;
   std::uint64_t maxFrames = 0;
