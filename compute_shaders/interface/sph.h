@@ -209,7 +209,7 @@
 #define HEMO_INTEGRATE_BINDING_SAVED_VEL 9
 #define HEMO_INTEGRATE_BINDING_STEP_DT 10
 #define HEMO_INTEGRATE_BINDING_POS_AT_BUILD 11
-#define HEMO_INTEGRATE_BINDING_CHECK_PARTIALS 12  // vec4 per workgroup: its part of the rebuild test
+#define HEMO_INTEGRATE_BINDING_CHECK_PARTIALS 12  // vec4 per SIMD group: its part of the rebuild test (below)
 #define HEMO_INTEGRATE_BINDING_INFLOW 13  // InflowParams (common/inflow.glsl): the driven inflow zone
 #define HEMO_INTEGRATE_BINDING_STATE 14  // vec4 (rho, p, rate, 0): the inflow zone's mass supply reads rho; continuity density rho or its rate
 #define HEMO_INTEGRATE_BINDING_NORMALS 15  // w: where a fluid particle carries its density (continuity)
@@ -218,22 +218,19 @@
 // fraction of a storage read; no record is read after it is written in the pass).
 #define HEMO_INTEGRATE_BINDING_POSITIONS_IN 16
 #define HEMO_INTEGRATE_BINDING_VELOCITIES_IN 17
-#define HEMO_INTEGRATE_BINDING_COUNT 27
+#define HEMO_INTEGRATE_BINDING_COUNT 23
 
 // The rebuild test (docs/architecture.md, "the rebuild test"), in the integrator's full
 // stages (symplectic Euler, RK2's second): each slot's x displacement d.x since the list
 // build and its reach |d - (c, 0, 0)| (+ the midpoint look-ahead), c the middle of the
-// x-displacement range extrapolated from the two steps before; each workgroup reduces them to
-// a partial (min d.x, max d.x, the two largest reaches), and the last workgroup to finish
-// reduces the partials to the result and arms the neighbour-rebuild gate for the next step
-// (common/gate.glsl): rebuild when the two largest reaches' half-sum exceeds half the skin.
-// After a symplectic step the tile pass (below) arms it instead, with both tests.
+// x-displacement range extrapolated from the two steps before; each SIMD group reduces them
+// to a partial (min d.x, max d.x, the two largest reaches), and sph/rebuild_decide.comp, one
+// workgroup dispatched after the integrator, reduces the partials to the result and arms the
+// neighbour-rebuild gate for the next step (common/gate.glsl): rebuild when the two largest
+// reaches' half-sum exceeds half the skin (and, after a symplectic step, the tile test below
+// fails too).
 #define HEMO_INTEGRATE_BINDING_DRIFT_RANGE 18  // uniform vec4: the result as the step found it
-#define HEMO_INTEGRATE_BINDING_CHECK_COUNTER 19  // uint: workgroups finished (starts and ends at 0)
-#define HEMO_INTEGRATE_BINDING_CHECK_RESULT 20   // vec4 (min d.x, max d.x, half-sum of the two largest reaches, middle of the range a step before); NaN if any is
-#define HEMO_INTEGRATE_BINDING_GATE_ARMED 21
-#define HEMO_INTEGRATE_BINDING_GATE_ARGS 22
-#define HEMO_INTEGRATE_BINDING_GATE_OPENED 23
+#define HEMO_INTEGRATE_BINDING_CHECK_COUNT 19  // uint: the partials this dispatch wrote
 #define HEMO_CHECK_RESULT_REACH 2      // the float index of the reach the gate compares (the half-sum) in the result
 // The tile test (symplectic Euler only; docs/architecture.md, "the rebuild test"): space is cut
 // into tiles of at least 1.5 list radii (common/tiles.glsl, the grid as it was at the build);
@@ -242,13 +239,12 @@
 // while no two neighbouring tiles' boxes (a tile and itself included) are further apart than
 // the skin and the two largest reaches sum to less than a tile less the support. The rebuild
 // gate opens only when this test and the reach test both fail. The integrator collects the
-// boxes; sph/rebuild_tiles.comp, one workgroup dispatched after it, compares them, decides and
-// arms the gate. (In the integrator's last workgroup the comparison cost the dam break's
-// step 0.4 ms: llvmpipe runs the code after the other workgroups' early return under an
-// empty mask.)
-#define HEMO_INTEGRATE_BINDING_TILE_GRID 24   // uniform TileGrid (common/tiles.glsl)
-#define HEMO_INTEGRATE_BINDING_TILE_BOXES 25  // uint[HEMO_TILE_WORDS] per tile (below)
-#define HEMO_INTEGRATE_BINDING_TILE_OCCUPIED 26  // uint count, uint collected, then the indices of the tiles with moving particles (count and collected start and end at 0)
+// boxes; sph/rebuild_decide.comp compares them, decides and arms the gate. (In the
+// integrator's last workgroup the comparison cost the dam break's step 0.4 ms: llvmpipe runs
+// the code after the other workgroups' early return under an empty mask.)
+#define HEMO_INTEGRATE_BINDING_TILE_GRID 20   // uniform TileGrid (common/tiles.glsl)
+#define HEMO_INTEGRATE_BINDING_TILE_BOXES 21  // uint[HEMO_TILE_WORDS] per tile (below)
+#define HEMO_INTEGRATE_BINDING_TILE_OCCUPIED 22  // uint count, uint collected, then the indices of the tiles with moving particles (count and collected start and end at 0)
 // A tile's words: 0-2 the largest -d (so the smallest d) and 4-6 the largest d per axis, as
 // order keys (hemo_order_key: unsigned order = float order, 0 = empty); word 3 is nonzero
 // when rigid boundary particles lie in the tile (sph/tile_static.comp), whose displacement is 0.
@@ -259,16 +255,19 @@
 #define HEMO_TILE_COLLECT_FROM 0.75
 #define HEMO_TILE_STATIC_WORD 3
 
-// sph/rebuild_tiles.comp: the tile test's comparison and the gate (one workgroup).
-#define HEMO_RTILES_BINDING_TILE_GRID 0     // uniform TileGrid
-#define HEMO_RTILES_BINDING_TILE_BOXES 1
-#define HEMO_RTILES_BINDING_TILE_OCCUPIED 2
-#define HEMO_RTILES_BINDING_CHECK_RESULT 3  // the integrator's result (HEMO_INTEGRATE_BINDING_CHECK_RESULT)
-#define HEMO_RTILES_BINDING_TILE_RESULT 4   // float: the largest box separation of neighbouring tiles (m), for tests
-#define HEMO_RTILES_BINDING_GATE_ARMED 5
-#define HEMO_RTILES_BINDING_GATE_ARGS 6
-#define HEMO_RTILES_BINDING_GATE_OPENED 7
-#define HEMO_RTILES_BINDING_COUNT 8
+// sph/rebuild_decide.comp: the rebuild test's reduction, the tile test's comparison (constant
+// 1 = 1, after symplectic Euler) and the gate (one workgroup).
+#define HEMO_DECIDE_BINDING_TILE_GRID 0     // uniform TileGrid
+#define HEMO_DECIDE_BINDING_TILE_BOXES 1
+#define HEMO_DECIDE_BINDING_TILE_OCCUPIED 2
+#define HEMO_DECIDE_BINDING_CHECK_RESULT 3  // vec4: the last step's result in, this step's out (HEMO_INTEGRATE_BINDING_DRIFT_RANGE)
+#define HEMO_DECIDE_BINDING_TILE_RESULT 4   // float: the largest box separation of neighbouring tiles (m), for tests
+#define HEMO_DECIDE_BINDING_GATE_ARMED 5
+#define HEMO_DECIDE_BINDING_GATE_ARGS 6
+#define HEMO_DECIDE_BINDING_GATE_OPENED 7
+#define HEMO_DECIDE_BINDING_CHECK_PARTIALS 8  // texel vec4: the integrator's partials
+#define HEMO_DECIDE_BINDING_CHECK_COUNT 9     // uint: how many it wrote
+#define HEMO_DECIDE_BINDING_COUNT 10
 
 // sph/tile_static.comp: marks the tiles that hold rigid boundary particles (once per upload).
 #define HEMO_TILE_STATIC_BINDING_POSITIONS 0  // texel vec4

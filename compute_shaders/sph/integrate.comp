@@ -11,8 +11,8 @@
 // Invocation 0 advances the clock (Kahan-compensated float sum) and logs (t, dt).
 // A particle that becomes non-finite records the step in the status buffer.
 // The full stages also run the neighbour list's rebuild test: every slot's x displacement
-// since the list was built and its reach, reduced per workgroup and then by the last
-// workgroup to finish, which decides the next step's grid and list build (below).
+// since the list was built and its reach, reduced per SIMD group to partials that
+// sph/rebuild_decide.comp reduces to the decision on the next step's grid and list build.
 // A fluid particle that starts the step in the inflow zone of a vessel moves along the axis at
 // the prescribed velocity instead (hemo/sim/inflow.hpp), in every mode; across the section it
 // moves freely.
@@ -26,6 +26,7 @@
 #include "common/clock.glsl"
 #include "common/inflow.glsl"
 #include "common/tiles.glsl"
+#include "common/rebuild_test.glsl"
 
 layout(std430, binding = HEMO_INTEGRATE_BINDING_POSITIONS) buffer Positions { vec4 positions[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_VELOCITIES) buffer Velocities { vec4 velocities[]; };
@@ -50,18 +51,14 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_POS) buffer SavedPos { vec
 layout(std430, binding = HEMO_INTEGRATE_BINDING_SAVED_VEL) buffer SavedVel { vec4 savedVel[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_STEP_DT) buffer StepDt { float stepDt; };
 layout(binding = HEMO_INTEGRATE_BINDING_POS_AT_BUILD) uniform samplerBuffer posAtBuildT;
-// The previous step's rebuild test: (min d.x, max d.x, max reach, the middle of the range a
-// step earlier). Every invocation reads it here before the last workgroup writes the new one
-// through checkResult (the same buffer): that workgroup starts its write only after every
-// other has counted itself finished.
+// The previous step's rebuild test: (min d.x, max d.x, half-sum of the two largest reaches,
+// the middle of the range a step earlier); sph/rebuild_decide.comp writes the next one after
+// this pass.
 layout(std140, binding = HEMO_INTEGRATE_BINDING_DRIFT_RANGE) uniform DriftRange { vec4 lastCheck; };
-// Written by every workgroup, read by the last: coherent, and published before the count.
-layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_PARTIALS) coherent buffer Partials { vec4 partials[]; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_COUNTER) coherent buffer Counter { uint finished; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_RESULT) writeonly buffer Result { vec4 checkResult; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_GATE_ARMED) readonly buffer GateArmed { uvec4 gateArmed[]; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_GATE_ARGS) writeonly buffer GateArgs { uvec4 gateArgs[]; };
-layout(std430, binding = HEMO_INTEGRATE_BINDING_GATE_OPENED) buffer GateOpened { uint gateOpened; };
+// One partial of the rebuild test per SIMD group, and how many this dispatch wrote
+// (sph/rebuild_decide.comp reads them).
+layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_COUNT) writeonly buffer PartialCount { uint partialCount; };
 layout(std140, binding = HEMO_INTEGRATE_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
 layout(binding = HEMO_INTEGRATE_BINDING_STATE) uniform samplerBuffer stateT;
 // The tile test (symplectic Euler; interface/sph.h): every invocation widens its particle's
@@ -93,11 +90,7 @@ layout(push_constant) uniform Push {
   float endTime;
   uint clockIn;
   float threshold;     // rebuild when the largest reach exceeds it (half the skin), m
-  uint gateSlots;      // the rebuild gate's dispatch slots
-  uint staticSlots;    // 1: the slots past n hold rigid boundary particles (displacement 0)
 } pc;
-
-#include "common/gate.glsl"
 
 // A wall particle whose springs all broke is marked by the wall stage with accel.w < 0 (fluid
 // particles keep a positive value there): from now on it has no SPH mass, so the fluid no
@@ -127,11 +120,9 @@ bool hemo_moves(float kind) {
 // this pass compute the reach (no pass of its own, docs/benchmarks.md "Session 17"); the
 // previous step's middle alone lagged the dam break's front by a step's motion, 15% of the
 // threshold, and rebuilt the list 30 times in 600 steps against 21. After a rebuild both
-// middles restart at 0 (hemo_finish_rebuild_test).
-// The middle c of this step's x-displacement range, predicted from the two steps before.
+// middles restart at 0 (sph/rebuild_decide.comp).
 float hemo_predicted_middle() {
-  const float c = (lastCheck.x + lastCheck.y) - lastCheck.w;  // 2 m1 - m2
-  return abs(c) < 1.0e30 ? c : 0.0;  // NaN (some particle was non-finite; its own reach is NaN and opens the gate)
+  return hemo_predicted_middle_of(lastCheck);
 }
 
 // (d.x, reach) of slot i at x, moving at v; its displacement d and position x0 at the build.
@@ -146,15 +137,6 @@ vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v, out vec3 d, out vec3 x0) {
   return vec2(d.x, r);
 }
 
-shared vec4 s_subgroup[gl_WorkGroupSize.x];
-shared bool s_nan[gl_WorkGroupSize.x];
-shared bool s_last;
-
-// The two largest of a1 >= a2 and b1 >= b2.
-vec2 hemo_top2(vec2 a, vec2 b) {
-  return vec2(max(a.x, b.x), max(min(a.x, b.x), max(a.y, b.y)));
-}
-
 // The subgroup's two largest reaches, each invocation holding its own two (t.x >= t.y): the
 // largest, and the larger of the other invocations' largest and its holder's second (the
 // largest again when two invocations hold it).
@@ -163,28 +145,6 @@ vec2 hemo_subgroup_top2(vec2 t) {
   const bool holder = t.x == first;
   const float second = subgroupMax(holder ? t.y : t.x);
   return vec2(first, subgroupAdd(holder ? 1u : 0u) > 1u ? first : second);
-}
-
-// (min d.x, max d.x, the two largest reaches) of the workgroup's m, NaN if any invocation saw
-// one; valid in invocation 0. Called in uniform control flow (it has a barrier).
-vec4 hemo_workgroup_check(vec4 m, bool nan) {
-  const vec4 sub = vec4(subgroupMin(m.x), subgroupMax(m.y), hemo_subgroup_top2(m.zw));
-  const bool subNan = subgroupAny(nan);
-  if (subgroupElect()) {
-    s_subgroup[gl_SubgroupID] = sub;
-    s_nan[gl_SubgroupID] = subNan;
-  }
-  barrier();
-  vec4 r = s_subgroup[0];
-  bool anyNan = s_nan[0];
-  if (gl_LocalInvocationID.x == 0u) {
-    for (uint s = 1u; s < gl_NumSubgroups; ++s) {
-      const vec4 o = s_subgroup[s];
-      r = vec4(min(r.x, o.x), max(r.y, o.y), hemo_top2(r.zw, o.zw));
-      anyNan = anyNan || s_nan[s];
-    }
-  }
-  return anyNan ? vec4(uintBitsToFloat(0x7fc00000u)) : r;
 }
 
 // The tile test (interface/sph.h). Two particles i, j that were more than the list radius R
@@ -206,7 +166,7 @@ vec4 hemo_workgroup_check(vec4 m, bool nan) {
 bool hemo_collect_tiles() {
   return kMode == HEMO_INTEGRATE_SYMPLECTIC_EULER && !(lastCheck.z <= float(HEMO_TILE_COLLECT_FROM) * pc.threshold);
 }
-bool gCollectTiles;  // read at the start of main, before the last workgroup writes lastCheck's buffer
+bool gCollectTiles;  // the same for every invocation
 
 // Widens tile t's box by [lo, hi]; the first to widen it lists the tile as occupied (the
 // list's order varies from run to run, the check's maximum over it does not).
@@ -239,65 +199,27 @@ void hemo_tile_collect(vec3 x0, vec3 d) {
   }
 }
 
-// The rebuild test's reduction, in uniform control flow: each workgroup stores its partial
-// and counts itself finished; the last reduces the partials (the result does not depend on
-// which one that is: min and max are exact), keeps the middle of the step before's range (w)
-// for the next prediction, and arms the gate (RK2; after symplectic Euler the tile pass,
-// sph/rebuild_tiles.comp, decides with both tests and arms it). Two particles' separation
-// has changed by at most the sum of their reaches, so the list holds every pair within the support while the
-// two largest reaches r1 >= r2 sum to less than the skin: the test compares their half-sum
-// (r1 + r2) / 2 with the threshold, half the skin (result.z), and rebuilds past it or on a
-// NaN. The largest reach alone (twice it against the skin, until session 21) counted the
-// fastest particle twice: the dam break's splash rebuilt 994 times in 5,890 steps, now 866
-// in 5,867; the aneurysm 624 times in 3,546 steps, now 539 in 3,534. When the gate opens, the range
-// becomes (0, 0) with w = 0: the next step rebuilds, and displacements start again from the
-// new build. Any NaN makes the whole result NaN. (Folded into this pass, the reach test costs
-// llvmpipe no dispatch of its own: docs/benchmarks.md, "Session 21"; the tile test's
-// comparison has its one-workgroup pass, since here it ran in every workgroup's masked tail.)
-void hemo_finish_rebuild_test(vec2 test, bool valid) {
+// The rebuild test's partial, in uniform control flow: each SIMD group (subgroup) reduces its
+// slots' (d.x, reach) to (min d.x, max d.x, the two largest reaches), NaN if any lane saw one,
+// and one lane stores it; sph/rebuild_decide.comp, one workgroup dispatched after this pass,
+// reduces the partials, decides and arms the gate. (Until session 25 the workgroups reduced
+// through shared memory and the last one to finish, found with an atomic counter, reduced the
+// partials and armed the gate: the barriers, the counter and the masked tail that llvmpipe
+// runs in every workgroup cost the dam break's step 0.5 ms of this pass's 2.0,
+// docs/benchmarks.md "Session 25".)
+void hemo_store_rebuild_partial(vec2 test, bool valid) {
   const float inf = uintBitsToFloat(0x7f800000u);
   const bool nan = valid && (isnan(test.x) || isnan(test.y));
   const vec4 m = valid ? vec4(test.x, test.x, test.y, -inf) : vec4(inf, -inf, -inf, -inf);
-  const vec4 partial = hemo_workgroup_check(m, nan);
-  const uint groups = gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z;
-  if (gl_LocalInvocationID.x == 0u) {
-    partials[hemo_group_index()] = partial;
-    memoryBarrierBuffer();  // the partial is visible before the count says so
-    s_last = atomicAdd(finished, 1u) == groups - 1u;
+  const vec4 sub = vec4(subgroupMin(m.x), subgroupMax(m.y), hemo_subgroup_top2(m.zw));
+  const bool subNan = subgroupAny(nan);
+  if (subgroupElect()) {
+    partials[hemo_group_index() * gl_NumSubgroups + gl_SubgroupID] = subNan ? vec4(uintBitsToFloat(0x7fc00000u)) : sub;
   }
-  barrier();
-  if (!s_last) {
-    return;  // the same for the whole workgroup
-  }
-  memoryBarrierBuffer();
-  vec4 r = vec4(inf, -inf, -inf, -inf);
-  bool anyNan = false;
-  for (uint p = gl_LocalInvocationID.x; p < groups; p += gl_WorkGroupSize.x) {
-    const vec4 v = partials[p];
-    anyNan = anyNan || any(isnan(v));
-    r = vec4(min(r.x, v.x), max(r.y, v.y), hemo_top2(r.zw, v.zw));
-  }
-  // (The first round's shared values were all read before the barrier after s_last.)
-  vec4 total = hemo_workgroup_check(r, anyNan);
-  if (gl_LocalInvocationID.x == 0u) {
-    if (pc.staticSlots != 0u && !isnan(total.z)) {
-      // Slots left out (SphSolver::movingSlots): rigid boundary particles, displacement 0, so
-      // their reach is |c| (many of them: twice).
-      const float c = abs(hemo_predicted_middle());
-      total = vec4(min(total.x, 0.0), max(total.y, 0.0), hemo_top2(total.zw, vec2(c)));
-    }
-    // Fewer than two particles: no pair, nothing to rebuild for.
-    const float pairReach = total.w == -inf ? -inf : 0.5 * (total.z + total.w);
-    // With symplectic Euler the tile pass (sph/rebuild_tiles.comp) decides after this one.
-    const bool open = kMode != HEMO_INTEGRATE_SYMPLECTIC_EULER && hemo_gate_open(pairReach, pc.threshold);
-    const float lastMiddle = 0.5 * (lastCheck.x + lastCheck.y);  // the step before's, for the extrapolation
-    checkResult = open ? vec4(0.0, 0.0, pairReach, 0.0) : vec4(total.xy, pairReach, lastMiddle);
-    if (kMode != HEMO_INTEGRATE_SYMPLECTIC_EULER) {
-      hemo_gate_arm(open, pc.gateSlots);
-    } else {
-      tilesCollected = gCollectTiles ? 1u : 0u;
-    }
-    finished = 0u;  // every other workgroup has counted itself: ready for the next use
+  if (hemo_global_index() == 0u) {
+    const uint groups = gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z;
+    partialCount = groups * gl_NumSubgroups;
+    tilesCollected = gCollectTiles ? 1u : 0u;
   }
 }
 
@@ -462,5 +384,5 @@ void main() {
       hemo_tile_collect(x0, d);
     }
   }
-  hemo_finish_rebuild_test(test, valid);  // every invocation: it has barriers
+  hemo_store_rebuild_partial(test, valid);  // every invocation: subgroup operations
 }

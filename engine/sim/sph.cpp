@@ -35,14 +35,13 @@ struct IntegratePush {
   std::uint32_t n, step, logIndex;
   float endTime;
   std::uint32_t clockIn;
-  float threshold;            // the rebuild test (full stages): rebuild past this reach, m
-  std::uint32_t gateSlots;    // the rebuild gate's slots
-  std::uint32_t staticSlots;  // 1: slots past n hold rigid boundary particles (displacement 0)
+  float threshold;  // the rebuild test (full stages): whether to collect the tile boxes, m
 };
-static_assert(sizeof(IntegratePush) == 32);
-struct TilePush {  // sph/rebuild_tiles.comp
-  float threshold;  // half the skin, m
-  std::uint32_t gateSlots;
+static_assert(sizeof(IntegratePush) == 24);
+struct DecidePush {  // sph/rebuild_decide.comp
+  float threshold;            // half the skin, m
+  std::uint32_t gateSlots;    // the rebuild gate's slots
+  std::uint32_t staticSlots;  // 1: slots the integrator left out hold rigid boundary particles (displacement 0)
 };
 static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
 static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
@@ -274,9 +273,11 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                   gpu::MemoryUse::Device, "time-step partials"),
       dtCounter_(context, 4, gpu::MemoryUse::Device, "time-step finished workgroups"),
       dtResult_(context, 8, gpu::MemoryUse::Device, "time-step limits (min, max)"),
-      checkPartials_(context, ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup) * 16,
+      // One partial per SIMD group of the integrator: at most one per invocation (a device may
+      // run SIMD groups of one).
+      checkPartials_(context, ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup) * kWorkgroup * 16,
                      gpu::MemoryUse::Device, "rebuild check partials"),
-      checkCounter_(context, 4, gpu::MemoryUse::Device, "rebuild check finished workgroups"),
+      checkCount_(context, 4, gpu::MemoryUse::Device, "rebuild check partials written"),
       checkResult_(context, 16, gpu::MemoryUse::Device, "rebuild check result"),
       tileSpec_(tilesFor(grid_.spec(), domainMin, domainMax, settings)),
       tileGrid_(context, sizeof(TileGrid), gpu::MemoryUse::Device, "rebuild tile grid"),
@@ -350,8 +351,11 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   tileStatic_ = &cache.get({"sph/tile_static", HEMO_TILE_STATIC_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {},
                             1u << HEMO_TILE_STATIC_BINDING_TILE_GRID,
                             1u << HEMO_TILE_STATIC_BINDING_POSITIONS | 1u << HEMO_TILE_STATIC_BINDING_VELOCITIES});
-  rebuildTiles_ = &cache.get({"sph/rebuild_tiles", HEMO_RTILES_BINDING_COUNT, sizeof(TilePush), kWorkgroup, {},
-                              1u << HEMO_RTILES_BINDING_TILE_GRID, 0u});
+  // constant 1: the tile test (after symplectic Euler) or the reach test alone (after RK2)
+  for (std::uint32_t tiles = 0; tiles < 2; ++tiles) {
+    rebuildDecide_[tiles] = &cache.get({"sph/rebuild_decide", HEMO_DECIDE_BINDING_COUNT, sizeof(DecidePush), kWorkgroup, {tiles},
+                                        1u << HEMO_DECIDE_BINDING_TILE_GRID, 1u << HEMO_DECIDE_BINDING_CHECK_PARTIALS});
+  }
   const ParticleArrays& a = particles.live();
   tileStaticSet_ = tileStatic_->makeSet({gpu::texelBinding(HEMO_TILE_STATIC_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                          gpu::texelBinding(HEMO_TILE_STATIC_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
@@ -428,11 +432,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_POS_AT_BUILD, &grid_.positionsAtBuild(), gpu::texel::kVec4),
                                        {HEMO_INTEGRATE_BINDING_DRIFT_RANGE, &checkResult_},
                                        {HEMO_INTEGRATE_BINDING_CHECK_PARTIALS, &checkPartials_},
-                                       {HEMO_INTEGRATE_BINDING_CHECK_COUNTER, &checkCounter_},
-                                       {HEMO_INTEGRATE_BINDING_CHECK_RESULT, &checkResult_},
-                                       {HEMO_INTEGRATE_BINDING_GATE_ARMED, &rebuildGate_.armedCounts()},
-                                       {HEMO_INTEGRATE_BINDING_GATE_ARGS, &rebuildGate_.arguments()},
-                                       {HEMO_INTEGRATE_BINDING_GATE_OPENED, &rebuildGate_.openings()},
+                                       {HEMO_INTEGRATE_BINDING_CHECK_COUNT, &checkCount_},
                                        {HEMO_INTEGRATE_BINDING_INFLOW, &inflow_},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_STATE, &state_, gpu::texel::kVec4),
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_POSITIONS_IN, &a.positions, gpu::texel::kVec4),
@@ -441,15 +441,18 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_TILE_GRID, &tileGrid_},
                                        {HEMO_INTEGRATE_BINDING_TILE_BOXES, &tileBoxes_},
                                        {HEMO_INTEGRATE_BINDING_TILE_OCCUPIED, &tileOccupied_}});
-  rebuildTilesSet_ = rebuildTiles_->makeSet({{HEMO_RTILES_BINDING_TILE_GRID, &tileGrid_},
-                                             {HEMO_RTILES_BINDING_TILE_BOXES, &tileBoxes_},
-                                             {HEMO_RTILES_BINDING_TILE_OCCUPIED, &tileOccupied_},
-                                             {HEMO_RTILES_BINDING_CHECK_RESULT, &checkResult_},
-                                             {HEMO_RTILES_BINDING_TILE_RESULT, &tileResult_},
-                                             {HEMO_RTILES_BINDING_GATE_ARMED, &rebuildGate_.armedCounts()},
-                                             {HEMO_RTILES_BINDING_GATE_ARGS, &rebuildGate_.arguments()},
-                                             {HEMO_RTILES_BINDING_GATE_OPENED, &rebuildGate_.openings()}});
-  checkCounter_.upload(std::vector<std::uint32_t>{0u});
+  // (both variants' layouts are the same: one set serves them)
+  rebuildDecideSet_ = rebuildDecide_[1]->makeSet({{HEMO_DECIDE_BINDING_TILE_GRID, &tileGrid_},
+                                                  {HEMO_DECIDE_BINDING_TILE_BOXES, &tileBoxes_},
+                                                  {HEMO_DECIDE_BINDING_TILE_OCCUPIED, &tileOccupied_},
+                                                  {HEMO_DECIDE_BINDING_CHECK_RESULT, &checkResult_},
+                                                  {HEMO_DECIDE_BINDING_TILE_RESULT, &tileResult_},
+                                                  {HEMO_DECIDE_BINDING_GATE_ARMED, &rebuildGate_.armedCounts()},
+                                                  {HEMO_DECIDE_BINDING_GATE_ARGS, &rebuildGate_.arguments()},
+                                                  {HEMO_DECIDE_BINDING_GATE_OPENED, &rebuildGate_.openings()},
+                                                  gpu::texelBinding(HEMO_DECIDE_BINDING_CHECK_PARTIALS, &checkPartials_, gpu::texel::kVec4),
+                                                  {HEMO_DECIDE_BINDING_CHECK_COUNT, &checkCount_}});
+  checkCount_.upload(std::vector<std::uint32_t>{0u});
   dtCounter_.upload(std::vector<std::uint32_t>{0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
   tileGrid_.upload(std::vector<TileGrid>{tileSpec_});
@@ -594,16 +597,18 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   }
   const std::uint32_t n = particles_->count();
   // The second stage reuses the step's dt; slots past `moving` (rigid) have no limit.
-  // At least one workgroup: invocation 0 advances the clock even with no particles, and the
-  // last workgroup of a full stage arms the rebuild gate for the next step.
-  const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold(), rebuildGate_.slots(),
-                           moving < n ? 1u : 0u};
+  // At least one workgroup: invocation 0 advances the clock even with no particles, and a
+  // full stage's partials of the rebuild test must not be empty.
+  const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold()};
   rec.dispatch(*integrate_[mode], integrateSet_, push, integrate_[mode]->groupsFor(std::max(moving, 1u)));
-  if (mode == HEMO_INTEGRATE_SYMPLECTIC_EULER) {
-    // the tile test's comparison decides and arms the gate (interface/sph.h)
+  if (mode != HEMO_INTEGRATE_RK2_HALF) {
+    // the rebuild test's reduction (with the tile test after symplectic Euler) decides and
+    // arms the gate (interface/sph.h)
     rec.computeToCompute();
-    rec.dispatch(*rebuildTiles_, rebuildTilesSet_, TilePush{rebuildThreshold(), rebuildGate_.slots()},
-                 rebuildTiles_->groupsFor(1u));
+    const std::uint32_t tiles = mode == HEMO_INTEGRATE_SYMPLECTIC_EULER ? 1u : 0u;
+    rec.dispatch(*rebuildDecide_[tiles], rebuildDecideSet_,
+                 DecidePush{rebuildThreshold(), rebuildGate_.slots(), moving < n ? 1u : 0u},
+                 rebuildDecide_[tiles]->groupsFor(1u));
   }
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone

@@ -282,17 +282,18 @@ class SphSolver {
   // The time step's reduction, in the force pass and the wall stage (common/dt_fold.glsl):
   // partials (vec2 per workgroup of both), finished-workgroup count, result (min, max).
   gpu::Buffer dtPartials_, dtCounter_, dtResult_;
-  // The rebuild test (in sph/integrate.comp): per-workgroup partials, the finished-workgroup
-  // counter and the result (min d.x, max d.x, max reach, middle of the range a step before).
-  gpu::Buffer checkPartials_, checkCounter_, checkResult_;
+  // The rebuild test: the integrator's partials (one per SIMD group) and their count, and the
+  // result sph/rebuild_decide.comp reduces them to (min d.x, max d.x, half-sum of the two
+  // largest reaches, middle of the range a step before).
+  gpu::Buffer checkPartials_, checkCount_, checkResult_;
   // The tile test: its grid (uniform), boxes (HEMO_TILE_WORDS per tile), result, occupied
-  // tiles; the pass that marks the tiles of rigid boundary particles, the one that compares
-  // the boxes (sph/rebuild_tiles.comp), and the upload the marks are of.
+  // tiles; the pass that marks the tiles of rigid boundary particles, the decision pass
+  // (sph/rebuild_decide.comp, with and without the tile test), and the upload the marks are of.
   TileGrid tileSpec_;
   gpu::Buffer tileGrid_, tileBoxes_, tileResult_, tileOccupied_;
   const gpu::ComputePipeline* tileStatic_;
-  const gpu::ComputePipeline* rebuildTiles_;
-  gpu::DescriptorSet tileStaticSet_, rebuildTilesSet_;
+  const gpu::ComputePipeline* rebuildDecide_[2];  // without, with the tile test
+  gpu::DescriptorSet tileStaticSet_, rebuildDecideSet_;
   std::uint64_t tileUpload_ = ~std::uint64_t(0);
   std::unique_ptr<MassSpring> wall_;
   gpu::DispatchGate rebuildGate_;
