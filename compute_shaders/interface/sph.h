@@ -186,11 +186,17 @@
 #define HEMO_FORCES_BINDING_TAU_B 12
 #define HEMO_FORCES_BINDING_VISCOUS_VEL 13
 #define HEMO_FORCES_BINDING_PAIR_POSITION 14
-// The time step's reduction (common/dt_fold.glsl), shared with the wall stage's spring pass:
-#define HEMO_FORCES_BINDING_DT_PARTIALS 15  // vec2 (min, max) per workgroup of both passes
-#define HEMO_FORCES_BINDING_DT_COUNTER 16   // uint: workgroups finished (starts and ends at 0)
-#define HEMO_FORCES_BINDING_DT_RESULT 17    // vec2 (min, max) of every limit; NaN if any is
-#define HEMO_FORCES_BINDING_COUNT 18
+// The time step's reduction's first level (common/dt_fold.glsl), shared with the wall
+// stage's spring pass:
+#define HEMO_FORCES_BINDING_DT_PARTIALS 15  // vec2 (min, max) per SIMD group of both passes
+#define HEMO_FORCES_BINDING_DT_COUNTS 16    // uint[2]: the partials each pass wrote
+#define HEMO_FORCES_BINDING_COUNT 17
+
+// sph/dt_reduce.comp: the time step's reduction's second level (one workgroup).
+#define HEMO_DTREDUCE_BINDING_PARTIALS 0  // texel vec2 (RG32F): HEMO_FORCES_BINDING_DT_PARTIALS
+#define HEMO_DTREDUCE_BINDING_COUNTS 1    // uint[2]
+#define HEMO_DTREDUCE_BINDING_RESULT 2    // vec2 (min, max) of every limit; NaN if any is
+#define HEMO_DTREDUCE_BINDING_COUNT 3
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
 // step, clock, status. Specialization constant 2, the stage:

@@ -53,9 +53,8 @@
 #define HEMO_SPRINGF_BINDING_SPRINGS_RW 20
 // The time step's reduction, begun by the fluid's force pass (interface/sph.h, HEMO_FORCES_BINDING_DT_*):
 #define HEMO_SPRINGF_BINDING_DT_PARTIALS 21
-#define HEMO_SPRINGF_BINDING_DT_COUNTER 22
-#define HEMO_SPRINGF_BINDING_DT_RESULT 23
-#define HEMO_SPRINGF_BINDING_COUNT 24
+#define HEMO_SPRINGF_BINDING_DT_COUNTS 22
+#define HEMO_SPRINGF_BINDING_COUNT 23
 
 // wall/point_shade.comp: per particle slot, vec2(largest strain of its unbroken springs,
 // fraction of its springs broken) for the renderer; push: uint n, uint idCount.

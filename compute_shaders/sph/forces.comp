@@ -24,7 +24,7 @@
 //                            + 2 mu V_j (x_ij . gradW_ij) / (r^2 + eta^2) v_ij ].
 // accel.w keeps the repulsion's normalisation 1 / max(sum T, 1), so a wall particle can apply
 // the exact reaction of its share. Also the particle's time-step limit min(C_a h / (c0 + |v|), C_f sqrt(h / |a|), dt_visc),
-// and the time step's reduction over all limits (common/dt_fold.glsl).
+// and the first level of the time step's reduction over all limits (common/dt_fold.glsl).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -51,10 +51,9 @@ layout(binding = HEMO_FORCES_BINDING_TAU_A) uniform samplerBuffer tauA;
 layout(binding = HEMO_FORCES_BINDING_TAU_B) uniform samplerBuffer tauB;
 layout(binding = HEMO_FORCES_BINDING_VISCOUS_VEL) uniform samplerBuffer viscousVel;
 layout(binding = HEMO_FORCES_BINDING_PAIR_POSITION) uniform samplerBuffer pairPosition;
-// The time step's reduction (common/dt_fold.glsl).
-layout(std430, binding = HEMO_FORCES_BINDING_DT_PARTIALS) coherent buffer DtPartials { vec2 dtPartials[]; };
-layout(std430, binding = HEMO_FORCES_BINDING_DT_COUNTER) coherent buffer DtCounter { uint dtFinished; };
-layout(std430, binding = HEMO_FORCES_BINDING_DT_RESULT) writeonly buffer DtResult { vec2 dtResult; };
+// The time step's reduction's first level (common/dt_fold.glsl).
+layout(std430, binding = HEMO_FORCES_BINDING_DT_PARTIALS) writeonly buffer DtPartials { vec2 dtPartials[]; };
+layout(std430, binding = HEMO_FORCES_BINDING_DT_COUNTS) writeonly buffer DtCounts { uint dtCounts[2]; };
 // 1 when the scene enables the SPS term. A specialization constant rather than a branch on
 // the parameter block: llvmpipe runs a branch's body under a lane mask even when no lane
 // takes it, and the dead SPS loads cost ~10% of the pass (dam break, docs/benchmarks.md).
@@ -70,7 +69,6 @@ mat3 hemo_sps_tensor(uint j) {
 }
 layout(push_constant) uniform Push {
   uint n;
-  uint dtGroups;  // the workgroups of this pass and of the wall stage after it (common/dt_fold.glsl)
 } pc;
 
 #include "common/dt_fold.glsl"
@@ -205,5 +203,5 @@ void main() {
   if (valid) {
     limit = hemo_forces(i);
   }
-  hemo_dt_fold(limit, valid, 0u, pc.dtGroups);  // every invocation: it has barriers
+  hemo_dt_partial(limit, valid, 0u, 0u);  // every invocation: subgroup operations
 }

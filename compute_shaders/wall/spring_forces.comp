@@ -6,8 +6,8 @@
 // time-step limit min(C sqrt(mass / sum of its unbroken stiffnesses), C_a h / (c0 + |v|))
 // (the first bounds the phase error of its fastest oscillation; C is push.timeStepFactor; the
 // second is the fluid's acoustic limit, which the neighbour-list look-ahead relies on). Other
-// particle kinds are left alone. The last workgroup of this pass completes the time step's
-// reduction, which the fluid's force pass began (common/dt_fold.glsl).
+// particle kinds are left alone. Its SIMD groups add their partials of the time step's
+// reduction after the fluid force pass's (common/dt_fold.glsl).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -43,10 +43,9 @@ layout(binding = HEMO_SPRINGF_BINDING_WALL_VEL) uniform samplerBuffer viscousVel
 layout(binding = HEMO_SPRINGF_BINDING_PAIR_POSITION) uniform samplerBuffer pairPositionT;
 // The springs again, for the broken flags this pass sets (rupture).
 layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS_RW) buffer SpringsRW { Spring springsRW[]; };
-// The time step's reduction (common/dt_fold.glsl).
-layout(std430, binding = HEMO_SPRINGF_BINDING_DT_PARTIALS) coherent buffer DtPartials { vec2 dtPartials[]; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_DT_COUNTER) coherent buffer DtCounter { uint dtFinished; };
-layout(std430, binding = HEMO_SPRINGF_BINDING_DT_RESULT) writeonly buffer DtResult { vec2 dtResult; };
+// The time step's reduction's first level (common/dt_fold.glsl).
+layout(std430, binding = HEMO_SPRINGF_BINDING_DT_PARTIALS) writeonly buffer DtPartials { vec2 dtPartials[]; };
+layout(std430, binding = HEMO_SPRINGF_BINDING_DT_COUNTS) writeonly buffer DtCounts { uint dtCounts[2]; };
 
 #define positions(k) texelFetch(positionsT, int(k))
 #define velocities(k) texelFetch(velocitiesT, int(k))
@@ -163,8 +162,7 @@ layout(push_constant) uniform Push {
   float acousticLength;  // C_a h (m): the fluid's acoustic limit C_a h / (c0 + |v|) applies too
   float c0;
   uint first;  // the slots [first, n): the fluid's, first after a sort, are left out
-  uint dtGroupBase;  // this pass's first partial of the time step's reduction: the force pass's workgroups
-  uint dtGroups;     // the workgroups of both passes
+  uint dtPartialBase;  // this pass's first partial of the time step's reduction (past the force pass's)
 } pc;
 
 #include "common/dt_fold.glsl"
@@ -250,5 +248,5 @@ void main() {
       valid = true;
     }
   }
-  hemo_dt_fold(limit, valid, pc.dtGroupBase, pc.dtGroups);  // every invocation: it has barriers
+  hemo_dt_partial(limit, valid, pc.dtPartialBase, 1u);  // every invocation: subgroup operations
 }

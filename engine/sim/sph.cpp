@@ -29,7 +29,10 @@ struct BoundaryPush {  // sph/boundary_pressure.comp
 };
 struct ForcesPush {  // sph/forces.comp
   std::uint32_t n;
-  std::uint32_t dtGroups;  // workgroups of the force pass and the wall stage (common/dt_fold.glsl)
+};
+struct DtReducePush {  // sph/dt_reduce.comp
+  std::uint32_t wallBase;  // the wall stage's first partial
+  std::uint32_t passes;    // bit 0: the force pass ran, bit 1: the wall stage ran
 };
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
@@ -48,6 +51,12 @@ static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the f
 
 std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
   return std::uint64_t(std::max(particles.capacity(), 1u)) * bytes;
+}
+
+// The time step's partials one pass may write: one per invocation of its workgroups over all
+// slots, at most (common/dt_fold.glsl).
+std::uint64_t dtPartialsPerPass(const ParticleStore& particles) {
+  return (std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup * kWorkgroup;
 }
 
 void require(bool ok, const std::string& what) {
@@ -267,11 +276,10 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
       tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
       tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
-      // Partials for the force pass's workgroups over all slots and the wall stage's over the
-      // non-fluid ones: twice a pass's at most.
-      dtPartials_(context, 2 * ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup) * 8,
-                  gpu::MemoryUse::Device, "time-step partials"),
-      dtCounter_(context, 4, gpu::MemoryUse::Device, "time-step finished workgroups"),
+      // Partials for the force pass's SIMD groups over all slots and the wall stage's over the
+      // non-fluid ones: at most one per invocation of each (a device may run SIMD groups of one).
+      dtPartials_(context, 2 * dtPartialsPerPass(particles) * 8, gpu::MemoryUse::Device, "time-step partials"),
+      dtCounts_(context, 8, gpu::MemoryUse::Device, "time-step partials written"),
       dtResult_(context, 8, gpu::MemoryUse::Device, "time-step limits (min, max)"),
       // One partial per SIMD group of the integrator: at most one per invocation (a device may
       // run SIMD groups of one).
@@ -331,6 +339,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
                                1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
   // constant 1: the SPS term compiled in or out; 2: the list's read width
+  dtReduce_ = &cache.get({"sph/dt_reduce", HEMO_DTREDUCE_BINDING_COUNT, sizeof(DtReducePush), kWorkgroup, {}, 0u,
+                          1u << HEMO_DTREDUCE_BINDING_PARTIALS});
   forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup,
                         pairSpecialization({settings.sps ? 1u : 0u, listWidth_}), 1u << HEMO_FORCES_BINDING_PARAMS,
                         1u << HEMO_FORCES_BINDING_POSITIONS | 1u << HEMO_FORCES_BINDING_VELOCITIES | 1u << HEMO_FORCES_BINDING_STATE |
@@ -400,6 +410,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  gpu::texelBinding(HEMO_SPS_BINDING_NLIST, &pairList_, listFormat),
                                  {HEMO_SPS_BINDING_TAU_A, &tauA_},
                                  {HEMO_SPS_BINDING_TAU_B, &tauB_}});
+  dtReduceSet_ = dtReduce_->makeSet({gpu::texelBinding(HEMO_DTREDUCE_BINDING_PARTIALS, &dtPartials_, gpu::texel::kVec2),
+                                     {HEMO_DTREDUCE_BINDING_COUNTS, &dtCounts_},
+                                     {HEMO_DTREDUCE_BINDING_RESULT, &dtResult_}});
   forcesSet_ = forces_->makeSet({gpu::texelBinding(HEMO_FORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
@@ -410,8 +423,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  {HEMO_FORCES_BINDING_ACCEL, &accel_},
                                  {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
                                  {HEMO_FORCES_BINDING_DT_PARTIALS, &dtPartials_},
-                                 {HEMO_FORCES_BINDING_DT_COUNTER, &dtCounter_},
-                                 {HEMO_FORCES_BINDING_DT_RESULT, &dtResult_},
+                                 {HEMO_FORCES_BINDING_DT_COUNTS, &dtCounts_},
                                  {HEMO_FORCES_BINDING_IDS, &a.ids},
                                  {HEMO_FORCES_BINDING_STATUS, &status_},
                                  gpu::texelBinding(HEMO_FORCES_BINDING_TAU_A, &tauA_, gpu::texel::kVec4),
@@ -453,7 +465,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                                   gpu::texelBinding(HEMO_DECIDE_BINDING_CHECK_PARTIALS, &checkPartials_, gpu::texel::kVec4),
                                                   {HEMO_DECIDE_BINDING_CHECK_COUNT, &checkCount_}});
   checkCount_.upload(std::vector<std::uint32_t>{0u});
-  dtCounter_.upload(std::vector<std::uint32_t>{0u});
+  dtCounts_.upload(std::vector<std::uint32_t>{0u, 0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
   tileGrid_.upload(std::vector<TileGrid>{tileSpec_});
   tileBoxes_.upload(std::vector<std::uint32_t>(std::size_t(tileSpec_.tiles()) * HEMO_TILE_WORDS, 0u));
@@ -473,7 +485,7 @@ float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - 
 void SphSolver::attachWall(const SpringNetwork& network) {
   const FluidBuffers fluid{&grid_.slotOfId(), &accel_,      &dtLimit_,      &paramsBuffer_, &state_,
                            &ncount_,           &nlist_,      &viscousVel_,   &pairPosition_, listWidth_,
-                           &dtPartials_,       &dtCounter_,  &dtResult_,     pairSpecialization({listWidth_})};
+                           &dtPartials_,       &dtCounts_,   pairSpecialization({listWidth_})};
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }
@@ -565,24 +577,22 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
     rec.dispatch(*spsStress_, spsSet_, CountPush{fluidSlots}, spsStress_->groupsFor(fluidSlots));
     rec.computeToCompute();
   }
-  // The time step's reduction runs in the last workgroup of this pass or, with a wall, of the
-  // wall stage (common/dt_fold.glsl).
+  // The time step's reduction: the SIMD groups of this pass and, with a wall, of the wall
+  // stage store partials, and one workgroup reduces them (common/dt_fold.glsl).
   const gpu::Groups groups = forces_->groupsFor(fluidSlots);
-  const auto forceGroups = static_cast<std::uint32_t>(groups.total());
   const std::uint32_t first = nonFluidStart();
-  const std::uint32_t dtGroups = forceGroups + (wall_ ? wall_->workgroups(first, n) : 0u);
-  if (dtGroups == 0) {  // no particle limits the step
-    rec.fill(dtResult_, 0x7f800000u, 0, 4);  // +inf
-    rec.fill(dtResult_, 0xff800000u, 4, 4);  // -inf
-    rec.transferToCompute();
-  }
-  rec.dispatch(*forces_, forcesSet_, ForcesPush{fluidSlots, dtGroups}, groups);
+  const bool wallRuns = wall_ && wall_->workgroups(first, n) > 0;
+  const auto wallBase = static_cast<std::uint32_t>(dtPartialsPerPass(*particles_));
+  rec.dispatch(*forces_, forcesSet_, ForcesPush{fluidSlots}, groups);
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "forces");
   if (wall_) {
-    wall_->record(rec, first, n, forceGroups, dtGroups);  // the wall, solved after the fluid in every force evaluation
+    wall_->record(rec, first, n, wallBase);  // the wall, solved after the fluid in every force evaluation
     if (timestamps) timestamps->mark(rec, "wall");
   }
+  const std::uint32_t passes = (groups.total() > 0 ? 1u : 0u) | (wallRuns ? 2u : 0u);
+  rec.dispatch(*dtReduce_, dtReduceSet_, DtReducePush{wallBase, passes}, dtReduce_->groupsFor(1u));
+  rec.computeToCompute();
 }
 
 void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime) {

@@ -23,9 +23,9 @@ struct ForcesPush {
   std::uint32_t n, idCount;
   float timeStepFactor, acousticLength, c0;
   std::uint32_t first;
-  std::uint32_t dtGroupBase, dtGroups;
+  std::uint32_t dtPartialBase;
 };
-static_assert(sizeof(ForcesPush) == 48);
+static_assert(sizeof(ForcesPush) == 44);
 
 bool finiteNonNegative(float x) { return std::isfinite(x) && x >= 0.0f; }
 }  // namespace
@@ -153,8 +153,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, kVec4),
                                  {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_},
                                  {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
-                                 {HEMO_SPRINGF_BINDING_DT_COUNTER, fluid.dtCounter},
-                                 {HEMO_SPRINGF_BINDING_DT_RESULT, fluid.dtResult}});
+                                 {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts}});
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
                                     {HEMO_SHADE_BINDING_IDS, &a.ids},
@@ -177,10 +176,9 @@ void MassSpring::recordReset(gpu::CommandRecorder& rec) {
   rec.transferToCompute();
 }
 
-void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t dtGroupBase,
-                        std::uint32_t dtGroups) {
+void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t dtPartialBase) {
   const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, n, idCount_, timeStepFactor_, acousticLength_,
-                        soundSpeed_, first, dtGroupBase, dtGroups};
+                        soundSpeed_, first, dtPartialBase};
   rec.dispatch(*forces_, forcesSet_, push, forces_->groupsFor(n - first));
   rec.computeToCompute();
 }

@@ -38,6 +38,7 @@ inline constexpr VkFormat kVec4 = VK_FORMAT_R32G32B32A32_SFLOAT;
 inline constexpr VkFormat kUvec4 = VK_FORMAT_R32G32B32A32_UINT;
 inline constexpr VkFormat kIvec4 = VK_FORMAT_R32G32B32A32_SINT;
 inline constexpr VkFormat kUvec2 = VK_FORMAT_R32G32_UINT;
+inline constexpr VkFormat kVec2 = VK_FORMAT_R32G32_SFLOAT;
 inline constexpr VkFormat kUint = VK_FORMAT_R32_UINT;
 inline constexpr VkFormat kInt = VK_FORMAT_R32_SINT;
 inline constexpr VkFormat kFloat = VK_FORMAT_R32_SFLOAT;

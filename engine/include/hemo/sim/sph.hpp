@@ -279,9 +279,10 @@ class SphSolver {
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
-  // The time step's reduction, in the force pass and the wall stage (common/dt_fold.glsl):
-  // partials (vec2 per workgroup of both), finished-workgroup count, result (min, max).
-  gpu::Buffer dtPartials_, dtCounter_, dtResult_;
+  // The time step's reduction: partials of the force pass and the wall stage (vec2 per SIMD
+  // group; common/dt_fold.glsl), how many each wrote, and the result (min, max) that
+  // sph/dt_reduce.comp reduces them to.
+  gpu::Buffer dtPartials_, dtCounts_, dtResult_;
   // The rebuild test: the integrator's partials (one per SIMD group) and their count, and the
   // result sph/rebuild_decide.comp reduces them to (min d.x, max d.x, half-sum of the two
   // largest reaches, middle of the range a step before).
@@ -302,6 +303,8 @@ class SphSolver {
   const gpu::ComputePipeline* boundaryPressure_;
   const gpu::ComputePipeline* spsStress_;
   const gpu::ComputePipeline* forces_;
+  const gpu::ComputePipeline* dtReduce_;
+  gpu::DescriptorSet dtReduceSet_;
   const gpu::ComputePipeline* integrate_[3];  // by stage (HEMO_INTEGRATE_*)
   gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_;
   // The gate must be armed by its own pass before the next step (after a reset or a rebuild

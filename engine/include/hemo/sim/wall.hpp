@@ -76,11 +76,10 @@ struct FluidBuffers {
   const gpu::Buffer* viscousVelocities;  // a wall particle's entry: the no-slip velocity the fluid saw
   const gpu::Buffer* pairPositions;      // (x, V p) per slot (interface/sph.h, the pair data)
   std::uint32_t listReadWidth;           // list entries per texel read (SphSolver::listReadWidth)
-  // The time step's reduction, begun by the SPH force pass (common/dt_fold.glsl): partials,
-  // finished-workgroup count, result.
+  // The time step's reduction's first level (common/dt_fold.glsl): the partials, after the
+  // SPH force pass's, and how many each pass wrote.
   const gpu::Buffer* dtPartials;
-  const gpu::Buffer* dtCounter;
-  const gpu::Buffer* dtResult;
+  const gpu::Buffer* dtCounts;
   std::vector<std::uint32_t> reactionSpecialization;  // of the spring pass (SphSolver::pairSpecialization)
 };
 
@@ -93,11 +92,9 @@ class MassSpring {
   void recordReset(gpu::CommandRecorder& rec);  // counters to zero (flags stay)
   // Rupture, then spring forces for the slots [first, n) (after the SPH force pass, whose
   // accelerations of wall particles this replaces). Slots before `first` must hold no wall
-  // particle (SphSolver::nonFluidStart). The pass's workgroups write the time step's partials
-  // from index dtGroupBase (the force pass's workgroups) on, and the last of all dtGroups
-  // reduces them (common/dt_fold.glsl).
-  void record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t dtGroupBase,
-              std::uint32_t dtGroups);
+  // particle (SphSolver::nonFluidStart). The pass's SIMD groups write the time step's partials
+  // from index dtPartialBase (past the force pass's) on (common/dt_fold.glsl).
+  void record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t dtPartialBase);
   // The workgroups record(first, n, ...) dispatches.
   std::uint32_t workgroups(std::uint32_t first, std::uint32_t n) const;
 
