@@ -62,7 +62,7 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_COUNT) writeonly buffer Pa
 layout(std140, binding = HEMO_INTEGRATE_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
 layout(binding = HEMO_INTEGRATE_BINDING_STATE) uniform samplerBuffer stateT;
 // The tile test (symplectic Euler; interface/sph.h): every invocation widens its particle's
-// tile's box, and lists the tile when it is the first; sph/rebuild_tiles.comp reads them.
+// tile's box, and lists the tile when it is the first; sph/rebuild_decide.comp reads them.
 layout(std140, binding = HEMO_INTEGRATE_BINDING_TILE_GRID) uniform TileGridBlock { TileGrid tiles; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_TILE_BOXES) buffer TileBoxes { uint tileBox[]; };
 // The tiles with moving particles this step: their number, whether this step collected the
@@ -162,7 +162,7 @@ vec2 hemo_subgroup_top2(vec2 t) {
 // every invocation). Collecting cost the dam break's integrator 0.4-0.6 ms a step (subgroup
 // reductions and atomics); the tiles decide only where the reach test has failed. A step
 // whose half-sum jumps past the threshold without having collected rebuilds
-// (sph/rebuild_tiles.comp).
+// (sph/rebuild_decide.comp).
 bool hemo_collect_tiles() {
   return kMode == HEMO_INTEGRATE_SYMPLECTIC_EULER && !(lastCheck.z <= float(HEMO_TILE_COLLECT_FROM) * pc.threshold);
 }
