@@ -53,9 +53,10 @@ std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
   return std::uint64_t(std::max(particles.capacity(), 1u)) * bytes;
 }
 
-// The time step's partials one pass may write: one per invocation of its workgroups over all
-// slots, at most (common/dt_fold.glsl).
-std::uint64_t dtPartialsPerPass(const ParticleStore& particles) {
+// The partials one pass over all slots may write when each SIMD group writes one (the time
+// step's, common/dt_fold.glsl; the rebuild test's, sph/integrate.comp): at most one per
+// invocation of its workgroups (a device may run SIMD groups of one).
+std::uint64_t partialsPerPass(const ParticleStore& particles) {
   return (std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup * kWorkgroup;
 }
 
@@ -277,13 +278,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
       tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
       // Partials for the force pass's SIMD groups over all slots and the wall stage's over the
-      // non-fluid ones: at most one per invocation of each (a device may run SIMD groups of one).
-      dtPartials_(context, 2 * dtPartialsPerPass(particles) * 8, gpu::MemoryUse::Device, "time-step partials"),
+      // non-fluid ones.
+      dtPartials_(context, 2 * partialsPerPass(particles) * 8, gpu::MemoryUse::Device, "time-step partials"),
       dtCounts_(context, 8, gpu::MemoryUse::Device, "time-step partials written"),
       dtResult_(context, 8, gpu::MemoryUse::Device, "time-step limits (min, max)"),
-      // One partial per SIMD group of the integrator: at most one per invocation (a device may
-      // run SIMD groups of one).
-      checkPartials_(context, ((std::uint64_t(std::max(particles.capacity(), 1u)) + kWorkgroup - 1) / kWorkgroup) * kWorkgroup * 16,
+      // One partial per SIMD group of the integrator.
+      checkPartials_(context, partialsPerPass(particles) * 16,
                      gpu::MemoryUse::Device, "rebuild check partials"),
       checkCount_(context, 4, gpu::MemoryUse::Device, "rebuild check partials written"),
       checkResult_(context, 16, gpu::MemoryUse::Device, "rebuild check result"),
@@ -582,7 +582,7 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
   const gpu::Groups groups = forces_->groupsFor(fluidSlots);
   const std::uint32_t first = nonFluidStart();
   const bool wallRuns = wall_ && wall_->workgroups(first, n) > 0;
-  const auto wallBase = static_cast<std::uint32_t>(dtPartialsPerPass(*particles_));
+  const auto wallBase = static_cast<std::uint32_t>(partialsPerPass(*particles_));
   rec.dispatch(*forces_, forcesSet_, ForcesPush{fluidSlots}, groups);
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "forces");
