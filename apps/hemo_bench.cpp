@@ -216,6 +216,33 @@ Json primitives(Context& ctx, int repeat) {
           {{"vec4_loads_per_pair", loads}, {"list_layout", layout ? "contiguous" : "interleaved"},
            {"gathers", layout == 2 ? "texel buffer, uniform index" : "texel buffer"}, {"particles", n}, {"entries_per_particle", entries}});
     }
+    // Clusters (bench/pair_gather_cluster.comp): an invocation owns 1, 2, 4 or 8 particles and
+    // evaluates each fetched entry against all of them, over lists as long as one particle's.
+    // The cost per pair evaluated, against the fetches it saves; a real cluster list is the
+    // union of its particles' (1.27, 1.59 and 1.98 times one list for 2, a 2 x 2 square and a
+    // 2 x 2 x 2 cube of lattice points).
+    const char* bodyNames[3] = {"few flops", "density", "forces"};
+    for (const std::uint32_t body : {0u, 1u, 2u})
+    for (const std::uint32_t cluster : {1u, 2u, 4u, 8u}) {
+      const std::uint32_t loads = body == 2u ? 2u : 1u;
+      const std::uint32_t texels = 0x1fu;
+      const auto& probe = ctx.pipelines().get(
+          {"bench/pair_gather_cluster", HEMO_BENCH_BINDING_COUNT, sizeof(Push), 64, {loads, cluster, body}, 0u, texels});
+      using hemo::gpu::texelBinding;
+      const auto set = probe.makeSet({texelBinding(HEMO_BENCH_BINDING_LIST, &contiguousBuffer, VK_FORMAT_R32_UINT),
+                                      texelBinding(HEMO_BENCH_BINDING_A, &data[0], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                      texelBinding(HEMO_BENCH_BINDING_B, &data[1], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                      texelBinding(HEMO_BENCH_BINDING_C, &data[2], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                      texelBinding(HEMO_BENCH_BINDING_D, &data[3], VK_FORMAT_R32G32B32A32_SFLOAT),
+                                      {HEMO_BENCH_BINDING_OUT, &data[4]}});
+      const Push push{n / cluster, entries};
+      const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
+        rec.dispatch(probe, set, push, probe.groupsFor(n / cluster));
+      });
+      row("pair_gather", std::uint64_t(n / cluster) * cluster * entries, ms,
+          {{"vec4_loads_per_pair", loads}, {"list_layout", "contiguous"}, {"gathers", "texel buffer"},
+           {"cluster", cluster}, {"pair_body", bodyNames[body]}, {"particles", n / cluster * cluster}, {"entries_per_particle", entries}});
+    }
   }
 
   // What a per-lane store costs (bench/store_scatter.comp): 10,648 invocations (the
