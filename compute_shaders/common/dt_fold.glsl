@@ -14,13 +14,12 @@
 //   writeonly buffer { vec2 dtPartials[]; }
 //   writeonly buffer { uint dtCounts[2]; }
 
-// Every invocation of the dispatch calls this once, in uniform control flow, with its limit
-// (s) and whether it has one.
-void hemo_dt_partial(float limit, bool valid, uint partialBase, uint pass) {
-  const float inf = uintBitsToFloat(0x7f800000u);
-  const vec2 mm = valid ? vec2(limit) : vec2(inf, -inf);
+// Every invocation of the dispatch calls one of these once, in uniform control flow. An
+// invocation with several limits (the cluster passes) gives their (min, max) ((+inf, -inf)
+// for none) and whether any is NaN.
+void hemo_dt_partial_range(vec2 mm, bool anyNan, uint partialBase, uint pass) {
   const vec2 sub = vec2(subgroupMin(mm.x), subgroupMax(mm.y));
-  const bool nan = subgroupAny(valid && isnan(limit));
+  const bool nan = subgroupAny(anyNan);
   if (subgroupElect()) {
     dtPartials[partialBase + hemo_group_index() * gl_NumSubgroups + gl_SubgroupID] =
         nan ? vec2(uintBitsToFloat(0x7fc00000u)) : sub;
@@ -28,4 +27,10 @@ void hemo_dt_partial(float limit, bool valid, uint partialBase, uint pass) {
   if (gl_LocalInvocationID.x == 0u && hemo_group_index() == 0u) {
     dtCounts[pass] = gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z * gl_NumSubgroups;
   }
+}
+
+// One limit (s), and whether the invocation has one.
+void hemo_dt_partial(float limit, bool valid, uint partialBase, uint pass) {
+  const float inf = uintBitsToFloat(0x7f800000u);
+  hemo_dt_partial_range(valid ? vec2(limit) : vec2(inf, -inf), valid && isnan(limit), partialBase, pass);
 }

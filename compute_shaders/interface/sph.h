@@ -85,6 +85,61 @@
 #define HEMO_BUILD_BINDING_ACTIVE_ARGS 6
 #define HEMO_BUILD_BINDING_COUNT 7
 
+// Clusters (ListLayout::Clusters, CPU devices): the fluid's slots [0, fluid) in grid order are
+// cut into clusters of HEMO_CLUSTER_SIZE consecutive slots (the last may hold fewer), and each
+// cluster has one list, the union of its members' neighbour lists, which the cluster passes walk
+// evaluating every entry against all members: on llvmpipe a texel fetch costs per lane whatever
+// the arithmetic, so a fetch that serves eight pairs costs an eighth (docs/benchmarks.md,
+// "Session 26"). An entry is a slot (bits 0-22) with the members within the list radius of it
+// as a mask (bit 23 + m for member m) and HEMO_LIST_BOUNDARY_BIT for a boundary or wall
+// neighbour. A cluster whose members lie in more than one row of grid cells walks each row's
+// members separately, so a slot may appear once per such group, each time with that group's
+// members only: no pair is counted twice. Fluid entries fill the list from entry 0 up,
+// boundary entries from entry capacity - 1 down; the count packs both (fluid | boundary << 16).
+#define HEMO_CLUSTER_SIZE 4
+#define HEMO_CLUSTER_SLOT_MASK 0x7fffffu
+#define HEMO_CLUSTER_MEMBER_SHIFT 23u
+#define HEMO_CLUSTER_MAX_SLOTS 0x800000u  // slots the entries can name
+
+// sph/build_clusters.comp: the clusters' lists.
+#define HEMO_CBUILD_BINDING_POSITIONS 0  // the grid's positions at build, with the kind in w
+#define HEMO_CBUILD_BINDING_CELL_START 1
+#define HEMO_CBUILD_BINDING_PARAMS 2
+#define HEMO_CBUILD_BINDING_CCOUNT 3  // uint per cluster: fluid | boundary << 16
+#define HEMO_CBUILD_BINDING_CLIST 4   // clusterCapacity entries per cluster
+#define HEMO_CBUILD_BINDING_STATUS 5
+#define HEMO_CBUILD_BINDING_COUNT 6
+
+// sph/density_clusters.comp: sph/density.comp over the clusters' lists (summation density).
+#define HEMO_CDENSITY_BINDING_POSITIONS 0
+#define HEMO_CDENSITY_BINDING_VELOCITIES 1
+#define HEMO_CDENSITY_BINDING_PARAMS 2
+#define HEMO_CDENSITY_BINDING_STATE 3
+#define HEMO_CDENSITY_BINDING_CCOUNT 4
+#define HEMO_CDENSITY_BINDING_CLIST 5  // RGBA32UI texels: four entries each
+#define HEMO_CDENSITY_BINDING_CLOCK 6
+#define HEMO_CDENSITY_BINDING_VISCOUS_VEL 7
+#define HEMO_CDENSITY_BINDING_PAIR_POSITION 8
+#define HEMO_CDENSITY_BINDING_COUNT 9
+
+// sph/forces_clusters.comp: sph/forces.comp over the clusters' lists (no SPS term).
+#define HEMO_CFORCES_BINDING_POSITIONS 0
+#define HEMO_CFORCES_BINDING_VELOCITIES 1
+#define HEMO_CFORCES_BINDING_NORMALS 2
+#define HEMO_CFORCES_BINDING_PARAMS 3
+#define HEMO_CFORCES_BINDING_STATE 4
+#define HEMO_CFORCES_BINDING_CCOUNT 5
+#define HEMO_CFORCES_BINDING_CLIST 6
+#define HEMO_CFORCES_BINDING_ACCEL 7
+#define HEMO_CFORCES_BINDING_DT_LIMIT 8
+#define HEMO_CFORCES_BINDING_IDS 9
+#define HEMO_CFORCES_BINDING_STATUS 10
+#define HEMO_CFORCES_BINDING_VISCOUS_VEL 11
+#define HEMO_CFORCES_BINDING_PAIR_POSITION 12
+#define HEMO_CFORCES_BINDING_DT_PARTIALS 13
+#define HEMO_CFORCES_BINDING_DT_COUNTS 14
+#define HEMO_CFORCES_BINDING_COUNT 15
+
 // sph/density.comp: summation density and Tait pressure of fluid particles from the list.
 #define HEMO_DENSITY_BINDING_POSITIONS 0
 #define HEMO_DENSITY_BINDING_VELOCITIES 1

@@ -23,7 +23,10 @@ layout(std430, binding = HEMO_BUILD_BINDING_NCOUNT) writeonly buffer Counts { ui
 layout(std430, binding = HEMO_BUILD_BINDING_NLIST) writeonly buffer List { uint neighbourList[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_STATUS) buffer Status { uint status[]; };
 layout(std430, binding = HEMO_BUILD_BINDING_ACTIVE_ARGS) writeonly buffer ActiveArgs { uvec4 activeArgs; };
-layout(push_constant) uniform Push { HemoGrid grid; } pc;
+layout(push_constant) uniform Push {
+  HemoGrid grid;
+  uint first;  // the slots [first, n) get lists (with clusters, the fluid's are the clusters')
+} pc;
 
 // Distance in cell units from u to cell k along one axis; on a bounded axis the first and
 // last cells reach to infinity, as particles outside the grid are clamped into them.
@@ -38,8 +41,8 @@ float hemo_cell_gap(int k, float u, uint dim, uint periodic) {
 }
 
 void main() {
-  const uint i = hemo_global_index();
-  if (i == 0u) {
+  const uint i = pc.first + hemo_global_index();
+  if (hemo_global_index() == 0u) {
     activeArgs = uvec4(0u, 1u, 1u, 0u);  // boundary_pressure.comp's active list, filled after this pass
   }
   if (i >= pc.grid.dimsN.w) {

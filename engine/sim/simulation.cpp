@@ -12,9 +12,10 @@ std::string mib(std::uint64_t bytes) { return std::to_string(bytes / (1024 * 102
 }  // namespace
 
 Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : context_(&context), scene_(scene) {
-  // Fit check before building anything: the largest per-particle buffer is the neighbour list.
+  // Fit check before building anything: the largest per-particle buffer is the neighbour list
+  // (with clusters, their lists: a little more, bounded by (count + 8) (capacity + 2) entries).
   const std::uint64_t count = scene::countSceneParticles(scene);
-  const std::uint64_t listBytes = count * scene.sph.neighbourCapacity * 4;
+  const std::uint64_t listBytes = (count + 8) * (scene.sph.neighbourCapacity + 2) * 4;
   const std::uint64_t limit = context.limits().maxStorageBufferRange;
   if (count > 0xffffffffull / 2 || listBytes > limit) {
     std::ostringstream msg;

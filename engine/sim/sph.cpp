@@ -23,6 +23,18 @@ struct CountPush {
 struct ClockedPush {
   std::uint32_t n, clockIn;
 };
+struct BuildPush {  // sph/build_list.comp
+  NeighbourGrid::Push grid;
+  std::uint32_t first;  // the slots [first, n) get lists
+};
+struct ClusterBuildPush {  // sph/build_clusters.comp
+  NeighbourGrid::Push grid;
+  std::uint32_t fluid, capacity;
+};
+struct ClusterPush {  // the cluster pair passes
+  std::uint32_t fluid, capacity;
+  std::uint32_t third;  // density: the clock record it reads; forces: n (slots past the fluid's to set)
+};
 struct BoundaryPush {  // sph/boundary_pressure.comp
   std::uint32_t first, n, clockIn;  // the range modes: the slots [first, n)
   std::uint32_t mode;               // HEMO_BPRESSURE_*
@@ -51,6 +63,24 @@ static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the f
 
 std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
   return std::uint64_t(std::max(particles.capacity(), 1u)) * bytes;
+}
+
+// Clusters (interface/sph.h): as many as the slots could need, and the entries of each: every
+// member's neighbours and itself even when each member walks alone (all in different rows of
+// cells), plus the spare entry of the build's stores, in whole texels of four.
+std::uint64_t clustersFor(const ParticleStore& particles) {
+  return std::uint64_t(std::max(particles.capacity(), 1u)) / HEMO_CLUSTER_SIZE + 1;
+}
+std::uint32_t clusterEntries(std::uint32_t neighbourCapacity) {
+  return (HEMO_CLUSTER_SIZE * (neighbourCapacity + 1) + 1 + 3) & ~3u;
+}
+// Whether the fluid walks clusters (ListLayout): on CPU devices, where a fetch costs per lane,
+// for summation density without the SPS term (the cluster passes have neither).
+bool clusterLayout(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
+  const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  const bool clusterable = !s.sps && s.densityMethod == DensityMethod::Summation &&
+                           particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS;
+  return clusterable && (s.listLayout == ListLayout::Clusters || (s.listLayout == ListLayout::Auto && cpu));
 }
 
 // The partials one pass over all slots may write when each SIMD group writes one (the time
@@ -265,6 +295,12 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       pairList_(context, perParticle(particles, 4) * settings.neighbourCapacity, gpu::MemoryUse::Device,
                 "interacting pairs"),
       viscousVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "viscous velocities"),
+      clusterCapacity_(clusterEntries(settings.neighbourCapacity)),
+      // (a texel's worth when the solver does not use them)
+      ccount_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 : 16,
+              gpu::MemoryUse::Device, "cluster list counts"),
+      clist_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 * clusterCapacity_ : 16,
+             gpu::MemoryUse::Device, "cluster lists"),
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
       activeArgs_(context, 16, gpu::MemoryUse::Device, "boundary-pressure indirect arguments"),
@@ -297,8 +333,10 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   // The list's layout (interface/sph.h): on a CPU device each SIMD lane walks its own list,
   // and entries next to each other stream from cache; interleaved entries, which coalesce
   // on a GPU, cost a cache miss per entry there (pair_gather in hemo-bench primitives).
-  const bool contiguous = settings.listLayout == ListLayout::Contiguous ||
-                          (settings.listLayout == ListLayout::Auto && context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU);
+  const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  const bool contiguous = settings.listLayout == ListLayout::Contiguous || settings.listLayout == ListLayout::Clusters ||
+                          (settings.listLayout == ListLayout::Auto && cpu);
+  clusters_ = clusterLayout(context, settings, particles);
   params_.listStride = contiguous ? 1u : std::max(particles.capacity(), 1u);
   params_.listParticleStride = contiguous ? settings.neighbourCapacity : 1u;
   // Contiguous lists whose capacity is a multiple of 4 are read four entries per texel
@@ -317,7 +355,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   inflow_.upload(std::vector<InflowParams>{disabledInflowParams()});
   auto& cache = context.pipelines();
-  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(NeighbourGrid::Push), kWorkgroup,
+  buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(BuildPush), kWorkgroup,
                            pairSpecialization({}), 1u << HEMO_BUILD_BINDING_PARAMS,
                              1u << HEMO_BUILD_BINDING_POSITIONS | 1u << HEMO_BUILD_BINDING_CELL_START});
   // Constant 1 of the density pass and the integrator: summation density (0), or continuity
@@ -378,6 +416,49 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_BUILD_BINDING_NLIST, &nlist_},
                                        {HEMO_BUILD_BINDING_STATUS, &status_},
                                        {HEMO_BUILD_BINDING_ACTIVE_ARGS, &activeArgs_}});
+  buildClusters_ = &cache.get({"sph/build_clusters", HEMO_CBUILD_BINDING_COUNT, sizeof(ClusterBuildPush), kWorkgroup,
+                               pairSpecialization({}), 1u << HEMO_CBUILD_BINDING_PARAMS,
+                               1u << HEMO_CBUILD_BINDING_POSITIONS | 1u << HEMO_CBUILD_BINDING_CELL_START});
+  densityClusters_ = &cache.get({"sph/density_clusters", HEMO_CDENSITY_BINDING_COUNT, sizeof(ClusterPush), kWorkgroup,
+                                 pairSpecialization({}), 1u << HEMO_CDENSITY_BINDING_PARAMS | 1u << HEMO_CDENSITY_BINDING_CLOCK,
+                                 1u << HEMO_CDENSITY_BINDING_POSITIONS | 1u << HEMO_CDENSITY_BINDING_VELOCITIES |
+                                     1u << HEMO_CDENSITY_BINDING_CCOUNT | 1u << HEMO_CDENSITY_BINDING_CLIST});
+  forcesClusters_ = &cache.get({"sph/forces_clusters", HEMO_CFORCES_BINDING_COUNT, sizeof(ClusterPush), kWorkgroup,
+                                pairSpecialization({}), 1u << HEMO_CFORCES_BINDING_PARAMS,
+                                1u << HEMO_CFORCES_BINDING_POSITIONS | 1u << HEMO_CFORCES_BINDING_VELOCITIES |
+                                    1u << HEMO_CFORCES_BINDING_NORMALS | 1u << HEMO_CFORCES_BINDING_STATE |
+                                    1u << HEMO_CFORCES_BINDING_CCOUNT | 1u << HEMO_CFORCES_BINDING_CLIST |
+                                    1u << HEMO_CFORCES_BINDING_VISCOUS_VEL | 1u << HEMO_CFORCES_BINDING_PAIR_POSITION});
+  forcesClustersSet_ = forcesClusters_->makeSet({gpu::texelBinding(HEMO_CFORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
+                                 {HEMO_CFORCES_BINDING_PARAMS, &paramsBuffer_},
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_STATE, &state_, gpu::texel::kVec4),
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_CCOUNT, &ccount_, gpu::texel::kUint),
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_CLIST, &clist_, gpu::texel::kUvec4),
+                                 {HEMO_CFORCES_BINDING_ACCEL, &accel_},
+                                 {HEMO_CFORCES_BINDING_DT_LIMIT, &dtLimit_},
+                                 {HEMO_CFORCES_BINDING_DT_PARTIALS, &dtPartials_},
+                                 {HEMO_CFORCES_BINDING_DT_COUNTS, &dtCounts_},
+                                 {HEMO_CFORCES_BINDING_IDS, &a.ids},
+                                 {HEMO_CFORCES_BINDING_STATUS, &status_},
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4),
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)});
+  buildClustersSet_ = buildClusters_->makeSet({gpu::texelBinding(HEMO_CBUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
+                                               gpu::texelBinding(HEMO_CBUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
+                                               {HEMO_CBUILD_BINDING_PARAMS, &paramsBuffer_},
+                                               {HEMO_CBUILD_BINDING_CCOUNT, &ccount_},
+                                               {HEMO_CBUILD_BINDING_CLIST, &clist_},
+                                               {HEMO_CBUILD_BINDING_STATUS, &status_}});
+  densityClustersSet_ = densityClusters_->makeSet({gpu::texelBinding(HEMO_CDENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                   gpu::texelBinding(HEMO_CDENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                   {HEMO_CDENSITY_BINDING_PARAMS, &paramsBuffer_},
+                                   {HEMO_CDENSITY_BINDING_STATE, &state_},
+                                   gpu::texelBinding(HEMO_CDENSITY_BINDING_CCOUNT, &ccount_, gpu::texel::kUint),
+                                   gpu::texelBinding(HEMO_CDENSITY_BINDING_CLIST, &clist_, gpu::texel::kUvec4),
+                                   {HEMO_CDENSITY_BINDING_CLOCK, &clock_},
+                                   {HEMO_CDENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
+                                   {HEMO_CDENSITY_BINDING_PAIR_POSITION, &pairPosition_}});
   densitySet_ = density_->makeSet({gpu::texelBinding(HEMO_DENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                    gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                    {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
@@ -527,13 +608,26 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
   // Past movingSlots() the slots hold rigid boundary particles in the grid order of an
   // earlier build, where they still are: the grid sorts the moving slots only.
   grid_.record(rec, n, sorted, timestamps);
-  rec.dispatch(*buildList_, buildListSet_, grid_.push(n), buildList_->groupsFor(n));
+  if (sorted == n) sortedUpload_ = particles_->uploads();  // every slot sorted: the grid's order
+  // With clusters the fluid's lists are the clusters'; the per-particle lists are built for
+  // the boundary and wall slots only (the boundary-pressure pass and the wall's reaction).
+  const std::uint32_t listFirst = clusterPath() ? particles_->fluidCount() : 0u;
+  rec.dispatch(*buildList_, buildListSet_, BuildPush{grid_.push(n), listFirst}, buildList_->groupsFor(std::max(n - listFirst, 1u)));
   rec.computeToCompute();
+  if (timestamps) timestamps->mark(rec, "neighbour list");
+  if (clusterPath()) {
+    const std::uint32_t fluid = particles_->fluidCount();
+    const std::uint32_t clusters = clusterCount();
+    rec.dispatch(*buildClusters_, buildClustersSet_, ClusterBuildPush{grid_.push(n), fluid, clusterCapacity_},
+                 buildClusters_->groupsFor(std::max(clusters, 1u)));
+    rec.computeToCompute();
+    if (timestamps) timestamps->mark(rec, "cluster list");
+  }
   // The boundary and wall particles: those with fluid in the new list to the active list,
   // the others set to a state without fluid neighbours until the next build.
   recordBoundaryRange(rec, HEMO_BPRESSURE_SORT, clockParity_);
   rec.computeToComputeAndIndirect();
-  if (timestamps) timestamps->mark(rec, "neighbour list");
+  if (timestamps) timestamps->mark(rec, "boundary sort");
 }
 
 void SphSolver::recordBoundaryRange(gpu::CommandRecorder& rec, std::uint32_t mode, std::uint32_t clockIn) {
@@ -557,7 +651,14 @@ void SphSolver::recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* 
 void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
                                   gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
-  rec.dispatch(*density_, densitySet_, ClockedPush{fluidSlots, clockParity_}, density_->groupsFor(fluidSlots));
+  if (clusterPath()) {
+    const std::uint32_t fluid = particles_->fluidCount();
+    const std::uint32_t clusters = clusterCount();
+    rec.dispatch(*densityClusters_, densityClustersSet_, ClusterPush{fluid, clusterCapacity_, clockParity_},
+                 densityClusters_->groupsFor(std::max(clusters, 1u)));
+  } else {
+    rec.dispatch(*density_, densitySet_, ClockedPush{fluidSlots, clockParity_}, density_->groupsFor(fluidSlots));
+  }
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
   // Over the active list of the last build (recordNeighbours), as many workgroups as it counted.
@@ -579,11 +680,19 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
   }
   // The time step's reduction: the SIMD groups of this pass and, with a wall, of the wall
   // stage store partials, and one workgroup reduces them (common/dt_fold.glsl).
-  const gpu::Groups groups = forces_->groupsFor(fluidSlots);
   const std::uint32_t first = nonFluidStart();
   const bool wallRuns = wall_ && wall_->workgroups(first, n) > 0;
   const auto wallBase = static_cast<std::uint32_t>(partialsPerPass(*particles_));
-  rec.dispatch(*forces_, forcesSet_, ForcesPush{fluidSlots}, groups);
+  gpu::Groups groups;
+  if (clusterPath()) {
+    const std::uint32_t fluid = particles_->fluidCount();
+    const std::uint32_t clusters = clusterCount();
+    groups = forcesClusters_->groupsFor(std::max(clusters + (fluidSlots - std::min(fluid, fluidSlots)), 1u));
+    rec.dispatch(*forcesClusters_, forcesClustersSet_, ClusterPush{fluid, clusterCapacity_, fluidSlots}, groups);
+  } else {
+    groups = forces_->groupsFor(fluidSlots);
+    rec.dispatch(*forces_, forcesSet_, ForcesPush{fluidSlots}, groups);
+  }
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "forces");
   if (wall_) {
@@ -626,6 +735,12 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   } else {
     rec.computeToCompute();
   }
+}
+
+bool SphSolver::clusterPath() const { return clusters_ && inGridOrder() && !wall_; }
+
+std::uint32_t SphSolver::clusterCount() const {
+  return (particles_->fluidCount() + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE;
 }
 
 bool SphSolver::inGridOrder() const {

@@ -165,7 +165,9 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
                                 Variant{false, 0.0f, sim::ListLayout::Contiguous, 128, 4},
                                 Variant{true, 3000.0f, sim::ListLayout::Contiguous, 128, 4},
                                 Variant{false, 3000.0f, sim::ListLayout::Contiguous, 130, 1},
-                                Variant{false, 3000.0f, sim::ListLayout::Interleaved, 128, 1}}) {
+                                Variant{false, 3000.0f, sim::ListLayout::Interleaved, 128, 1},
+                                Variant{true, 0.0f, sim::ListLayout::Clusters, 128, 4},
+                                Variant{false, 3000.0f, sim::ListLayout::Clusters, 128, 4}}) {
     const bool clamp = variant.clamp;
     sim::SphSettings s = settings();
     s.clampNegativePressure = clamp;
@@ -180,6 +182,7 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
     const sim::ParticleStore& store = *st.store;
     const sim::SphSolver& solver = *st.solver;
     ASSERT_EQ(solver.listReadWidth(), variant.readWidth);
+    ASSERT_EQ(solver.usesClusters(), variant.layout == sim::ListLayout::Clusters);
 
     const auto slotIds = store.readIds();
     const auto state = solver.state().readback<glm::vec4>(n);
@@ -310,13 +313,17 @@ TEST_F(SphStageTest, PeriodicAxesMatchReferenceAcrossTheSeams) {
   s.periodic = {true, true, false};
   // Periods of 9 and 10 spacings (3.1 and 3.5 list radii of 2.86 dp), then of 9 and 8 (2.8 list
   // radii): the list grid's cells along y are then R / 2, as five of 2R/3 do not fit.
+  for (const sim::ListLayout layout : {sim::ListLayout::Contiguous, sim::ListLayout::Clusters})
   for (const int ny : {10, 8}) {
-  SCOPED_TRACE("period along y of " + std::to_string(ny) + " spacings");
+  SCOPED_TRACE("period along y of " + std::to_string(ny) + " spacings, " +
+               (layout == sim::ListLayout::Clusters ? "clusters" : "contiguous lists"));
+  s.listLayout = layout;
   const int nx = 9;
   const Case c = makeCase(rng, s, nx, ny, 6, 0.3f, true);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
   const glm::vec3 lo(0.0f, 0.0f, -0.05f), hi(float(nx) * s.spacing, float(ny) * s.spacing, 0.15f);
   const Stages st = runStages(c, s, hi, lo);
+  ASSERT_EQ(st.solver->usesClusters(), layout == sim::ListLayout::Clusters);
   const auto model = modelOf(st.solver->params());
   ASSERT_NEAR(model.period.x, nx * s.spacing, 1e-7);
   ASSERT_NEAR(model.period.y, ny * s.spacing, 1e-7);
@@ -467,6 +474,7 @@ TEST_F(SphStageTest, PartialGridBuildMatchesAWholeBuild) {
   }
   const auto n = static_cast<std::uint32_t>(c.pos.size());
   s.neighbourCapacity = 1024;
+  s.listLayout = sim::ListLayout::Contiguous;  // every particle's own list (clusters: ClusterListsHoldEachPairOnce)
   const Stages st = runStages(c, s, hi, lo, true);  // a whole build: the slots now in grid order
   const std::uint32_t fluid = st.store->fluidCount();
   ASSERT_GT(fluid, 300u);
@@ -909,6 +917,7 @@ TEST_F(SphStageTest, ListHoldsEveryPairWithinTheSupportWhileTheGateStaysClosed) 
   const float dp = s.spacing, m = s.particleMass();
   std::uniform_real_distribution<float> jitter(-0.1f * dp, 0.1f * dp);
   std::normal_distribution<float> noise(0.0f, 0.05f);
+  s.listLayout = sim::ListLayout::Contiguous;  // every particle's own list; clusters: ClusterListsHoldEachPairOnce
   std::vector<glm::vec4> pos, vel;
   // A rigid wall of two layers across y = 0.095 m ...
   for (int layer = 0; layer < 2; ++layer)
@@ -990,6 +999,116 @@ TEST_F(SphStageTest, ListHoldsEveryPairWithinTheSupportWhileTheGateStaysClosed) 
               saved, wallPairs, solver.readRebuilds());
   EXPECT_GE(saved, 5) << "the tile test kept the list where the reach test alone rebuilt it";
   EXPECT_GT(wallPairs, 0) << "the fluid reached the wall";
+}
+
+// The clusters' lists (interface/sph.h, "Clusters") against a brute-force double-precision
+// search: every fluid member is named, exactly once, with exactly the particles within the
+// list radius (the minimum image on periodic axes); fluid entries from the front, boundary
+// entries (marked) from the back. Cases: a jittered block over a boundary plane, the same
+// periodic in x and y, and random particles (some outside the grid) with a periodic x axis.
+// Clusters whose members sit in several rows of cells must occur (a slot then appears once per
+// row group), or the grouping is not tested.
+TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
+  auto rng = rngFor();
+  struct Setup {
+    const char* name;
+    Case c;
+    sim::SphSettings s;
+    glm::vec3 lo, hi;
+  };
+  std::vector<Setup> setups;
+  {
+    sim::SphSettings s = settings();
+    setups.push_back({"block", makeCase(rng, s, 9, 8, 7), s, glm::vec3(-0.05f), glm::vec3(0.15f)});
+  }
+  {
+    sim::SphSettings s = settings();
+    s.periodic = {true, true, false};
+    const Case c = makeCase(rng, s, 9, 8, 6, 0.3f, true);
+    setups.push_back({"periodic x, y", c, s, glm::vec3(0.0f, 0.0f, -0.05f), glm::vec3(0.09f, 0.08f, 0.1f)});
+  }
+  {
+    sim::SphSettings s = settings();
+    s.periodic = {true, false, false};
+    s.neighbourCapacity = 1024;  // random positions crowd more than a fluid
+    const float period = float(3.6 * s.listRadius());
+    std::uniform_real_distribution<float> ux(0.0f, period), uy(-0.03f, 0.07f), uz(-0.03f, 0.06f), unit(0.0f, 1.0f);
+    Case c;
+    for (int k = 0; k < 2000; ++k) {
+      const glm::vec3 x(ux(rng), uy(rng), uz(rng));
+      const bool fluid = x.y > 0.0f && x.y < 0.05f && unit(rng) < 0.6f;
+      c.pos.emplace_back(x, s.particleMass());
+      c.vel.emplace_back(0.0f, 0.0f, 0.0f, float(fluid ? sim::ParticleKind::Fluid : sim::ParticleKind::Boundary));
+      c.normals.emplace_back(0.0f, 0.0f, 1.0f, 0.0f);
+    }
+    setups.push_back({"random, periodic x, some outside the grid", c, s, glm::vec3(0.0f, -0.02f, -0.02f),
+                      glm::vec3(period, 0.06f, 0.05f)});
+  }
+  std::size_t repeated = 0;  // entries of a slot already listed in its cluster
+  for (Setup& setup : setups) {
+    SCOPED_TRACE(setup.name);
+    setup.s.listLayout = sim::ListLayout::Clusters;
+    const Stages st = runStages(setup.c, setup.s, setup.hi, setup.lo, true);
+    const sim::SphSolver& solver = *st.solver;
+    ASSERT_TRUE(solver.usesClusters());
+    const auto n = static_cast<std::uint32_t>(setup.c.pos.size());
+    const std::uint32_t fluid = st.store->fluidCount();
+    const std::uint32_t clusters = (fluid + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE;
+    const std::uint32_t cap = solver.clusterCapacity();
+    const auto x = st.store->readPositions();
+    const auto v = st.store->readVelocities();
+    const auto counts = solver.clusterCounts().readback<std::uint32_t>(clusters);
+    const auto list = solver.clusterLists().readback<std::uint32_t>(std::size_t(clusters) * cap);
+    EXPECT_EQ(solver.readStatus().neighbourOverflow, 0u);
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      ASSERT_EQ(v[slot].w == float(sim::ParticleKind::Fluid), slot < fluid) << "the fluid's slots come first";
+    }
+    std::vector<std::vector<std::uint32_t>> named(fluid);
+    for (std::uint32_t c = 0; c < clusters; ++c) {
+      const std::uint32_t nf = counts[c] & 0xffffu, nb = counts[c] >> 16u;
+      ASSERT_LE(nf + nb, cap);
+      std::map<std::uint32_t, int> seen;
+      auto take = [&](std::uint32_t k, bool boundary) {
+        const std::uint32_t e = list[std::size_t(c) * cap + k];
+        const std::uint32_t j = e & HEMO_CLUSTER_SLOT_MASK;
+        const std::uint32_t mask = (e >> HEMO_CLUSTER_MEMBER_SHIFT) & ((1u << HEMO_CLUSTER_SIZE) - 1u);
+        ASSERT_LT(j, n);
+        EXPECT_EQ((e & sim::SphSolver::kListBoundaryBit) != 0, boundary) << "cluster " << c << " entry " << k;
+        EXPECT_EQ(j >= fluid, boundary) << "cluster " << c << " entry " << k;
+        EXPECT_NE(mask, 0u) << "an entry no member needs";
+        repeated += seen[j]++ > 0;
+        for (std::uint32_t m = 0; m < HEMO_CLUSTER_SIZE; ++m) {
+          if (!(mask & (1u << m))) continue;
+          const std::uint32_t i = c * HEMO_CLUSTER_SIZE + m;
+          ASSERT_LT(i, fluid) << "a mask names a member past the fluid";
+          named[i].push_back(j);
+        }
+      };
+      for (std::uint32_t k = 0; k < nf; ++k) take(k, false);
+      for (std::uint32_t k = cap - nb; k < cap; ++k) take(k, true);
+    }
+    const auto& p = solver.params();
+    const double radius = p.listRadius;
+    std::size_t pairs = 0;
+    for (std::uint32_t i = 0; i < fluid; ++i) {
+      auto& got = named[i];
+      std::sort(got.begin(), got.end());
+      EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "slot " << i << " names a neighbour twice";
+      for (std::uint32_t j = 0; j < n; ++j) {
+        glm::dvec3 d = glm::dvec3(x[i]) - glm::dvec3(x[j]);
+        for (int a = 0; a < 3; ++a) {
+          if (p.period[a] > 0.0f) d[a] -= double(p.period[a]) * std::round(d[a] / double(p.period[a]));
+        }
+        const double r = glm::length(d);
+        if (std::abs(r - radius) < 1e-5 * radius) continue;  // float rounding decides
+        const bool listed = std::binary_search(got.begin(), got.end(), j);
+        EXPECT_EQ(listed, r < radius) << "slots " << i << " and " << j << " at " << r / radius << " list radii";
+        pairs += r < radius;
+      }
+    }
+    EXPECT_GT(pairs, 20u * fluid);
+  }
+  EXPECT_GT(repeated, 0u) << "no cluster spans rows of cells";
 }
 
 }  // namespace

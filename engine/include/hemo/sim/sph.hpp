@@ -38,9 +38,13 @@ enum class Integrator { SymplecticEuler, Rk2Midpoint };
 // How the fluid's density is found (docs/physics.md).
 enum class DensityMethod { Summation, Continuity };
 
-// Memory layout of the neighbour list (interface/sph.h, listStride). Auto: contiguous on CPU
-// devices (lavapipe), interleaved on GPUs. Results do not depend on it.
-enum class ListLayout { Auto, Interleaved, Contiguous };
+// Memory layout of the neighbour list (interface/sph.h, listStride). Auto: clusters where they
+// apply and contiguous lists otherwise on CPU devices (lavapipe), interleaved on GPUs.
+// Clusters: the fluid walks one list per cluster of HEMO_CLUSTER_SIZE consecutive slots
+// (interface/sph.h), the other particles contiguous lists; they apply to summation density
+// without the SPS term and without a wall, else the solver uses contiguous lists. Results do
+// not depend on the layout beyond the order of the sums.
+enum class ListLayout { Auto, Interleaved, Contiguous, Clusters };
 
 // Physical and numerical settings (SI units).
 struct SphSettings {
@@ -219,6 +223,14 @@ class SphSolver {
   // list order and layout (interface/sph.h, HEMO_DENSITY_BINDING_PAIR_LIST), and their number.
   const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
   const gpu::Buffer& interactingPairs() const { return pairList_; }
+  // Clusters (interface/sph.h, "Clusters"): whether the fluid passes walk them (they do while
+  // the slots are in grid order and no wall is attached), the entries per cluster, and the
+  // lists as the last build left them: a count per cluster (fluid | boundary << 16) and
+  // clusterCapacity() entries per cluster.
+  bool usesClusters() const { return clusterPath(); }
+  std::uint32_t clusterCapacity() const { return clusterCapacity_; }
+  const gpu::Buffer& clusterCounts() const { return ccount_; }
+  const gpu::Buffer& clusterLists() const { return clist_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
   // The last step's rebuild test: vec4 (min, max of the x displacements since the list
   // build, the half-sum of the two largest reaches, the middle of the range a step before), m
@@ -270,6 +282,18 @@ class SphSolver {
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
   std::uint32_t periodicAxes_ = 0;  // bit a: axis a is periodic (HEMO_SPEC_PERIODIC_AXES)
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, viscousVel_;
+  // Clusters (interface/sph.h): their lists' capacity, counts and entries.
+  std::uint32_t clusterCapacity_ = 0;
+  gpu::Buffer ccount_, clist_;
+  const gpu::ComputePipeline* buildClusters_ = nullptr;
+  const gpu::ComputePipeline* densityClusters_ = nullptr;
+  const gpu::ComputePipeline* forcesClusters_ = nullptr;
+  gpu::DescriptorSet buildClustersSet_, densityClustersSet_, forcesClustersSet_;
+  bool clusters_ = false;  // the layout asks for clusters (they run while clusterPath())
+  // The fluid passes walk the clusters' lists in this step: the layout asks for them, the
+  // slots are in grid order, and the scene has no wall.
+  bool clusterPath() const;
+  std::uint32_t clusterCount() const;  // clusters of the fluid's slots (the last may hold fewer)
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   // The boundary and wall slots with fluid in their list, and the indirect arguments of the
   // boundary-pressure pass over them (interface/sph.h, HEMO_BPRESSURE_SORT).

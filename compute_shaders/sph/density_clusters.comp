@@ -1,0 +1,95 @@
+#version 450
+// sph/density.comp's summation density over the clusters' lists (interface/sph.h, "Clusters"):
+// one invocation per cluster, every entry fetched once and evaluated against all members,
+//   rho_i = sum_j m_j W(|x_i - x_j|, h)   (j includes i: each member is in its own mask)
+//   p_i   = B ((rho_i / rho0)^7 - 1) + p_bg   (common/tait.glsl)
+// and the pair data of interface/sph.h: pair position (x, V p) and viscous velocity (v, V).
+// A member counts an entry only where the entry's mask names it (within the list radius, and
+// counted once however the cluster's rows split its walk); W is 0 beyond the support.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/sph.h"
+#include "common/index.glsl"
+#include "common/kernel.glsl"
+#include "common/sph_params.glsl"
+#include "common/clock.glsl"
+#include "common/tait.glsl"
+
+layout(binding = HEMO_CDENSITY_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_CDENSITY_BINDING_VELOCITIES) uniform samplerBuffer velocities;
+HEMO_SPH_PARAMS_UNIFORM(HEMO_CDENSITY_BINDING_PARAMS);
+layout(std430, binding = HEMO_CDENSITY_BINDING_STATE) writeonly buffer State { vec4 state[]; };
+layout(binding = HEMO_CDENSITY_BINDING_CCOUNT) uniform usamplerBuffer clusterCount;
+layout(binding = HEMO_CDENSITY_BINDING_CLIST) uniform usamplerBuffer clusterList;
+layout(std140, binding = HEMO_CDENSITY_BINDING_CLOCK) uniform Clock { ClockRecord clocks[2]; };
+layout(std430, binding = HEMO_CDENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
+layout(std430, binding = HEMO_CDENSITY_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
+layout(push_constant) uniform Push {
+  uint fluid;     // fluid slots: [0, fluid)
+  uint capacity;  // entries per cluster (a multiple of 4)
+  uint clockIn;   // the clock record this step reads
+} pc;
+
+const uint M = HEMO_CLUSTER_SIZE;
+
+vec3 gX[M];
+float gRho[M];
+HemoPairParams gPp;
+float gInvH, gSupport;
+
+// One entry; `valid` is false for the padding of the last texel.
+void pair(uint entry, bool valid) {
+  const uint j = entry & HEMO_CLUSTER_SLOT_MASK;
+  const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;  // the boundary bit lies past the members'
+  const vec4 pj = texelFetch(positions, int(j));
+  for (uint m = 0u; m < M; ++m) {
+    const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
+    const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
+    const float w = hemo_kernel_w_inv(r, gInvH, gPp.kernelNorm);
+    gRho[m] += (mask & (1u << m)) != 0u ? pj.w * w : 0.0;
+  }
+}
+
+// Entries [first, end) of the cluster's list.
+void range(uint base, uint first, uint end) {
+  for (uint k = first & ~3u; k < end; k += 4u) {
+    const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
+    pair(e.x, k >= first);
+    pair(e.y, k + 1u >= first && k + 1u < end);
+    pair(e.z, k + 2u >= first && k + 2u < end);
+    pair(e.w, k + 3u >= first && k + 3u < end);
+  }
+}
+
+void main() {
+  const uint cluster = hemo_global_index();
+  const uint first = cluster * M;
+  if (first >= pc.fluid) {
+    return;
+  }
+  const uint count = min(M, pc.fluid - first);
+  gPp = hemo_pair_params();
+  gInvH = 1.0 / gPp.h;
+  gSupport = 2.0 * gPp.h;
+  for (uint m = 0u; m < M; ++m) {
+    gX[m] = texelFetch(positions, int(first + min(m, count - 1u))).xyz;
+    gRho[m] = 0.0;
+  }
+  const uint counts = texelFetch(clusterCount, int(cluster)).x;
+  const uint base = cluster * pc.capacity;
+  range(base, 0u, counts & 0xffffu);
+  range(base, pc.capacity - (counts >> 16u), pc.capacity);
+  const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
+  for (uint m = 0u; m < M; ++m) {
+    if (m < count) {
+      const uint i = first + m;
+      const float rho = gRho[m];
+      const float p = hemo_tait_pressure(rho, background, params);
+      state[i] = vec4(rho, p, 0.0, 0.0);
+      const vec4 xi = texelFetch(positions, int(i));
+      const vec4 vi = texelFetch(velocities, int(i));
+      const float volume = xi.w / rho;
+      pairPosition[i] = vec4(xi.xyz, volume * p);
+      viscousVel[i] = vec4(vi.xyz, volume);
+    }
+  }
+}

@@ -1,0 +1,168 @@
+#version 450
+// sph/forces.comp over the clusters' lists (interface/sph.h, "Clusters"): one invocation per
+// cluster, every entry fetched once and evaluated against all members. The terms are those of
+// sph/forces.comp (pressure, laminar viscosity, the boundary's repulsion, gravity and body
+// force) and so are the outputs: accel (a, 1 / max(sum T, 1)), the time-step limit, the blow-up
+// diagnosis and the time step's first reduction level, here one (min, max) per invocation's
+// members. A member takes an entry only where the entry's mask names it; beyond the support
+// the kernel terms vanish and the repulsion's reach is shorter than the list radius. No SPS
+// term: scenes with it use the per-particle lists.
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
+#include "interface/sph.h"
+#include "common/index.glsl"
+#include "common/kernel.glsl"
+#include "common/sph_params.glsl"
+#include "common/repulsion.glsl"
+
+layout(binding = HEMO_CFORCES_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_CFORCES_BINDING_VELOCITIES) uniform samplerBuffer velocities;
+layout(binding = HEMO_CFORCES_BINDING_NORMALS) uniform samplerBuffer normals;
+HEMO_SPH_PARAMS_UNIFORM(HEMO_CFORCES_BINDING_PARAMS);
+layout(binding = HEMO_CFORCES_BINDING_STATE) uniform samplerBuffer state;
+layout(binding = HEMO_CFORCES_BINDING_CCOUNT) uniform usamplerBuffer clusterCount;
+layout(binding = HEMO_CFORCES_BINDING_CLIST) uniform usamplerBuffer clusterList;
+layout(std430, binding = HEMO_CFORCES_BINDING_ACCEL) writeonly buffer Accel { vec4 accel[]; };
+layout(std430, binding = HEMO_CFORCES_BINDING_DT_LIMIT) writeonly buffer DtLimit { float dtLimit[]; };
+layout(std430, binding = HEMO_CFORCES_BINDING_IDS) readonly buffer Ids { uint ids[]; };
+layout(std430, binding = HEMO_CFORCES_BINDING_STATUS) buffer Status { uint status[]; };
+layout(binding = HEMO_CFORCES_BINDING_VISCOUS_VEL) uniform samplerBuffer viscousVel;
+layout(binding = HEMO_CFORCES_BINDING_PAIR_POSITION) uniform samplerBuffer pairPosition;
+layout(std430, binding = HEMO_CFORCES_BINDING_DT_PARTIALS) writeonly buffer DtPartials { vec2 dtPartials[]; };
+layout(std430, binding = HEMO_CFORCES_BINDING_DT_COUNTS) writeonly buffer DtCounts { uint dtCounts[2]; };
+layout(push_constant) uniform Push {
+  uint fluid;     // fluid slots: [0, fluid)
+  uint capacity;  // entries per cluster (a multiple of 4)
+  uint n;         // the slots [fluid, n) get sph/forces.comp's values for other kinds
+} pc;
+
+#include "common/dt_fold.glsl"
+
+const uint M = HEMO_CLUSTER_SIZE;
+const float kNoLimit = 3.0e38;
+
+vec3 gX[M], gV[M];
+float gP[M];
+// sum V_j [ -(p_i + p_j) gradW + 2 mu (x_ij . gradW) / (r^2 + eta^2) v_ij ]: one sum for both
+// terms, as the registers of eight members are scarce
+vec3 gSum[M];
+vec4 gRepulsion[M];  // (sum n N T, sum T)
+HemoPairParams gPp;
+float gInvH, gGradNorm, gEtaSq, gTwoMu;
+HemoRepulsionParams gRp;
+
+// One entry (fluid or boundary: a constant at each call); `valid` is false for the padding of
+// the last texel.
+void pair(uint entry, bool valid, const bool boundary) {
+  const uint j = entry & HEMO_CLUSTER_SLOT_MASK;
+  const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;
+  const vec4 pj = texelFetch(pairPosition, int(j));  // (x_j, V_j p_j)
+  const vec4 vj = texelFetch(viscousVel, int(j));    // (v_j, +-V_j)
+  const float volumeJ = abs(vj.w);
+  vec3 nrm = vec3(0.0);
+  if (boundary) {
+    nrm = texelFetch(normals, int(j)).xyz;
+  }
+  for (uint m = 0u; m < M; ++m) {
+    const bool take = (mask & (1u << m)) != 0u;
+    const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
+    const float r2 = dot(d, d);
+    const vec3 gradW = d * (take ? hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm) : 0.0);
+    gSum[m] += (gTwoMu * volumeJ * dot(d, gradW) / (r2 + gEtaSq)) * (gV[m] - vj.xyz) - (volumeJ * gP[m] + pj.w) * gradW;
+    if (boundary) {
+      // boundary and wall particles; detached ones (V = 0) do not repel, nor does a
+      // coincident one (no direction)
+      const float x = dot(d, nrm);
+      float w;
+      const float push = hemo_repulsion(x, length(d - x * nrm), gRp, w);
+      const bool repels = take && vj.w < 0.0 && r2 > 0.0 && w > 0.0;
+      gRepulsion[m] += repels ? vec4(nrm * push, w) : vec4(0.0);
+    }
+  }
+}
+
+// Entries [first, end) of the cluster's list.
+void range(uint base, uint first, uint end, const bool boundary) {
+  for (uint k = first & ~3u; k < end; k += 4u) {
+    const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
+    pair(e.x, k >= first, boundary);
+    pair(e.y, k + 1u >= first && k + 1u < end, boundary);
+    pair(e.z, k + 2u >= first && k + 2u < end, boundary);
+    pair(e.w, k + 3u >= first && k + 3u < end, boundary);
+  }
+}
+
+void main() {
+  // Invocations past the clusters: one per slot of [fluid, n), no acceleration and no limit.
+  const uint cluster = hemo_global_index();
+  const uint clusters = (pc.fluid + M - 1u) / M;
+  const uint first = cluster * M;
+  const float inf = uintBitsToFloat(0x7f800000u);
+  vec2 limits = vec2(inf, -inf);
+  bool anyNan = false;
+  const uint other = pc.fluid + (cluster - clusters);
+  if (cluster >= clusters && other < pc.n) {
+    accel[other] = vec4(0.0);
+    dtLimit[other] = kNoLimit;
+    limits = vec2(kNoLimit);
+  }
+  if (cluster < clusters) {
+    const uint count = min(M, pc.fluid - first);
+    gPp = hemo_pair_params();
+    gInvH = 1.0 / gPp.h;
+    gGradNorm = hemo_kernel_grad_norm(gPp.h, gPp.kernelNorm);
+    gEtaSq = params.etaSq;
+    gTwoMu = 2.0 * params.mu;
+    gRp = hemo_repulsion_params(gPp.h, params.psi, params.repulsionCutoff, params.wallSpacing);
+    const bool diagnose = status[HEMO_STATUS_FIRST_BAD_STEP] == 0xffffffffu;
+    float rho[M];
+    bool finiteInput[M];
+    for (uint m = 0u; m < M; ++m) {
+      const uint i = first + min(m, count - 1u);
+      const vec3 xi = texelFetch(positions, int(i)).xyz;
+      const vec3 vi = texelFetch(velocities, int(i)).xyz;
+      const vec2 si = texelFetch(state, int(i)).xy;  // rho, p
+      gX[m] = xi;
+      gV[m] = vi;
+      gP[m] = si.y;
+      rho[m] = si.x;
+      finiteInput[m] = !(any(isnan(xi)) || any(isinf(xi)) || any(isnan(vi)) || any(isinf(vi)) || any(isnan(si)) ||
+                         any(isinf(si)));
+      gSum[m] = vec3(0.0);
+      gRepulsion[m] = vec4(0.0);
+    }
+    const uint counts = texelFetch(clusterCount, int(cluster)).x;
+    const uint base = cluster * pc.capacity;
+    range(base, 0u, counts & 0xffffu, false);
+    range(base, pc.capacity - (counts >> 16u), pc.capacity, true);
+    const float h = gPp.h;
+    for (uint m = 0u; m < M; ++m) {
+      if (m < count) {
+        const uint i = first + m;
+        if (diagnose && !finiteInput[m]) {
+          atomicMin(status[HEMO_STATUS_BAD_INPUT_ID], ids[i]);
+        }
+        vec3 a = gSum[m] / rho[m];
+        const float repulsionScale = 1.0 / max(gRepulsion[m].w, 1.0);
+        a += gRepulsion[m].xyz * repulsionScale;
+        a += params.gravity.xyz;
+        accel[i] = vec4(a, repulsionScale);
+        if (diagnose && finiteInput[m] && (any(isnan(a)) || any(isinf(a)))) {
+          atomicMin(status[HEMO_STATUS_BAD_FORCE_ID], ids[i]);
+        }
+        const float speed = length(gV[m]);
+        const float accelMag = length(a);
+        float limit = min(params.cflAcoustic * h / (params.c0 + speed), params.dtViscous);
+        if (accelMag > 0.0) {
+          limit = min(limit, params.cflForce * sqrt(h / accelMag));
+        }
+        dtLimit[i] = limit;  // NaN if anything went non-finite
+        limits = vec2(min(limits.x, limit), max(limits.y, limit));
+        anyNan = anyNan || isnan(limit);
+      }
+    }
+  }
+  hemo_dt_partial_range(limits, anyNan, 0u, 0u);  // every invocation: subgroup operations
+}
