@@ -737,7 +737,7 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   }
 }
 
-bool SphSolver::clusterPath() const { return clusters_ && inGridOrder() && !wall_; }
+bool SphSolver::clusterPath() const { return clusters_ && inGridOrder(); }
 
 std::uint32_t SphSolver::clusterCount() const {
   return (particles_->fluidCount() + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE;

@@ -282,14 +282,23 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
   s.viscosity = 0.05f;  // large, so the viscous reaction is visible
   const CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.6f);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  // the fluid's list read four entries per texel (capacity 128) and one (capacity 130)
-  for (const std::uint32_t capacity : {128u, 130u}) {
-    SCOPED_TRACE(testing::Message() << "capacity " << capacity);
-    s.listLayout = sim::ListLayout::Contiguous;
+  // the fluid's list read four entries per texel (capacity 128) and one (capacity 130), and
+  // the fluid's clusters (interface/sph.h)
+  struct Variant {
+    sim::ListLayout layout;
+    std::uint32_t capacity;
+  };
+  for (const Variant variant : {Variant{sim::ListLayout::Contiguous, 128u}, Variant{sim::ListLayout::Contiguous, 130u},
+                                Variant{sim::ListLayout::Clusters, 128u}}) {
+    const std::uint32_t capacity = variant.capacity;
+    SCOPED_TRACE(testing::Message() << "capacity " << capacity
+                                    << (variant.layout == sim::ListLayout::Clusters ? ", clusters" : ""));
+    s.listLayout = variant.layout;
     s.neighbourCapacity = capacity;
     setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.05f), glm::vec3(0.15f));
     ASSERT_EQ(solver_->listReadWidth(), capacity % 4u == 0u ? 4u : 1u);
     evaluate();
+    ASSERT_EQ(solver_->usesClusters(), variant.layout == sim::ListLayout::Clusters);
 
     // References: the fluid model (all wall particles as boundary particles), then the springs.
     const reference::SphModel model = modelOf(solver_->params());

@@ -5,6 +5,7 @@
 // supply on, a stretching tube keeps its fluid at the rest density.
 #include "gpu_test.hpp"
 #include "hemo/scene/build.hpp"
+#include "interface/sph.h"
 #include "hemo/sim/simulation.hpp"
 
 #include <glm/geometric.hpp>
@@ -225,14 +226,29 @@ TEST_F(InflowTest, NeighbourListStaysCompleteWhileTheBloodDrifts) {
     const auto pos = sim.store().readPositions();
     const auto vel = sim.store().readVelocities();
     const auto n = static_cast<std::uint32_t>(pos.size());
-    const auto counts = sim.solver().neighbourCounts().readback<std::uint32_t>(n);
-    const auto list = sim.solver().neighbourList().readback<std::uint32_t>(sim.solver().neighbourList().size() / 4);
+    // The fluid's lists: each particle's own, or (on CPU devices) its cluster's entries that
+    // name it (interface/sph.h, "Clusters").
+    const bool clusters = sim.solver().usesClusters();
+    const gpu::Buffer& countBuffer = clusters ? sim.solver().clusterCounts() : sim.solver().neighbourCounts();
+    const gpu::Buffer& listBuffer = clusters ? sim.solver().clusterLists() : sim.solver().neighbourList();
+    const auto counts = countBuffer.readback<std::uint32_t>(countBuffer.size() / 4);
+    const auto list = listBuffer.readback<std::uint32_t>(listBuffer.size() / 4);
+    const std::uint32_t cap = sim.solver().clusterCapacity();
     for (std::uint32_t i = 0; i < n; ++i) {
       if (vel[i].w != float(sim::ParticleKind::Fluid)) continue;
       std::vector<std::uint32_t> have;
-      for (std::uint32_t k = 0; k < counts[i]; ++k) {
-        have.push_back(list[std::size_t(i) * p.listParticleStride + std::size_t(k) * p.listStride] &
-                       ~sim::SphSolver::kListBoundaryBit);
+      if (clusters) {
+        const std::uint32_t c = i / HEMO_CLUSTER_SIZE, bit = 1u << (HEMO_CLUSTER_MEMBER_SHIFT + i % HEMO_CLUSTER_SIZE);
+        const std::uint32_t nf = counts[c] & 0xffffu, nb = counts[c] >> 16u;
+        for (std::uint32_t k = 0; k < cap; ++k) {
+          const std::uint32_t e = list[std::size_t(c) * cap + k];
+          if ((k < nf || k >= cap - nb) && (e & bit)) have.push_back(e & HEMO_CLUSTER_SLOT_MASK);
+        }
+      } else {
+        for (std::uint32_t k = 0; k < counts[i]; ++k) {
+          have.push_back(list[std::size_t(i) * p.listParticleStride + std::size_t(k) * p.listStride] &
+                         ~sim::SphSolver::kListBoundaryBit);
+        }
       }
       std::sort(have.begin(), have.end());
       for (std::uint32_t k = 0; k < n; ++k) {

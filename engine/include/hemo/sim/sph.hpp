@@ -42,7 +42,7 @@ enum class DensityMethod { Summation, Continuity };
 // apply and contiguous lists otherwise on CPU devices (lavapipe), interleaved on GPUs.
 // Clusters: the fluid walks one list per cluster of HEMO_CLUSTER_SIZE consecutive slots
 // (interface/sph.h), the other particles contiguous lists; they apply to summation density
-// without the SPS term and without a wall, else the solver uses contiguous lists. Results do
+// without the SPS term, else the solver uses contiguous lists. Results do
 // not depend on the layout beyond the order of the sums.
 enum class ListLayout { Auto, Interleaved, Contiguous, Clusters };
 
@@ -224,7 +224,7 @@ class SphSolver {
   const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
   const gpu::Buffer& interactingPairs() const { return pairList_; }
   // Clusters (interface/sph.h, "Clusters"): whether the fluid passes walk them (they do while
-  // the slots are in grid order and no wall is attached), the entries per cluster, and the
+  // the slots are in grid order), the entries per cluster, and the
   // lists as the last build left them: a count per cluster (fluid | boundary << 16) and
   // clusterCapacity() entries per cluster.
   bool usesClusters() const { return clusterPath(); }
@@ -290,8 +290,8 @@ class SphSolver {
   const gpu::ComputePipeline* forcesClusters_ = nullptr;
   gpu::DescriptorSet buildClustersSet_, densityClustersSet_, forcesClustersSet_;
   bool clusters_ = false;  // the layout asks for clusters (they run while clusterPath())
-  // The fluid passes walk the clusters' lists in this step: the layout asks for them, the
-  // slots are in grid order, and the scene has no wall.
+  // The fluid passes walk the clusters' lists in this step: the layout asks for them and the
+  // slots are in grid order (the fluid's first).
   bool clusterPath() const;
   std::uint32_t clusterCount() const;  // clusters of the fluid's slots (the last may hold fewer)
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
