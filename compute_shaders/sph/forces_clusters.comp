@@ -61,6 +61,7 @@ void pair(uint entry, bool valid, const bool boundary) {
   const vec4 pj = texelFetch(pairPosition, int(j));  // (x_j, V_j p_j)
   const vec4 vj = texelFetch(viscousVel, int(j));    // (v_j, +-V_j)
   const float volumeJ = abs(vj.w);
+  const float viscJ = gTwoMu * volumeJ;
   vec3 nrm = vec3(0.0);
   if (boundary) {
     nrm = texelFetch(normals, int(j)).xyz;
@@ -69,8 +70,9 @@ void pair(uint entry, bool valid, const bool boundary) {
     const bool take = (mask & (1u << m)) != 0u;
     const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
     const float r2 = dot(d, d);
-    const vec3 gradW = d * (take ? hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm) : 0.0);
-    gSum[m] += (gTwoMu * volumeJ * dot(d, gradW) / (r2 + gEtaSq)) * (gV[m] - vj.xyz) - (volumeJ * gP[m] + pj.w) * gradW;
+    // grad W = F d, so x_ij . grad W = F r^2: both terms carry F
+    const float f = take ? hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm) : 0.0;
+    gSum[m] += f * ((viscJ * r2 / (r2 + gEtaSq)) * (gV[m] - vj.xyz) - (volumeJ * gP[m] + pj.w) * d);
     if (boundary) {
       // boundary and wall particles; detached ones (V = 0) do not repel, nor does a
       // coincident one (no direction)
