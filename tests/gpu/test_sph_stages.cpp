@@ -65,6 +65,22 @@ Case makeCase(std::mt19937_64& rng, const sim::SphSettings& s, int nx, int ny, i
   return c;
 }
 
+// 2,000 particles at random over x in [0, period) (the grid's periodic axis) and y, z in
+// [-0.03, 0.07) x [-0.03, 0.06), some beyond the grid's bounded sides: fluid (with chance 0.6)
+// in the slab 0 < y < 0.05, boundary particles elsewhere. Positions only (no reference).
+Case randomCase(std::mt19937_64& rng, const sim::SphSettings& s, float period) {
+  std::uniform_real_distribution<float> ux(0.0f, period), uy(-0.03f, 0.07f), uz(-0.03f, 0.06f), unit(0.0f, 1.0f);
+  Case c;
+  for (int k = 0; k < 2000; ++k) {
+    const glm::vec3 x(ux(rng), uy(rng), uz(rng));
+    const bool fluid = x.y > 0.0f && x.y < 0.05f && unit(rng) < 0.6f;
+    c.pos.emplace_back(x, s.particleMass());
+    c.vel.emplace_back(0.0f, 0.0f, 0.0f, float(fluid ? sim::ParticleKind::Fluid : sim::ParticleKind::Boundary));
+    c.normals.emplace_back(0.0f, 0.0f, 1.0f, 0.0f);
+  }
+  return c;
+}
+
 // The tile test's largest box separation (common/tiles.glsl), in double precision: each
 // particle's displacement since the build goes into the box of the tile its build position
 // lies in (the solver's grid decides which); neighbouring tiles (and each tile with itself)
@@ -462,16 +478,8 @@ TEST_F(SphStageTest, PartialGridBuildMatchesAWholeBuild) {
   s.periodic = {true, false, false};
   const float period = float(3.6 * s.listRadius());
   const glm::vec3 lo(0.0f, -0.02f, -0.02f), hi(period, 0.06f, 0.05f);
-  std::uniform_real_distribution<float> ux(0.0f, period), uy(-0.03f, 0.07f), uz(-0.03f, 0.06f), unit(0.0f, 1.0f);
   std::normal_distribution<float> jitter(0.0f, 0.006f);
-  Case c;
-  for (int k = 0; k < 2000; ++k) {
-    const glm::vec3 x(ux(rng), uy(rng), uz(rng));
-    const bool fluid = x.y > 0.0f && x.y < 0.05f && unit(rng) < 0.6f;
-    c.pos.emplace_back(x, s.particleMass());
-    c.vel.emplace_back(0.0f, 0.0f, 0.0f, float(fluid ? sim::ParticleKind::Fluid : sim::ParticleKind::Boundary));
-    c.normals.emplace_back(0.0f, 0.0f, 1.0f, 0.0f);
-  }
+  const Case c = randomCase(rng, s, period);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
   s.neighbourCapacity = 1024;
   s.listLayout = sim::ListLayout::Contiguous;  // every particle's own list (clusters: ClusterListsHoldEachPairOnce)
@@ -1032,15 +1040,7 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     s.periodic = {true, false, false};
     s.neighbourCapacity = 1024;  // random positions crowd more than a fluid
     const float period = float(3.6 * s.listRadius());
-    std::uniform_real_distribution<float> ux(0.0f, period), uy(-0.03f, 0.07f), uz(-0.03f, 0.06f), unit(0.0f, 1.0f);
-    Case c;
-    for (int k = 0; k < 2000; ++k) {
-      const glm::vec3 x(ux(rng), uy(rng), uz(rng));
-      const bool fluid = x.y > 0.0f && x.y < 0.05f && unit(rng) < 0.6f;
-      c.pos.emplace_back(x, s.particleMass());
-      c.vel.emplace_back(0.0f, 0.0f, 0.0f, float(fluid ? sim::ParticleKind::Fluid : sim::ParticleKind::Boundary));
-      c.normals.emplace_back(0.0f, 0.0f, 1.0f, 0.0f);
-    }
+    const Case c = randomCase(rng, s, period);
     setups.push_back({"random, periodic x, some outside the grid", c, s, glm::vec3(0.0f, -0.02f, -0.02f),
                       glm::vec3(period, 0.06f, 0.05f)});
   }
