@@ -25,17 +25,7 @@ layout(push_constant) uniform Push {
 
 const uint M = HEMO_CLUSTER_SIZE;
 
-// Distance in cell units from the interval [a, b] to cell k along one axis; on a bounded axis
-// the first and last cells reach to infinity (particles outside the grid are clamped into them).
-float hemo_cell_gap(int k, float a, float b, uint dim, uint periodic) {
-  float lo = float(k);
-  float hi = float(k + 1);
-  if (periodic == 0u) {
-    lo = k <= 0 ? -3.0e38 : lo;
-    hi = k >= int(dim) - 1 ? 3.0e38 : hi;
-  }
-  return max(0.0, max(lo - b, a - hi));
-}
+#include "common/list_ranges.glsl"
 
 vec3 gX[M];    // members' positions
 vec3 gU[M];    // members' positions in cell units, in the period of their cells
@@ -46,9 +36,6 @@ uint gNamed[M]; // entries naming each member (itself included)
 // The members [g0, g1) (one row of cells): walk their candidates and keep each one within the
 // list radius of at least one of them, with that mask.
 void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
-  const uvec3 dims = pc.grid.dimsN.xyz;
-  const uint cellCount = dims.x * dims.y * dims.z;
-  const ivec3 c = gC[g0];
   vec3 lo = gU[g0];
   vec3 hi = gU[g0];
   uint members = 0u;
@@ -58,72 +45,8 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
     hi = inGroup ? max(hi, gU[m]) : hi;
     members |= inGroup ? 1u << m : 0u;
   }
-  const vec3 cellM = 1.0 / pc.grid.invCell.xyz;
-  const int hiX = int(dims.x) - 1;
-  const int reachX = int(ceil(params.listRadius * pc.grid.invCell.x));
-  const int cxLo = int(floor(lo.x));
-  const int cxHi = int(floor(hi.x));
-  const float trim2 = list2 * 1.0001;
-  uvec2 ranges[100];
-  uint rangeCount = 0u;
-  for (int dz = -2; dz <= 2; ++dz) {
-    const float gz = hemo_cell_gap(c.z + dz, lo.z, hi.z, dims.z, pc.grid.periodic.z) * cellM.z;
-    const int z = hemo_grid_step(c.z, dz, dims.z, pc.grid.periodic.z);
-    if (z < 0 || gz * gz >= trim2) {
-      continue;
-    }
-    int yLo = c.y - 2;
-    int yHi = c.y + 2;
-    if (pc.grid.periodic.y != 0u && (yLo < 0 || yHi >= int(dims.y))) {
-      yLo = 0;
-      yHi = int(dims.y) - 1;
-    }
-    yLo = clamp(yLo, 0, int(dims.y) - 1);
-    yHi = clamp(yHi, 0, int(dims.y) - 1);
-    const uint planeFirst = hemo_cell_linear(ivec3(0, yLo, z), dims);
-    const uint planeLast = hemo_cell_linear(ivec3(hiX, yHi, z), dims);
-    // the boundary part is walked only where the plane's rows hold some of it
-    const bool occupied = texelFetch(cellStart, int(cellCount + planeFirst)).x !=
-                          texelFetch(cellStart, int(cellCount + planeLast + 1u)).x;
-    const uint parts = occupied ? 2u : 1u;
-    for (int dy = -2; dy <= 2; ++dy) {
-      const float gy = hemo_cell_gap(c.y + dy, lo.y, hi.y, dims.y, pc.grid.periodic.y) * cellM.y;
-      const float rest2 = trim2 - gy * gy - gz * gz;
-      const int y = hemo_grid_step(c.y, dy, dims.y, pc.grid.periodic.y);
-      if (y < 0 || rest2 <= 0.0) {
-        continue;
-      }
-      const float reach = sqrt(rest2) * pc.grid.invCell.x;
-      int xLo = int(floor(lo.x - reach));
-      int xHi = int(floor(hi.x + reach));
-      if (pc.grid.periodic.x == 0u) {
-        xLo = clamp(xLo, 0, hiX);
-        xHi = clamp(xHi, 0, hiX);
-      }
-      xLo = max(xLo, cxLo - reachX);
-      xHi = min(xHi, min(cxHi + reachX, xLo + hiX));  // never a cell twice round a periodic x axis
-      ivec2 xr[2];
-      xr[0] = ivec2(max(xLo, 0), min(xHi, hiX));
-      xr[1] = xLo < 0 ? ivec2(xLo + int(dims.x), hiX) : ivec2(0, xHi - int(dims.x));
-      const int segments = pc.grid.periodic.x != 0u ? 2 : 1;
-      for (int s = 0; s < segments; ++s) {
-        if (xr[s].x > xr[s].y) {
-          continue;
-        }
-        const uint first = hemo_cell_linear(ivec3(xr[s].x, y, z), dims);
-        const uint last = hemo_cell_linear(ivec3(xr[s].y, y, z), dims);
-        for (uint part = 0u; part < parts; ++part) {
-          const uint base = part * cellCount;
-          const uint jBegin = texelFetch(cellStart, int(base + first)).x;
-          const uint jEnd = texelFetch(cellStart, int(base + last + 1u)).x;
-          if (jBegin < jEnd) {
-            ranges[rangeCount] = uvec2(jBegin, jEnd | (part == 0u ? 0u : HEMO_LIST_BOUNDARY_BIT));
-            ++rangeCount;
-          }
-        }
-      }
-    }
-  }
+  // the rows around the group's box (common/list_ranges.glsl); the members are fluid
+  const uint rangeCount = hemo_list_ranges(pc.grid, gC[g0], lo, hi, true, params.listRadius);
   // The candidates as one flat loop (sph/build_list.comp). Each is written to the next free
   // entry of its end and kept (the end advances) only if some member is close enough.
   const uint base = cluster * pc.capacity;
@@ -137,7 +60,7 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
       if (next == rangeCount) {
         break;
       }
-      const uvec2 r = ranges[next];
+      const uvec2 r = gRanges[next];
       ++next;
       j = r.x;
       jEnd = r.y & ~HEMO_LIST_BOUNDARY_BIT;
