@@ -96,6 +96,10 @@
 // members separately, so a slot may appear once per such group, each time with that group's
 // members only: no pair is counted twice. Fluid entries fill the list from entry 0 up,
 // boundary entries from entry capacity - 1 down; the count packs both (fluid | boundary << 16).
+// In a scene without wall particles the boundary particles' slots [fluid, n) are cut into
+// clusters too, numbered after the fluid's (the first is ceil(fluid / HEMO_CLUSTER_SIZE)):
+// their lists hold fluid entries only (all sph/boundary_clusters.comp needs), and no member
+// names itself. Wall particles keep per-particle lists, which the wall's reaction reads.
 #define HEMO_CLUSTER_SIZE 4
 #define HEMO_CLUSTER_SLOT_MASK 0x7fffffu
 #define HEMO_CLUSTER_MEMBER_SHIFT 23u
@@ -108,7 +112,10 @@
 #define HEMO_CBUILD_BINDING_CCOUNT 3  // uint per cluster: fluid | boundary << 16
 #define HEMO_CBUILD_BINDING_CLIST 4   // clusterCapacity entries per cluster
 #define HEMO_CBUILD_BINDING_STATUS 5
-#define HEMO_CBUILD_BINDING_COUNT 6
+// The boundary-pressure pass's active list (HEMO_BPRESSURE_BINDING_ACTIVE_ARGS), emptied by
+// invocation 0 of the fluid's clusters (as by sph/build_list.comp).
+#define HEMO_CBUILD_BINDING_ACTIVE_ARGS 6
+#define HEMO_CBUILD_BINDING_COUNT 7
 
 // sph/density_clusters.comp: sph/density.comp over the clusters' lists (summation density).
 #define HEMO_CDENSITY_BINDING_POSITIONS 0
@@ -211,6 +218,10 @@
 // slots [first, n): set the particles without fluid neighbours only, to the pressure of the
 // clock record given (for output between list builds); the active list is left alone
 #define HEMO_BPRESSURE_REST 2
+// sph/boundary_clusters.comp: the same pass over the boundary particles' clusters (scenes
+// without wall particles), with the same bindings, modes and push constants plus the
+// clusters' capacity and the first boundary cluster; NCOUNT and NLIST are the clusters' counts
+// and lists (RGBA32UI texels), and the active list holds clusters (relative to the first).
 
 // sph/sps_stress.comp: the SPS stress tau of each fluid particle from its strain rate.
 // NCOUNT / NLIST here and in the force pass: the interacting pairs (PAIR_COUNT / PAIR_LIST of

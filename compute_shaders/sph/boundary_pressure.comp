@@ -40,6 +40,7 @@ layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer 
 layout(constant_id = 1) const uint kListWidth = 1u;
 layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE) buffer Active { uint activeSlots[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE_ARGS) buffer ActiveArgs { uvec4 activeArgs; };
+#include "common/boundary_state.glsl"
 layout(push_constant) uniform Push {
   uint first;  // SORT and REST: the slots [first, n); after a sort the fluid's slots come
   uint n;      // first and are left out (SphSolver::nonFluidStart)
@@ -121,22 +122,6 @@ void main() {
       pair(texelFetch(neighbourList, int(hemo_list_slot(b, k, gPp))).x, true);
     }
   }
-  const float sumW = gSumW, sumP = gSumP;
-  const vec3 sumRhoR = gSumRhoR, sumV = gSumV;
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
-  float rho = params.rho0;
-  float p = background;
-  vec3 v = vb.xyz;
-  if (sumW > 0.0) {
-    v = 2.0 * vb.xyz - sumV / sumW;
-    p = (sumP + dot(params.gravity.xyz, sumRhoR)) / sumW;
-    if (params.clampNegativePressure != 0u) {
-      p = max(p, 0.0);
-    }
-    rho = hemo_tait_density(p, background, params);
-  }
-  state[b] = vec4(rho, p, 0.0, 0.0);
-  const float volume = xb4.w / rho;  // 0 when detached
-  pairPosition[b] = vec4(xb, volume * p);
-  viscousVel[b] = vec4(v, -volume);  // < 0: boundary or wall; -0 (neither) when detached
+  hemo_boundary_store(b, xb4, vb.xyz, gSumW, gSumP, gSumRhoR, gSumV, background);
 }

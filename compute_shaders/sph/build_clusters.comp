@@ -1,7 +1,9 @@
 #version 450
 // The clusters' lists (interface/sph.h, "Clusters"): for each cluster of HEMO_CLUSTER_SIZE
 // consecutive fluid slots, every particle closer than the list radius to at least one member,
-// with the mask of the members it is that close to. One invocation per cluster. Its members
+// with the mask of the members it is that close to; for a cluster of boundary slots (a second
+// dispatch, in scenes without wall particles), every such fluid particle. One invocation per
+// cluster. Its members
 // are grouped by row of grid cells (the slots are in cell order, so a row's members are
 // consecutive); each group walks the cells within the list radius of its members' box, as
 // sph/build_list.comp does for one particle, and tests every candidate against its members.
@@ -17,10 +19,14 @@ HEMO_SPH_PARAMS_UNIFORM(HEMO_CBUILD_BINDING_PARAMS);
 layout(std430, binding = HEMO_CBUILD_BINDING_CCOUNT) writeonly buffer Counts { uint clusterCount[]; };
 layout(std430, binding = HEMO_CBUILD_BINDING_CLIST) writeonly buffer List { uint clusterList[]; };
 layout(std430, binding = HEMO_CBUILD_BINDING_STATUS) buffer Status { uint status[]; };
+layout(std430, binding = HEMO_CBUILD_BINDING_ACTIVE_ARGS) writeonly buffer ActiveArgs { uvec4 activeArgs; };
 layout(push_constant) uniform Push {
   HemoGrid grid;
-  uint fluid;     // fluid slots: [0, fluid)
+  uint first;     // the dispatch's slots: [first, end), all fluid or all boundary
+  uint end;
   uint capacity;  // entries per cluster
+  uint base;      // the cluster of slot `first`
+  uint boundary;  // 1: the members are boundary particles (they list fluid neighbours only)
 } pc;
 
 const uint M = HEMO_CLUSTER_SIZE;
@@ -45,8 +51,8 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
     hi = inGroup ? max(hi, gU[m]) : hi;
     members |= inGroup ? 1u << m : 0u;
   }
-  // the rows around the group's box (common/list_ranges.glsl); the members are fluid
-  const uint rangeCount = hemo_list_ranges(pc.grid, gC[g0], lo, hi, true, params.listRadius);
+  // the rows around the group's box (common/list_ranges.glsl)
+  const uint rangeCount = hemo_list_ranges(pc.grid, gC[g0], lo, hi, pc.boundary == 0u, params.listRadius);
   // The candidates as one flat loop (sph/build_list.comp). Each is written to the next free
   // entry of its end and kept (the end advances) only if some member is close enough.
   const uint base = cluster * pc.capacity;
@@ -87,12 +93,15 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
 }
 
 void main() {
-  const uint cluster = hemo_global_index();
-  const uint first = cluster * M;
-  if (first >= pc.fluid) {
+  if (hemo_global_index() == 0u && pc.boundary == 0u) {
+    activeArgs = uvec4(0u, 1u, 1u, 0u);  // the boundary-pressure pass's active list, filled after the build
+  }
+  const uint cluster = pc.base + hemo_global_index();
+  const uint first = pc.first + hemo_global_index() * M;
+  if (first >= pc.end) {
     return;
   }
-  const uint count = min(M, pc.fluid - first);
+  const uint count = min(M, pc.end - first);
   const HemoPairParams pp = hemo_pair_params();
   const float list2 = params.listRadius * params.listRadius;
   const vec3 dimsF = vec3(pc.grid.dimsN.xyz);
@@ -120,13 +129,14 @@ void main() {
     group(cluster, g0, g1, pp, list2);
     g0 = g1;
   }
-  // Neighbours of the most crowded member (itself not counted). The capacity holds every
+  // Neighbours of the most crowded member (a fluid member not counting itself). The capacity holds every
   // member's neighbours even when each member walks alone (HEMO_CLUSTER_SIZE rows), so the
   // cluster overflows only when a member has more than the particles' capacity, as a
   // per-particle list would; the run then stops (status).
+  const uint self = 1u - pc.boundary;
   uint most = 0u;
   for (uint m = 0u; m < M; ++m) {
-    most = max(most, max(gNamed[m], 1u) - 1u);
+    most = max(most, max(gNamed[m], self) - self);
   }
   const uint used = gNf + gNb;
   const bool overflow = used > pc.capacity - 1u || most > params.neighbourCapacity;

@@ -29,7 +29,10 @@ struct BuildPush {  // sph/build_list.comp
 };
 struct ClusterBuildPush {  // sph/build_clusters.comp
   NeighbourGrid::Push grid;
-  std::uint32_t fluid, capacity;
+  std::uint32_t first, end;  // the slots [first, end)
+  std::uint32_t capacity;
+  std::uint32_t base;      // the cluster of slot `first`
+  std::uint32_t boundary;  // 1: boundary members
 };
 struct ClusterPush {  // the cluster pair passes
   std::uint32_t fluid, capacity;
@@ -38,6 +41,10 @@ struct ClusterPush {  // the cluster pair passes
 struct BoundaryPush {  // sph/boundary_pressure.comp
   std::uint32_t first, n, clockIn;  // the range modes: the slots [first, n)
   std::uint32_t mode;               // HEMO_BPRESSURE_*
+};
+struct BoundaryClusterPush {  // sph/boundary_clusters.comp
+  BoundaryPush range;
+  std::uint32_t capacity, base;  // entries per cluster; the cluster of slot range.first
 };
 struct ForcesPush {  // sph/forces.comp
   std::uint32_t n;
@@ -65,11 +72,12 @@ std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
   return std::uint64_t(std::max(particles.capacity(), 1u)) * bytes;
 }
 
-// Clusters (interface/sph.h): as many as the slots could need, and the entries of each: every
+// Clusters (interface/sph.h): as many as the slots could need (the fluid's and the boundary
+// particles', each part's last cluster perhaps not full), and the entries of each: every
 // member's neighbours and itself even when each member walks alone (all in different rows of
 // cells), plus the spare entry of the build's stores, in whole texels of four.
 std::uint64_t clustersFor(const ParticleStore& particles) {
-  return std::uint64_t(std::max(particles.capacity(), 1u)) / HEMO_CLUSTER_SIZE + 1;
+  return std::uint64_t(std::max(particles.capacity(), 1u)) / HEMO_CLUSTER_SIZE + 2;
 }
 std::uint32_t clusterEntries(std::uint32_t neighbourCapacity) {
   return (HEMO_CLUSTER_SIZE * (neighbourCapacity + 1) + 1 + 3) & ~3u;
@@ -416,6 +424,23 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_BUILD_BINDING_NLIST, &nlist_},
                                        {HEMO_BUILD_BINDING_STATUS, &status_},
                                        {HEMO_BUILD_BINDING_ACTIVE_ARGS, &activeArgs_}});
+  boundaryClusters_ = &cache.get({"sph/boundary_clusters", HEMO_BPRESSURE_BINDING_COUNT, sizeof(BoundaryClusterPush), kWorkgroup,
+                                  pairSpecialization({}), 1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK,
+                                  1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
+                                      1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
+                                      1u << HEMO_BPRESSURE_BINDING_FLUID_STATE});
+  boundaryClustersSet_ = boundaryClusters_->makeSet({gpu::texelBinding(HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_FLUID_STATE, &state_, gpu::texel::kVec4),
+                                             {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
+                                             {HEMO_BPRESSURE_BINDING_STATE, &state_},
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NCOUNT, &ccount_, gpu::texel::kUint),
+                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, &clist_, gpu::texel::kUvec4),
+                                             {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
+                                             {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
+                                             {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_},
+                                             {HEMO_BPRESSURE_BINDING_ACTIVE, &activeSlots_},
+                                             {HEMO_BPRESSURE_BINDING_ACTIVE_ARGS, &activeArgs_}});
   buildClusters_ = &cache.get({"sph/build_clusters", HEMO_CBUILD_BINDING_COUNT, sizeof(ClusterBuildPush), kWorkgroup,
                                pairSpecialization({}), 1u << HEMO_CBUILD_BINDING_PARAMS,
                                1u << HEMO_CBUILD_BINDING_POSITIONS | 1u << HEMO_CBUILD_BINDING_CELL_START});
@@ -449,7 +474,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                                {HEMO_CBUILD_BINDING_PARAMS, &paramsBuffer_},
                                                {HEMO_CBUILD_BINDING_CCOUNT, &ccount_},
                                                {HEMO_CBUILD_BINDING_CLIST, &clist_},
-                                               {HEMO_CBUILD_BINDING_STATUS, &status_}});
+                                               {HEMO_CBUILD_BINDING_STATUS, &status_},
+                                               {HEMO_CBUILD_BINDING_ACTIVE_ARGS, &activeArgs_}});
   densityClustersSet_ = densityClusters_->makeSet({gpu::texelBinding(HEMO_CDENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                    gpu::texelBinding(HEMO_CDENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                    {HEMO_CDENSITY_BINDING_PARAMS, &paramsBuffer_},
@@ -610,16 +636,26 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
   grid_.record(rec, n, sorted, timestamps);
   if (sorted == n) sortedUpload_ = particles_->uploads();  // every slot sorted: the grid's order
   // With clusters the fluid's lists are the clusters'; the per-particle lists are built for
-  // the boundary and wall slots only (the boundary-pressure pass and the wall's reaction).
-  const std::uint32_t listFirst = clusterPath() ? particles_->fluidCount() : 0u;
-  rec.dispatch(*buildList_, buildListSet_, BuildPush{grid_.push(n), listFirst}, buildList_->groupsFor(std::max(n - listFirst, 1u)));
-  rec.computeToCompute();
-  if (timestamps) timestamps->mark(rec, "neighbour list");
+  // the boundary and wall slots only (the boundary-pressure pass and the wall's reaction),
+  // and not at all when the boundary slots are in clusters too.
+  const std::uint32_t fluid = particles_->fluidCount();
+  if (!boundaryClusterPath()) {
+    const std::uint32_t listFirst = clusterPath() ? fluid : 0u;
+    rec.dispatch(*buildList_, buildListSet_, BuildPush{grid_.push(n), listFirst}, buildList_->groupsFor(std::max(n - listFirst, 1u)));
+    rec.computeToCompute();
+    if (timestamps) timestamps->mark(rec, "neighbour list");
+  }
   if (clusterPath()) {
-    const std::uint32_t fluid = particles_->fluidCount();
     const std::uint32_t clusters = clusterCount();
-    rec.dispatch(*buildClusters_, buildClustersSet_, ClusterBuildPush{grid_.push(n), fluid, clusterCapacity_},
+    // (its invocation 0 empties the boundary pass's active list)
+    rec.dispatch(*buildClusters_, buildClustersSet_, ClusterBuildPush{grid_.push(n), 0u, fluid, clusterCapacity_, 0u, 0u},
                  buildClusters_->groupsFor(std::max(clusters, 1u)));
+    if (boundaryClusterPath()) {
+      // A dispatch of its own: lavapipe gives each thread a contiguous share of a dispatch,
+      // and the fluid's clusters cost several times the boundary's.
+      rec.dispatch(*buildClusters_, buildClustersSet_, ClusterBuildPush{grid_.push(n), fluid, n, clusterCapacity_, clusters, 1u},
+                   buildClusters_->groupsFor((n - fluid + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE));
+    }
     rec.computeToCompute();
     if (timestamps) timestamps->mark(rec, "cluster list");
   }
@@ -633,6 +669,12 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
 void SphSolver::recordBoundaryRange(gpu::CommandRecorder& rec, std::uint32_t mode, std::uint32_t clockIn) {
   const std::uint32_t n = particles_->count();
   const std::uint32_t first = nonFluidStart();
+  if (boundaryClusterPath()) {
+    rec.dispatch(*boundaryClusters_, boundaryClustersSet_,
+                 BoundaryClusterPush{{first, n, clockIn, mode}, clusterCapacity_, clusterCount()},
+                 boundaryClusters_->groupsFor((n - first + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE));
+    return;
+  }
   rec.dispatch(*boundaryPressure_, boundarySet_, BoundaryPush{first, n, clockIn, mode},
                boundaryPressure_->groupsFor(n - first));
 }
@@ -662,8 +704,14 @@ void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluid
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
   // Over the active list of the last build (recordNeighbours), as many workgroups as it counted.
-  rec.dispatchIndirect(*boundaryPressure_, boundarySet_, BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
-                       activeArgs_, 0);
+  if (boundaryClusterPath()) {
+    rec.dispatchIndirect(*boundaryClusters_, boundaryClustersSet_,
+                         BoundaryClusterPush{{nonFluidStart(), n, clockParity_, HEMO_BPRESSURE_ACTIVE}, clusterCapacity_, clusterCount()},
+                         activeArgs_, 0);
+  } else {
+    rec.dispatchIndirect(*boundaryPressure_, boundarySet_, BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
+                         activeArgs_, 0);
+  }
   boundaryClockIn_ = clockParity_;
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "boundary pressure");
@@ -738,6 +786,10 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
 }
 
 bool SphSolver::clusterPath() const { return clusters_ && inGridOrder(); }
+
+bool SphSolver::boundaryClusterPath() const {
+  return clusterPath() && particles_->wallCount() == 0 && particles_->count() > particles_->fluidCount();
+}
 
 std::uint32_t SphSolver::clusterCount() const {
   return (particles_->fluidCount() + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE;

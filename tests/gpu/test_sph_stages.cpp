@@ -199,6 +199,8 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
     const sim::SphSolver& solver = *st.solver;
     ASSERT_EQ(solver.listReadWidth(), variant.readWidth);
     ASSERT_EQ(solver.usesClusters(), variant.layout == sim::ListLayout::Clusters);
+    // (no wall particles: the boundary particles' slots are in clusters too)
+    ASSERT_EQ(solver.usesBoundaryClusters(), variant.layout == sim::ListLayout::Clusters);
 
     const auto slotIds = store.readIds();
     const auto state = solver.state().readback<glm::vec4>(n);
@@ -693,56 +695,82 @@ TEST_F(SphStageTest, NeighbourListIsRebuiltOnlyWhenTwoParticlesMayHaveClosedInBy
 // in their list (the active list, sorted out after every build); the others keep the state of
 // the build, and recordBoundaryRest brings them to the last force evaluation's background
 // pressure without touching the active ones. With a background pressure ramping ~30 Pa per
-// step, a stale state is visible.
+// step, a stale state is visible. Per-particle lists, and the boundary particles' clusters,
+// where a particle is active when its cluster lists fluid.
 TEST_F(SphStageTest, BoundaryParticlesWithoutFluidAreSetAtTheBuildAndOnRequest) {
   auto rng = rngFor();
   sim::SphSettings s = settings();
   s.maxTimeStep = 1.0e-4f;
   s.backgroundPressure = 3000.0f;
   s.backgroundPressureRamp = 0.01f;
-  const Case c = makeCase(rng, s, 6, 5, 5, 0.01f);
+  Case c = makeCase(rng, s, 6, 5, 5, 0.01f);
+  // and a patch of boundary particles beyond the list radius of any fluid (x >= 0.095 m
+  // against the fluid's x < 0.06 m), which fills clusters of its own
+  for (int layer = 0; layer < 2; ++layer)
+    for (int j = -2; j < 7; ++j)
+      for (int i = 0; i < 3; ++i) {
+        c.pos.emplace_back(0.095f + 0.01f * float(i), (j + 0.5f) * s.spacing, -(layer + 0.5f) * s.spacing, s.particleMass());
+        c.vel.emplace_back(0.0f, 0.0f, 0.0f, float(sim::ParticleKind::Boundary));
+        c.normals.emplace_back(0.0f, 0.0f, 1.0f, 0.0f);
+      }
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  sim::ParticleStore store(ctx(), n);
-  store.upload(c.pos, c.vel, {}, c.normals);
-  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.12f), s);
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  solver.recordReset(rec);
-  for (std::uint32_t k = 0; k < 6; ++k) solver.recordStep(rec, k, k);
-  rec.end();
-  rec.submitAndWait();
-  ASSERT_EQ(solver.readRebuilds(), 1u) << "the case must keep its first list";
-  const sim::SphClock clock = solver.readClock();
-  ASSERT_GT(clock.lastDt, 0.0);
-  const auto counts = solver.neighbourCounts().readback<std::uint32_t>(n);
-  const auto vel = store.readVelocities();
-  const auto before = solver.state().readback<glm::vec4>(n);
-  rec.begin();
-  solver.recordBoundaryRest(rec);
-  rec.end();
-  rec.submitAndWait();
-  const auto after = solver.state().readback<glm::vec4>(n);
-  // The last force evaluation ran at the clock before the last step.
-  auto background = [&](double t) { return 3000.0 * std::clamp(t / 0.01, 0.0, 1.0); };
-  const double pLast = background(clock.time - clock.lastDt);
-  const double pBuild = background(0.0);
-  std::size_t active = 0, rest = 0;
-  for (std::uint32_t slot = 0; slot < n; ++slot) {
-    if (vel[slot].w == float(sim::ParticleKind::Fluid)) continue;
-    if (counts[slot] > 0) {
-      ++active;
-      EXPECT_EQ(after[slot], before[slot]) << "an active boundary particle was changed, slot " << slot;
-      EXPECT_GT(before[slot].x, 0.0f);
-      continue;
+  for (const sim::ListLayout layout : {sim::ListLayout::Contiguous, sim::ListLayout::Clusters}) {
+    SCOPED_TRACE(layout == sim::ListLayout::Clusters ? "clusters" : "per-particle lists");
+    s.listLayout = layout;
+    sim::ParticleStore store(ctx(), n);
+    store.upload(c.pos, c.vel, {}, c.normals);
+    sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.12f), s);
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    solver.recordReset(rec);
+    for (std::uint32_t k = 0; k < 6; ++k) solver.recordStep(rec, k, k);
+    rec.end();
+    rec.submitAndWait();
+    ASSERT_EQ(solver.readRebuilds(), 1u) << "the case must keep its first list";
+    ASSERT_EQ(solver.usesBoundaryClusters(), layout == sim::ListLayout::Clusters);
+    const sim::SphClock clock = solver.readClock();
+    ASSERT_GT(clock.lastDt, 0.0);
+    const auto vel = store.readVelocities();
+    const std::uint32_t fluid = store.fluidCount();
+    std::vector<bool> listsFluid(n, false);
+    if (solver.usesBoundaryClusters()) {
+      const std::uint32_t first = (fluid + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE;
+      const auto counts = solver.clusterCounts().readback<std::uint32_t>(first + (n - fluid + 3) / 4);
+      for (std::uint32_t slot = fluid; slot < n; ++slot) {
+        listsFluid[slot] = (counts[first + (slot - fluid) / HEMO_CLUSTER_SIZE] & 0xffffu) > 0;
+      }
+    } else {
+      const auto counts = solver.neighbourCounts().readback<std::uint32_t>(n);
+      for (std::uint32_t slot = 0; slot < n; ++slot) listsFluid[slot] = counts[slot] > 0;
     }
-    ++rest;
-    EXPECT_NEAR(before[slot].y, pBuild, 1e-3) << "without fluid: the build's background pressure, slot " << slot;
-    EXPECT_NEAR(after[slot].y, pLast, 1e-2) << "without fluid: the last evaluation's background pressure, slot " << slot;
-    EXPECT_NEAR(after[slot].x, s.restDensity, 1e-3 * s.restDensity) << "slot " << slot;
+    const auto before = solver.state().readback<glm::vec4>(n);
+    rec.begin();
+    solver.recordBoundaryRest(rec);
+    rec.end();
+    rec.submitAndWait();
+    const auto after = solver.state().readback<glm::vec4>(n);
+    // The last force evaluation ran at the clock before the last step.
+    auto background = [&](double t) { return 3000.0 * std::clamp(t / 0.01, 0.0, 1.0); };
+    const double pLast = background(clock.time - clock.lastDt);
+    const double pBuild = background(0.0);
+    std::size_t active = 0, rest = 0;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      if (vel[slot].w == float(sim::ParticleKind::Fluid)) continue;
+      if (listsFluid[slot]) {
+        ++active;
+        EXPECT_EQ(after[slot], before[slot]) << "an active boundary particle was changed, slot " << slot;
+        EXPECT_GT(before[slot].x, 0.0f);
+        continue;
+      }
+      ++rest;
+      EXPECT_NEAR(before[slot].y, pBuild, 1e-3) << "without fluid: the build's background pressure, slot " << slot;
+      EXPECT_NEAR(after[slot].y, pLast, 1e-2) << "without fluid: the last evaluation's background pressure, slot " << slot;
+      EXPECT_NEAR(after[slot].x, s.restDensity, 1e-3 * s.restDensity) << "slot " << slot;
+    }
+    EXPECT_GT(active, 30u);
+    EXPECT_GT(rest, 15u);
+    EXPECT_GT(pLast - pBuild, 100.0) << "the ramp must make a stale state visible";
   }
-  EXPECT_GT(active, 30u);
-  EXPECT_GT(rest, 15u);
-  EXPECT_GT(pLast - pBuild, 100.0) << "the ramp must make a stale state visible";
 }
 
 // With SPS turbulence on, the accelerations (SPS stress from the strain rate, then its
@@ -1014,8 +1042,10 @@ TEST_F(SphStageTest, ListHoldsEveryPairWithinTheSupportWhileTheGateStaysClosed) 
 // list radius (the minimum image on periodic axes); fluid entries from the front, boundary
 // entries (marked) from the back. Cases: a jittered block over a boundary plane, the same
 // periodic in x and y, and random particles (some outside the grid) with a periodic x axis.
-// Clusters whose members sit in several rows of cells must occur (a slot then appears once per
-// row group), or the grouping is not tested.
+// The boundary particles' clusters (numbered after the fluid's) the same way: each member
+// named once with every fluid particle within the list radius, and nothing else. Clusters
+// whose members sit in several rows of cells must occur (a slot then appears once per row
+// group), or the grouping is not tested.
 TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
   auto rng = rngFor();
   struct Setup {
@@ -1045,6 +1075,7 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
                       glm::vec3(period, 0.06f, 0.05f)});
   }
   std::size_t repeated = 0;  // entries of a slot already listed in its cluster
+  std::size_t boundaryPairs = 0;
   for (Setup& setup : setups) {
     SCOPED_TRACE(setup.name);
     setup.s.listLayout = sim::ListLayout::Clusters;
@@ -1054,19 +1085,29 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     const auto n = static_cast<std::uint32_t>(setup.c.pos.size());
     const std::uint32_t fluid = st.store->fluidCount();
     const std::uint32_t clusters = (fluid + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE;
+    ASSERT_LT(fluid, n) << "the setup has boundary particles";
+    ASSERT_TRUE(solver.usesBoundaryClusters());
+    const std::uint32_t boundaryClusters = (n - fluid + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE;
+    const std::uint32_t all = clusters + boundaryClusters;
     const std::uint32_t cap = solver.clusterCapacity();
     const auto x = st.store->readPositions();
     const auto v = st.store->readVelocities();
-    const auto counts = solver.clusterCounts().readback<std::uint32_t>(clusters);
-    const auto list = solver.clusterLists().readback<std::uint32_t>(std::size_t(clusters) * cap);
+    const auto counts = solver.clusterCounts().readback<std::uint32_t>(all);
+    const auto list = solver.clusterLists().readback<std::uint32_t>(std::size_t(all) * cap);
     EXPECT_EQ(solver.readStatus().neighbourOverflow, 0u);
     for (std::uint32_t slot = 0; slot < n; ++slot) {
       ASSERT_EQ(v[slot].w == float(sim::ParticleKind::Fluid), slot < fluid) << "the fluid's slots come first";
     }
-    std::vector<std::vector<std::uint32_t>> named(fluid);
-    for (std::uint32_t c = 0; c < clusters; ++c) {
+    std::vector<std::vector<std::uint32_t>> named(n);
+    for (std::uint32_t c = 0; c < all; ++c) {
+      const bool boundaryMembers = c >= clusters;
+      const std::uint32_t first = boundaryMembers ? fluid + (c - clusters) * HEMO_CLUSTER_SIZE : c * HEMO_CLUSTER_SIZE;
+      const std::uint32_t end = boundaryMembers ? n : fluid;
       const std::uint32_t nf = counts[c] & 0xffffu, nb = counts[c] >> 16u;
       ASSERT_LE(nf + nb, cap);
+      if (boundaryMembers) {
+        ASSERT_EQ(nb, 0u) << "boundary cluster " << c << " lists boundary particles";
+      }
       std::map<std::uint32_t, int> seen;
       auto take = [&](std::uint32_t k, bool boundary) {
         const std::uint32_t e = list[std::size_t(c) * cap + k];
@@ -1079,8 +1120,8 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
         repeated += seen[j]++ > 0;
         for (std::uint32_t m = 0; m < HEMO_CLUSTER_SIZE; ++m) {
           if (!(mask & (1u << m))) continue;
-          const std::uint32_t i = c * HEMO_CLUSTER_SIZE + m;
-          ASSERT_LT(i, fluid) << "a mask names a member past the fluid";
+          const std::uint32_t i = first + m;
+          ASSERT_LT(i, end) << "a mask names a member past its part";
           named[i].push_back(j);
         }
       };
@@ -1090,11 +1131,11 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     const auto& p = solver.params();
     const double radius = p.listRadius;
     std::size_t pairs = 0;
-    for (std::uint32_t i = 0; i < fluid; ++i) {
+    for (std::uint32_t i = 0; i < n; ++i) {
       auto& got = named[i];
       std::sort(got.begin(), got.end());
       EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "slot " << i << " names a neighbour twice";
-      for (std::uint32_t j = 0; j < n; ++j) {
+      for (std::uint32_t j = 0; j < (i < fluid ? n : fluid); ++j) {  // boundary members: fluid neighbours only
         glm::dvec3 d = glm::dvec3(x[i]) - glm::dvec3(x[j]);
         for (int a = 0; a < 3; ++a) {
           if (p.period[a] > 0.0f) d[a] -= double(p.period[a]) * std::round(d[a] / double(p.period[a]));
@@ -1103,12 +1144,14 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
         if (std::abs(r - radius) < 1e-5 * radius) continue;  // float rounding decides
         const bool listed = std::binary_search(got.begin(), got.end(), j);
         EXPECT_EQ(listed, r < radius) << "slots " << i << " and " << j << " at " << r / radius << " list radii";
-        pairs += r < radius;
+        pairs += r < radius && i < fluid;
+        boundaryPairs += r < radius && i >= fluid;
       }
     }
     EXPECT_GT(pairs, 20u * fluid);
   }
   EXPECT_GT(repeated, 0u) << "no cluster spans rows of cells";
+  EXPECT_GT(boundaryPairs, 1000u) << "the boundary clusters' lists were tested";
 }
 
 }  // namespace

@@ -224,10 +224,12 @@ class SphSolver {
   const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
   const gpu::Buffer& interactingPairs() const { return pairList_; }
   // Clusters (interface/sph.h, "Clusters"): whether the fluid passes walk them (they do while
-  // the slots are in grid order), the entries per cluster, and the
-  // lists as the last build left them: a count per cluster (fluid | boundary << 16) and
-  // clusterCapacity() entries per cluster.
+  // the slots are in grid order), whether the boundary particles' slots are in clusters too
+  // (then numbered after the fluid's, without per-particle lists), the entries per cluster,
+  // and the lists as the last build left them: a count per cluster (fluid | boundary << 16)
+  // and clusterCapacity() entries per cluster.
   bool usesClusters() const { return clusterPath(); }
+  bool usesBoundaryClusters() const { return boundaryClusterPath(); }
   std::uint32_t clusterCapacity() const { return clusterCapacity_; }
   const gpu::Buffer& clusterCounts() const { return ccount_; }
   const gpu::Buffer& clusterLists() const { return clist_; }
@@ -288,12 +290,16 @@ class SphSolver {
   const gpu::ComputePipeline* buildClusters_ = nullptr;
   const gpu::ComputePipeline* densityClusters_ = nullptr;
   const gpu::ComputePipeline* forcesClusters_ = nullptr;
-  gpu::DescriptorSet buildClustersSet_, densityClustersSet_, forcesClustersSet_;
+  const gpu::ComputePipeline* boundaryClusters_ = nullptr;
+  gpu::DescriptorSet buildClustersSet_, densityClustersSet_, forcesClustersSet_, boundaryClustersSet_;
   bool clusters_ = false;  // the layout asks for clusters (they run while clusterPath())
   // The fluid passes walk the clusters' lists in this step: the layout asks for them and the
   // slots are in grid order (the fluid's first).
   bool clusterPath() const;
   std::uint32_t clusterCount() const;  // clusters of the fluid's slots (the last may hold fewer)
+  // The boundary slots are in clusters too (numbered from clusterCount() on): on the cluster
+  // path in a scene without wall particles.
+  bool boundaryClusterPath() const;
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   // The boundary and wall slots with fluid in their list, and the indirect arguments of the
   // boundary-pressure pass over them (interface/sph.h, HEMO_BPRESSURE_SORT).

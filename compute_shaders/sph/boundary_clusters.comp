@@ -1,0 +1,127 @@
+#version 450
+// sph/boundary_pressure.comp over the boundary particles' clusters (interface/sph.h,
+// "Clusters"; scenes without wall particles): the same model, modes and outputs, with one
+// invocation per cluster of HEMO_CLUSTER_SIZE boundary slots. Each fluid entry of the
+// cluster's list is fetched once (position, state, velocity) and evaluated against every
+// member its mask names. The active list holds clusters with a fluid entry; a member of an
+// active cluster without fluid within the support takes the values of a particle without
+// fluid neighbours, as the per-particle pass gives it.
+#extension GL_GOOGLE_include_directive : require
+#include "interface/sph.h"
+#include "common/index.glsl"
+#include "common/kernel.glsl"
+#include "common/sph_params.glsl"
+#include "common/clock.glsl"
+#include "common/tait.glsl"
+
+layout(binding = HEMO_BPRESSURE_BINDING_POSITIONS) uniform samplerBuffer positions;
+layout(binding = HEMO_BPRESSURE_BINDING_VELOCITIES) uniform samplerBuffer velocities;
+layout(binding = HEMO_BPRESSURE_BINDING_FLUID_STATE) uniform samplerBuffer fluidState;
+HEMO_SPH_PARAMS_UNIFORM(HEMO_BPRESSURE_BINDING_PARAMS);
+layout(std430, binding = HEMO_BPRESSURE_BINDING_STATE) writeonly buffer State { vec4 state[]; };
+layout(binding = HEMO_BPRESSURE_BINDING_NCOUNT) uniform usamplerBuffer clusterCount;
+layout(binding = HEMO_BPRESSURE_BINDING_NLIST) uniform usamplerBuffer clusterList;
+layout(std430, binding = HEMO_BPRESSURE_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
+layout(std140, binding = HEMO_BPRESSURE_BINDING_CLOCK) uniform Clock { ClockRecord clocks[2]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE) buffer Active { uint activeClusters[]; };
+layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE_ARGS) buffer ActiveArgs { uvec4 activeArgs; };
+#include "common/boundary_state.glsl"
+layout(push_constant) uniform Push {
+  uint first;     // the boundary slots [first, n), in clusters from `first` on
+  uint n;
+  uint clockIn;
+  uint mode;      // HEMO_BPRESSURE_ACTIVE, _SORT or _REST
+  uint capacity;  // entries per cluster (a multiple of 4)
+  uint base;      // the cluster of slot `first`
+} pc;
+
+const uint M = HEMO_CLUSTER_SIZE;
+
+vec3 gX[M];
+HemoPairParams gPp;
+float gInvH, gSupport;
+float gSumW[M], gSumP[M];
+vec3 gSumRhoR[M], gSumV[M];
+
+// One entry (a fluid slot); `valid` is false for the padding of the last texel.
+void pair(uint entry, bool valid) {
+  const uint f = entry & HEMO_CLUSTER_SLOT_MASK;
+  const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;
+  const vec3 xf = texelFetch(positions, int(f)).xyz;
+  const vec2 sf = texelFetch(fluidState, int(f)).xy;
+  const vec3 vf = texelFetch(velocities, int(f)).xyz;
+  for (uint m = 0u; m < M; ++m) {
+    const vec3 d = hemo_min_image(gX[m] - xf, gPp);
+    const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
+    const float w = (mask & (1u << m)) != 0u ? hemo_kernel_w_inv(r, gInvH, gPp.kernelNorm) : 0.0;
+    gSumW[m] += w;
+    gSumP[m] += sf.y * w;
+    gSumRhoR[m] += sf.x * d * w;
+    gSumV[m] += vf * w;
+  }
+}
+
+void main() {
+  uint c;  // the cluster, counted from `base`
+  if (pc.mode == HEMO_BPRESSURE_ACTIVE) {
+    const uint k = hemo_global_index();
+    if (k >= activeArgs.w) {
+      return;
+    }
+    c = activeClusters[k];
+  } else {
+    c = hemo_global_index();
+  }
+  const uint first = pc.first + c * M;
+  if (first >= pc.n) {
+    return;
+  }
+  const uint count = min(M, pc.n - first);
+  const uint fluidEntries = texelFetch(clusterCount, int(pc.base + c)).x & 0xffffu;
+  const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
+  if (pc.mode != HEMO_BPRESSURE_ACTIVE) {
+    if (fluidEntries > 0u) {
+      if (pc.mode == HEMO_BPRESSURE_SORT) {
+        // (in whatever order the invocations run: each cluster's result does not depend on
+        // its place; the invocation that opens a workgroup's worth adds the workgroup)
+        const uint k = atomicAdd(activeArgs.w, 1u);
+        activeClusters[k] = c;
+        if (k % gl_WorkGroupSize.x == 0u) {
+          atomicAdd(activeArgs.x, 1u);
+        }
+      }
+      return;
+    }
+    for (uint m = 0u; m < count; ++m) {
+      const uint b = first + m;
+      hemo_boundary_store(b, texelFetch(positions, int(b)), texelFetch(velocities, int(b)).xyz, 0.0, 0.0, vec3(0.0),
+                          vec3(0.0), background);
+    }
+    return;
+  }
+  gPp = hemo_pair_params();
+  gInvH = 1.0 / gPp.h;
+  gSupport = 2.0 * gPp.h;
+  for (uint m = 0u; m < M; ++m) {
+    // a missing member repeats the last one (never in a mask)
+    gX[m] = texelFetch(positions, int(first + min(m, count - 1u))).xyz;
+    gSumW[m] = 0.0;
+    gSumP[m] = 0.0;
+    gSumRhoR[m] = vec3(0.0);
+    gSumV[m] = vec3(0.0);
+  }
+  const uint base = (pc.base + c) * pc.capacity;
+  for (uint k = 0u; k < fluidEntries; k += 4u) {
+    const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
+    pair(e.x, true);
+    pair(e.y, k + 1u < fluidEntries);
+    pair(e.z, k + 2u < fluidEntries);
+    pair(e.w, k + 3u < fluidEntries);
+  }
+  for (uint m = 0u; m < count; ++m) {
+    const uint b = first + m;
+    hemo_boundary_store(b, texelFetch(positions, int(b)), texelFetch(velocities, int(b)).xyz, gSumW[m], gSumP[m],
+                        gSumRhoR[m], gSumV[m], background);
+  }
+}
