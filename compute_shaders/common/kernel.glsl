@@ -16,6 +16,14 @@ float hemo_kernel_w_inv(float r, float invH, float kernelNorm) {
   return kernelNorm * t2 * t2 * (2.0 * q + 1.0);
 }
 
+// W / kernelNorm, (1 - q/2)^4 (2q + 1), for sums that apply the norm once at the end.
+float hemo_kernel_w_shape(float r, float invH) {
+  const float q = r * invH;
+  const float t = 1.0 - 0.5 * q;
+  const float t2 = t * t;
+  return t2 * t2 * (2.0 * q + 1.0);
+}
+
 // dW/dr / r, the factor that turns a separation d (|d| = r) into grad W = d * factor:
 //   kernelNorm * (-5 q (1 - q/2)^3) / (h r) = gradNorm * (1 - q/2)^3,  gradNorm = -5 kernelNorm / h^2.
 // No division by r, so a coincident pair gets grad W = 0; (1 - q/2) is clamped at 0, so any r
@@ -28,4 +36,10 @@ float hemo_kernel_grad_norm(float h, float kernelNorm) {
 float hemo_kernel_grad_factor(float r, float invH, float gradNorm) {
   const float t = max(1.0 - 0.5 * r * invH, 0.0);
   return gradNorm * t * t * t;
+}
+
+// The same over gradNorm, (1 - q/2)^3 clamped at 0, for sums that apply gradNorm once at the end.
+float hemo_kernel_grad_shape(float r, float invH) {
+  const float t = max(1.0 - 0.5 * r * invH, 0.0);
+  return t * t * t;
 }

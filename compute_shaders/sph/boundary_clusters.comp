@@ -54,7 +54,8 @@ void pair(uint entry, bool valid) {
   for (uint m = 0u; m < M; ++m) {
     const vec3 d = hemo_min_image(gX[m] - xf, gPp);
     const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
-    const float w = (mask & (1u << m)) != 0u ? hemo_kernel_w_inv(r, gInvH, gPp.kernelNorm) : 0.0;
+    // (the norm cancels in every ratio of common/boundary_state.glsl)
+    const float w = (mask & (1u << m)) != 0u ? hemo_kernel_w_shape(r, gInvH) : 0.0;
     gSumW[m] += w;
     gSumP[m] += sf.y * w;
     gSumRhoR[m] += sf.x * d * w;

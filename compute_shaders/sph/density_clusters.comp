@@ -44,7 +44,7 @@ void pair(uint entry, bool valid) {
   for (uint m = 0u; m < M; ++m) {
     const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
     const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
-    const float w = hemo_kernel_w_inv(r, gInvH, gPp.kernelNorm);
+    const float w = hemo_kernel_w_shape(r, gInvH);  // the norm applied to the sum
     gRho[m] += (mask & (1u << m)) != 0u ? pj.w * w : 0.0;
   }
 }
@@ -82,7 +82,7 @@ void main() {
   for (uint m = 0u; m < M; ++m) {
     if (m < count) {
       const uint i = first + m;
-      const float rho = gRho[m];
+      const float rho = gRho[m] * gPp.kernelNorm;
       const float p = hemo_tait_pressure(rho, background, params);
       state[i] = vec4(rho, p, 0.0, 0.0);
       const vec4 xi = texelFetch(positions, int(i));

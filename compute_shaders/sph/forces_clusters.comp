@@ -45,8 +45,8 @@ const float kNoLimit = 3.0e38;
 
 vec3 gX[M], gV[M];
 float gP[M];
-// sum V_j [ -(p_i + p_j) gradW + 2 mu (x_ij . gradW) / (r^2 + eta^2) v_ij ]: one sum for both
-// terms, as the registers of eight members are scarce
+// sum V_j [ -(p_i + p_j) gradW + 2 mu (x_ij . gradW) / (r^2 + eta^2) v_ij ] / gradNorm: one
+// sum for both terms, as the registers of eight members are scarce
 vec3 gSum[M];
 vec4 gRepulsion[M];  // (sum n N T, sum T)
 HemoPairParams gPp;
@@ -70,8 +70,9 @@ void pair(uint entry, bool valid, const bool boundary) {
     const bool take = (mask & (1u << m)) != 0u;
     const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
     const float r2 = dot(d, d);
-    // grad W = F d, so x_ij . grad W = F r^2: both terms carry F
-    const float f = take ? hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm) : 0.0;
+    // grad W = F d, so x_ij . grad W = F r^2: both terms carry F (over gradNorm: the sum's
+    // factor, applied once at the end)
+    const float f = take ? hemo_kernel_grad_shape(sqrt(r2), gInvH) : 0.0;
     gSum[m] += f * ((viscJ * r2 / (r2 + gEtaSq)) * (gV[m] - vj.xyz) - (volumeJ * gP[m] + pj.w) * d);
     if (boundary) {
       // boundary and wall particles; detached ones (V = 0) do not repel, nor does a
@@ -146,7 +147,7 @@ void main() {
         if (diagnose && !finiteInput[m]) {
           atomicMin(status[HEMO_STATUS_BAD_INPUT_ID], ids[i]);
         }
-        vec3 a = gSum[m] / rho[m];
+        vec3 a = gSum[m] * (gGradNorm / rho[m]);
         const float repulsionScale = 1.0 / max(gRepulsion[m].w, 1.0);
         a += gRepulsion[m].xyz * repulsionScale;
         a += params.gravity.xyz;
