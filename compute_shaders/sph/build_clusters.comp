@@ -31,10 +31,14 @@ layout(push_constant) uniform Push {
 
 const uint M = HEMO_CLUSTER_SIZE;
 
+// members' positions in cell units, in the period of their cells (common/list_ranges.glsl
+// trims each row to the group's members in gListPointMask)
+#define HEMO_LIST_POINTS HEMO_CLUSTER_SIZE
+vec3 gListPoints[M];
+uint gListPointMask;
 #include "common/list_ranges.glsl"
 
 vec3 gX[M];    // members' positions
-vec3 gU[M];    // members' positions in cell units, in the period of their cells
 ivec3 gC[M];   // members' cells
 uint gNf, gNb; // entries kept: fluid from the front, boundary from the back
 uint gNamed[M]; // entries naming each member (itself included)
@@ -42,15 +46,16 @@ uint gNamed[M]; // entries naming each member (itself included)
 // The members [g0, g1) (one row of cells): walk their candidates and keep each one within the
 // list radius of at least one of them, with that mask.
 void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
-  vec3 lo = gU[g0];
-  vec3 hi = gU[g0];
+  vec3 lo = gListPoints[g0];
+  vec3 hi = gListPoints[g0];
   uint members = 0u;
   for (uint m = 0u; m < M; ++m) {
     const bool inGroup = m >= g0 && m < g1;
-    lo = inGroup ? min(lo, gU[m]) : lo;
-    hi = inGroup ? max(hi, gU[m]) : hi;
+    lo = inGroup ? min(lo, gListPoints[m]) : lo;
+    hi = inGroup ? max(hi, gListPoints[m]) : hi;
     members |= inGroup ? 1u << m : 0u;
   }
+  gListPointMask = members;
   // the rows around the group's box (common/list_ranges.glsl)
   const uint rangeCount = hemo_list_ranges(pc.grid, gC[g0], lo, hi, pc.boundary == 0u, params.listRadius);
   // The candidates as one flat loop (sph/build_list.comp). Each is written to the next free
@@ -113,7 +118,7 @@ void main() {
     vec3 u = (x - pc.grid.origin.xyz) * pc.grid.invCell.xyz;
     u = mix(u, u - dimsF * floor(u / dimsF), notEqual(pc.grid.periodic.xyz, uvec3(0u)));
     // clamped into the grid like the cell, so a member outside it stays in its cell's box
-    gU[m] = clamp(u, vec3(gC[m]), vec3(gC[m]) + 0.999999);
+    gListPoints[m] = clamp(u, vec3(gC[m]), vec3(gC[m]) + 0.999999);
     gX[m] = x;
     gNamed[m] = 0u;
   }
