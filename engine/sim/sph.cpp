@@ -429,18 +429,6 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
                                       1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
                                       1u << HEMO_BPRESSURE_BINDING_FLUID_STATE});
-  boundaryClustersSet_ = boundaryClusters_->makeSet({gpu::texelBinding(HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_FLUID_STATE, &state_, gpu::texel::kVec4),
-                                             {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
-                                             {HEMO_BPRESSURE_BINDING_STATE, &state_},
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NCOUNT, &ccount_, gpu::texel::kUint),
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, &clist_, gpu::texel::kUvec4),
-                                             {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
-                                             {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
-                                             {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_},
-                                             {HEMO_BPRESSURE_BINDING_ACTIVE, &activeSlots_},
-                                             {HEMO_BPRESSURE_BINDING_ACTIVE_ARGS, &activeArgs_}});
   buildClusters_ = &cache.get({"sph/build_clusters", HEMO_CBUILD_BINDING_COUNT, sizeof(ClusterBuildPush), kWorkgroup,
                                pairSpecialization({}), 1u << HEMO_CBUILD_BINDING_PARAMS,
                                1u << HEMO_CBUILD_BINDING_POSITIONS | 1u << HEMO_CBUILD_BINDING_CELL_START});
@@ -497,18 +485,24 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_DENSITY_BINDING_PAIR_POSITION, &pairPosition_},
                                    {HEMO_DENSITY_BINDING_PAIR_COUNT, &pairCount_},
                                    {HEMO_DENSITY_BINDING_PAIR_LIST, &pairList_}});
-  boundarySet_ = boundaryPressure_->makeSet({gpu::texelBinding(HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_FLUID_STATE, &state_, gpu::texel::kVec4),
-                                             {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
-                                             {HEMO_BPRESSURE_BINDING_STATE, &state_},
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_, gpu::texel::kUint),
-                                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, &nlist_, listFormat),
-                                             {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
-                                             {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
-                                             {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_},
-                                             {HEMO_BPRESSURE_BINDING_ACTIVE, &activeSlots_},
-                                             {HEMO_BPRESSURE_BINDING_ACTIVE_ARGS, &activeArgs_}});
+  // The boundary-pressure pass and its cluster form share their bindings but for the lists.
+  auto boundarySetFor = [&](const gpu::ComputePipeline& pipeline, const gpu::Buffer* counts, const gpu::Buffer* list,
+                            VkFormat format) {
+    return pipeline.makeSet({gpu::texelBinding(HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_FLUID_STATE, &state_, gpu::texel::kVec4),
+                             {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
+                             {HEMO_BPRESSURE_BINDING_STATE, &state_},
+                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NCOUNT, counts, gpu::texel::kUint),
+                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, list, format),
+                             {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
+                             {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
+                             {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_},
+                             {HEMO_BPRESSURE_BINDING_ACTIVE, &activeSlots_},
+                             {HEMO_BPRESSURE_BINDING_ACTIVE_ARGS, &activeArgs_}});
+  };
+  boundarySet_ = boundarySetFor(*boundaryPressure_, &ncount_, &nlist_, listFormat);
+  boundaryClustersSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4);
   spsSet_ = spsStress_->makeSet({gpu::texelBinding(HEMO_SPS_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_SPS_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
