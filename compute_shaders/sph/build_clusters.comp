@@ -3,10 +3,10 @@
 // consecutive fluid slots, every particle closer than the list radius to at least one member,
 // with the mask of the members it is that close to; for a cluster of boundary slots (a second
 // dispatch, in scenes without wall particles), every such fluid particle. One invocation per
-// cluster. Its members
-// are grouped by row of grid cells (the slots are in cell order, so a row's members are
-// consecutive); each group walks the cells within the list radius of its members' box, as
-// sph/build_list.comp does for one particle, and tests every candidate against its members.
+// cluster. Its members are grouped by row of grid cells (the slots are in cell order, so a
+// row's members are consecutive); each group walks the cells within the list radius of its
+// members, as sph/build_list.comp does for one particle, and tests every candidate against
+// its members.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
