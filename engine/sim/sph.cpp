@@ -645,10 +645,9 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
     rec.dispatch(*buildClusters_, buildClustersSet_, ClusterBuildPush{grid_.push(n), 0u, fluid, clusterCapacity_, 0u, 0u},
                  buildClusters_->groupsFor(std::max(clusters, 1u)));
     if (boundaryClusterPath()) {
-      // A dispatch of its own: lavapipe gives each thread a contiguous share of a dispatch,
-      // and the fluid's clusters cost several times the boundary's.
+      // the boundary slots' clusters, numbered after the fluid's (their lists hold fluid only)
       rec.dispatch(*buildClusters_, buildClustersSet_, ClusterBuildPush{grid_.push(n), fluid, n, clusterCapacity_, clusters, 1u},
-                   buildClusters_->groupsFor((n - fluid + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE));
+                   buildClusters_->groupsFor(boundaryClusterCount()));
     }
     rec.computeToCompute();
     if (timestamps) timestamps->mark(rec, "cluster list");
@@ -666,7 +665,7 @@ void SphSolver::recordBoundaryRange(gpu::CommandRecorder& rec, std::uint32_t mod
   if (boundaryClusterPath()) {
     rec.dispatch(*boundaryClusters_, boundaryClustersSet_,
                  BoundaryClusterPush{{first, n, clockIn, mode}, clusterCapacity_, clusterCount()},
-                 boundaryClusters_->groupsFor((n - first + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE));
+                 boundaryClusters_->groupsFor(boundaryClusterCount()));
     return;
   }
   rec.dispatch(*boundaryPressure_, boundarySet_, BoundaryPush{first, n, clockIn, mode},
@@ -780,6 +779,10 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
 }
 
 bool SphSolver::clusterPath() const { return clusters_ && inGridOrder(); }
+
+std::uint32_t SphSolver::boundaryClusterCount() const {
+  return (particles_->count() - particles_->fluidCount() + HEMO_CLUSTER_SIZE - 1) / HEMO_CLUSTER_SIZE;
+}
 
 bool SphSolver::boundaryClusterPath() const {
   return clusterPath() && particles_->wallCount() == 0 && particles_->count() > particles_->fluidCount();

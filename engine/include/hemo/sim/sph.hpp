@@ -300,6 +300,7 @@ class SphSolver {
   // The boundary slots are in clusters too (numbered from clusterCount() on): on the cluster
   // path in a scene without wall particles.
   bool boundaryClusterPath() const;
+  std::uint32_t boundaryClusterCount() const;  // clusters of the slots past the fluid's
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   // The boundary and wall slots with fluid in their list, and the indirect arguments of the
   // boundary-pressure pass over them (interface/sph.h, HEMO_BPRESSURE_SORT).
