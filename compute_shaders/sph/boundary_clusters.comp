@@ -44,13 +44,10 @@ float gInvH, gSupport;
 float gSumW[M], gSumP[M];
 vec3 gSumRhoR[M], gSumV[M];
 
-// One entry (a fluid slot); `valid` is false for the padding of the last texel.
-void pair(uint entry, bool valid) {
-  const uint f = entry & HEMO_CLUSTER_SLOT_MASK;
+// One entry (a fluid slot) with its data: position, (rho, p), velocity; `valid` is false for
+// the padding of the last texel.
+void pair(uint entry, vec3 xf, vec2 sf, vec3 vf, bool valid) {
   const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;
-  const vec3 xf = texelFetch(positions, int(f)).xyz;
-  const vec2 sf = texelFetch(fluidState, int(f)).xy;
-  const vec3 vf = texelFetch(velocities, int(f)).xyz;
   for (uint m = 0u; m < M; ++m) {
     const vec3 d = hemo_min_image(gX[m] - xf, gPp);
     const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
@@ -114,11 +111,20 @@ void main() {
   }
   const uint base = (pc.base + c) * pc.capacity;
   for (uint k = 0u; k < fluidEntries; k += 4u) {
+    // a texel's four entries fetched together: the fetches (calls in llvmpipe, which spill the
+    // live registers) come in one run
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    pair(e.x, true);
-    pair(e.y, k + 1u < fluidEntries);
-    pair(e.z, k + 2u < fluidEntries);
-    pair(e.w, k + 3u < fluidEntries);
+    const ivec4 f = ivec4(e & HEMO_CLUSTER_SLOT_MASK);
+    const vec3 x0 = texelFetch(positions, f.x).xyz, x1 = texelFetch(positions, f.y).xyz;
+    const vec3 x2 = texelFetch(positions, f.z).xyz, x3 = texelFetch(positions, f.w).xyz;
+    const vec2 s0 = texelFetch(fluidState, f.x).xy, s1 = texelFetch(fluidState, f.y).xy;
+    const vec2 s2 = texelFetch(fluidState, f.z).xy, s3 = texelFetch(fluidState, f.w).xy;
+    const vec3 v0 = texelFetch(velocities, f.x).xyz, v1 = texelFetch(velocities, f.y).xyz;
+    const vec3 v2 = texelFetch(velocities, f.z).xyz, v3 = texelFetch(velocities, f.w).xyz;
+    pair(e.x, x0, s0, v0, true);
+    pair(e.y, x1, s1, v1, k + 1u < fluidEntries);
+    pair(e.z, x2, s2, v2, k + 2u < fluidEntries);
+    pair(e.w, x3, s3, v3, k + 3u < fluidEntries);
   }
   for (uint m = 0u; m < count; ++m) {
     const uint b = first + m;

@@ -36,11 +36,9 @@ float gRho[M];
 HemoPairParams gPp;
 float gInvH, gSupport;
 
-// One entry; `valid` is false for the padding of the last texel.
-void pair(uint entry, bool valid) {
-  const uint j = entry & HEMO_CLUSTER_SLOT_MASK;
+// One entry whose data is fetched; `valid` is false for the padding of the last texel.
+void pair(uint entry, vec4 pj, bool valid) {
   const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;  // the boundary bit lies past the members'
-  const vec4 pj = texelFetch(positions, int(j));
   for (uint m = 0u; m < M; ++m) {
     const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
     const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
@@ -49,14 +47,20 @@ void pair(uint entry, bool valid) {
   }
 }
 
-// Entries [first, end) of the cluster's list.
+// Entries [first, end) of the cluster's list: a texel's four entries fetched together, so that
+// the fetches (calls in llvmpipe, which spill the live registers) come in one run.
 void range(uint base, uint first, uint end) {
   for (uint k = first & ~3u; k < end; k += 4u) {
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    pair(e.x, k >= first);
-    pair(e.y, k + 1u >= first && k + 1u < end);
-    pair(e.z, k + 2u >= first && k + 2u < end);
-    pair(e.w, k + 3u >= first && k + 3u < end);
+    const uvec4 j = e & HEMO_CLUSTER_SLOT_MASK;
+    const vec4 p0 = texelFetch(positions, int(j.x));
+    const vec4 p1 = texelFetch(positions, int(j.y));
+    const vec4 p2 = texelFetch(positions, int(j.z));
+    const vec4 p3 = texelFetch(positions, int(j.w));
+    pair(e.x, p0, k >= first);
+    pair(e.y, p1, k + 1u >= first && k + 1u < end);
+    pair(e.z, p2, k + 2u >= first && k + 2u < end);
+    pair(e.w, p3, k + 3u >= first && k + 3u < end);
   }
 }
 

@@ -55,17 +55,10 @@ HemoRepulsionParams gRp;
 
 // One entry (fluid or boundary: a constant at each call); `valid` is false for the padding of
 // the last texel.
-void pair(uint entry, bool valid, const bool boundary) {
-  const uint j = entry & HEMO_CLUSTER_SLOT_MASK;
+void pair(uint entry, vec4 pj, vec4 vj, vec3 nrm, bool valid, const bool boundary) {
   const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;
-  const vec4 pj = texelFetch(pairPosition, int(j));  // (x_j, V_j p_j)
-  const vec4 vj = texelFetch(viscousVel, int(j));    // (v_j, +-V_j)
   const float volumeJ = abs(vj.w);
   const float viscJ = gTwoMu * volumeJ;
-  vec3 nrm = vec3(0.0);
-  if (boundary) {
-    nrm = texelFetch(normals, int(j)).xyz;
-  }
   for (uint m = 0u; m < M; ++m) {
     const bool take = (mask & (1u << m)) != 0u;
     const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
@@ -86,14 +79,28 @@ void pair(uint entry, bool valid, const bool boundary) {
   }
 }
 
-// Entries [first, end) of the cluster's list.
+// Entries [first, end) of the cluster's list: a texel's four entries fetched together, so that
+// the fetches (calls in llvmpipe, which spill the live registers) come in one run.
 void range(uint base, uint first, uint end, const bool boundary) {
   for (uint k = first & ~3u; k < end; k += 4u) {
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    pair(e.x, k >= first, boundary);
-    pair(e.y, k + 1u >= first && k + 1u < end, boundary);
-    pair(e.z, k + 2u >= first && k + 2u < end, boundary);
-    pair(e.w, k + 3u >= first && k + 3u < end, boundary);
+    const ivec4 j = ivec4(e & HEMO_CLUSTER_SLOT_MASK);
+    // (x_j, V_j p_j) and (v_j, +-V_j)
+    const vec4 p0 = texelFetch(pairPosition, j.x), p1 = texelFetch(pairPosition, j.y);
+    const vec4 p2 = texelFetch(pairPosition, j.z), p3 = texelFetch(pairPosition, j.w);
+    const vec4 v0 = texelFetch(viscousVel, j.x), v1 = texelFetch(viscousVel, j.y);
+    const vec4 v2 = texelFetch(viscousVel, j.z), v3 = texelFetch(viscousVel, j.w);
+    vec3 n0 = vec3(0.0), n1 = vec3(0.0), n2 = vec3(0.0), n3 = vec3(0.0);
+    if (boundary) {
+      n0 = texelFetch(normals, j.x).xyz;
+      n1 = texelFetch(normals, j.y).xyz;
+      n2 = texelFetch(normals, j.z).xyz;
+      n3 = texelFetch(normals, j.w).xyz;
+    }
+    pair(e.x, p0, v0, n0, k >= first, boundary);
+    pair(e.y, p1, v1, n1, k + 1u >= first && k + 1u < end, boundary);
+    pair(e.z, p2, v2, n2, k + 2u >= first && k + 2u < end, boundary);
+    pair(e.w, p3, v3, n3, k + 3u >= first && k + 3u < end, boundary);
   }
 }
 
