@@ -94,8 +94,11 @@
 // as a mask (bit 23 + m for member m) and HEMO_LIST_BOUNDARY_BIT for a boundary or wall
 // neighbour. A cluster whose members lie in more than one row of grid cells walks each row's
 // members separately, so a slot may appear once per such group, each time with that group's
-// members only: no pair is counted twice. Fluid entries fill the list from entry 0 up,
-// boundary entries from entry capacity - 1 down; the count packs both (fluid | boundary << 16).
+// members only: no pair is counted twice. Boundary entries that a member may come within the
+// repulsion's reach of before the next build (common/repulsion.glsl; that reach plus the skin)
+// fill the list from entry capacity - 1 down, all other entries (fluid, and boundary ones
+// marked as such) from entry 0 up: the force pass runs the repulsion over the back section
+// only. The count packs both (front | back << 16).
 // In a scene without wall particles the boundary particles' slots [fluid, n) are cut into
 // clusters too, numbered after the fluid's (the first is ceil(fluid / HEMO_CLUSTER_SIZE)):
 // their lists hold fluid entries only (all sph/boundary_clusters.comp needs), and no member
@@ -109,7 +112,7 @@
 #define HEMO_CBUILD_BINDING_POSITIONS 0  // the grid's positions at build, with the kind in w
 #define HEMO_CBUILD_BINDING_CELL_START 1
 #define HEMO_CBUILD_BINDING_PARAMS 2
-#define HEMO_CBUILD_BINDING_CCOUNT 3  // uint per cluster: fluid | boundary << 16
+#define HEMO_CBUILD_BINDING_CCOUNT 3  // uint per cluster: front | back << 16
 #define HEMO_CBUILD_BINDING_CLIST 4   // clusterCapacity entries per cluster
 #define HEMO_CBUILD_BINDING_STATUS 5
 // The boundary-pressure pass's active list (HEMO_BPRESSURE_BINDING_ACTIVE_ARGS), emptied by

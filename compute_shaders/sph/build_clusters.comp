@@ -6,7 +6,8 @@
 // cluster. Its members are grouped by row of grid cells (the slots are in cell order, so a
 // row's members are consecutive); each group walks the cells within the list radius of its
 // members, as sph/build_list.comp does for one particle, and tests every candidate against
-// its members.
+// its members. Boundary neighbours within the repulsion's reach (plus the skin) of a member go
+// to the back of the list, all others to the front (interface/sph.h).
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -42,6 +43,11 @@ vec3 gX[M];    // members' positions
 ivec3 gC[M];   // members' cells
 uint gNf, gNb; // entries kept: fluid from the front, boundary from the back
 uint gNamed[M]; // entries naming each member (itself included)
+// The squared distance within which a boundary neighbour may come into the repulsion's reach
+// before the next build: that reach (common/repulsion.glsl: within D of the neighbour's plane,
+// behind it by less than dp - D, within dp along it) plus the skin, by which a pair closes in
+// at most while the list lasts (the rebuild test).
+float gNear2;
 
 // The members [g0, g1) (one row of cells): walk their candidates and keep each one within the
 // list radius of at least one of them, with that mask.
@@ -79,15 +85,20 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
     }
     const vec3 xj = texelFetch(positions, int(j)).xyz;
     uint mask = 0u;
+    uint near = 0u;
     for (uint m = 0u; m < M; ++m) {
       const vec3 d = hemo_min_image(gX[m] - xj, pp);
-      mask |= dot(d, d) < list2 ? 1u << m : 0u;
+      const float d2 = dot(d, d);
+      mask |= d2 < list2 ? 1u << m : 0u;
+      near |= d2 < gNear2 ? 1u << m : 0u;
     }
     mask &= members;
     for (uint m = 0u; m < M; ++m) {
       gNamed[m] += (mask >> m) & 1u;
     }
-    const bool boundary = mark != 0u;
+    // A boundary entry that no member can come within the repulsion's reach of joins the
+    // fluid's section, the force pass's loop without the repulsion (it keeps its mark).
+    const bool boundary = mark != 0u && (near & members) != 0u;
     const uint used = gNf + gNb;
     const uint at = used >= last ? (boundary ? 0u : last) : (boundary ? last - gNb : gNf);
     clusterList[base + at] = j | mask << HEMO_CLUSTER_MEMBER_SHIFT | mark;
@@ -109,6 +120,12 @@ void main() {
   const uint count = min(M, pc.end - first);
   const HemoPairParams pp = hemo_pair_params();
   const float list2 = params.listRadius * params.listRadius;
+  {
+    const float normal = max(params.repulsionCutoff, params.wallSpacing - params.repulsionCutoff);
+    const float reach = sqrt(normal * normal + params.wallSpacing * params.wallSpacing) +
+                        (params.listRadius - params.supportRadius);
+    gNear2 = reach * reach;
+  }
   const vec3 dimsF = vec3(pc.grid.dimsN.xyz);
   for (uint m = 0u; m < M; ++m) {
     // a missing member repeats the last one (same cells, never in a mask)

@@ -5,8 +5,11 @@
 // force) and so are the outputs: accel (a, 1 / max(sum T, 1)), the time-step limit, the blow-up
 // diagnosis and the time step's first reduction level, here one (min, max) per invocation's
 // members. A member takes an entry only where the entry's mask names it; beyond the support
-// the kernel terms vanish and the repulsion's reach is shorter than the list radius. No SPS
-// term: scenes with it use the per-particle lists.
+// the kernel terms vanish and the repulsion's reach is shorter than the list radius. The
+// repulsion runs over the list's back section only, which holds every boundary neighbour that
+// may come within its reach before the next build; the front's boundary entries get the
+// pressure and viscous terms alone, the same as in the back. No SPS term: scenes with it use
+// the per-particle lists.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -53,8 +56,8 @@ HemoPairParams gPp;
 float gInvH, gGradNorm, gEtaSq, gTwoMu;
 HemoRepulsionParams gRp;
 
-// One entry (fluid or boundary: a constant at each call); `valid` is false for the padding of
-// the last texel.
+// One entry (the front section, or the back with the repulsion: a constant at each call);
+// `valid` is false for the padding of the last texel.
 void pair(uint entry, vec4 pj, vec4 vj, vec3 nrm, bool valid, const bool boundary) {
   const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;
   const float volumeJ = abs(vj.w);

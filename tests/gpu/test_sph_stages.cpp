@@ -160,6 +160,9 @@ class SphStageTest : public GpuTest {
     s.soundSpeed = 20.0f;
     s.viscosity = 0.05f;  // large, so the viscous term is visible next to pressure
     s.gravity = {0.0f, -1.0f, -9.81f};
+    // D = dp: the fluid's first layer (0.78-1.08 dp in front of the plane's top layer) is
+    // partly within the repulsion's reach (with the default D = dp / 2 none of it would be)
+    s.repulsionCutoffRatio = 1.0f;
     return s;
   }
 };
@@ -211,7 +214,7 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
     double accelScale = 0.0;
     for (const auto& a : acc) accelScale = std::max(accelScale, glm::length(a));
     ASSERT_GT(accelScale, 10.0);
-    std::size_t fluid = 0, positive = 0, negative = 0, boundaryWithPressure = 0;
+    std::size_t fluid = 0, positive = 0, negative = 0, boundaryWithPressure = 0, repelled = 0;
     for (std::uint32_t slot = 0; slot < n; ++slot) {
       const std::uint32_t i = slotIds[slot];
       if (c.ref[i].kind != 0) {
@@ -223,6 +226,8 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
         continue;
       }
       ++fluid;
+      // within D of the plane's top layer (at z = -dp/2, normal +z)
+      repelled += c.ref[i].x.z + 0.5 * s.spacing < double(solver.params().repulsionCutoff);
       positive += rp[i].y > 0.0;
       negative += rp[i].y < 0.0;
       EXPECT_NEAR(state[slot].x, rp[i].x, 2e-6 * rp[i].x) << "density of particle " << i;
@@ -233,6 +238,7 @@ TEST_F(SphStageTest, DensityPressureAndAccelerationMatchReference) {
     }
     EXPECT_GT(fluid, 400u);
     EXPECT_GT(boundaryWithPressure, 50u);
+    EXPECT_GT(repelled, 20u) << "the case must exercise the repulsion";
     EXPECT_GT(positive, 50u) << "the case must exercise positive pressure";
     if (!clamp) {
       EXPECT_GT(negative, 10u) << "the free surface must give negative pressure without clamping";
@@ -1040,7 +1046,8 @@ TEST_F(SphStageTest, ListHoldsEveryPairWithinTheSupportWhileTheGateStaysClosed) 
 // The clusters' lists (interface/sph.h, "Clusters") against a brute-force double-precision
 // search: every fluid member is named, exactly once, with exactly the particles within the
 // list radius (the minimum image on periodic axes); fluid entries from the front, boundary
-// entries (marked) from the back. Cases: a jittered block over a boundary plane, the same
+// entries marked, from the back where a member is within the repulsion's reach plus the skin
+// (the force pass evaluates the repulsion only there) and from the front otherwise. Cases: a jittered block over a boundary plane, the same
 // periodic in x and y, and random particles (some outside the grid) with a periodic x axis.
 // The boundary particles' clusters (numbered after the fluid's) the same way: each member
 // named once with every fluid particle within the list radius, and nothing else. Clusters
@@ -1076,6 +1083,7 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
   }
   std::size_t repeated = 0;  // entries of a slot already listed in its cluster
   std::size_t boundaryPairs = 0;
+  std::size_t farBoundary = 0, nearBoundary = 0;  // fluid clusters' boundary entries by section
   for (Setup& setup : setups) {
     SCOPED_TRACE(setup.name);
     setup.s.listLayout = sim::ListLayout::Clusters;
@@ -1098,6 +1106,19 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     for (std::uint32_t slot = 0; slot < n; ++slot) {
       ASSERT_EQ(v[slot].w == float(sim::ParticleKind::Fluid), slot < fluid) << "the fluid's slots come first";
     }
+    const auto& p = solver.params();
+    auto distance = [&](std::uint32_t i, std::uint32_t j) {
+      glm::dvec3 d = glm::dvec3(x[i]) - glm::dvec3(x[j]);
+      for (int a = 0; a < 3; ++a) {
+        if (p.period[a] > 0.0f) d[a] -= double(p.period[a]) * std::round(d[a] / double(p.period[a]));
+      }
+      return glm::length(d);
+    };
+    // The repulsion acts only within D of a boundary particle's plane, behind it by less than
+    // dp - D, and within dp along it (common/repulsion.glsl); a pair closes in by less than
+    // the skin (the list radius less the support) before the next build.
+    const double normalReach = std::max(double(p.repulsionCutoff), double(p.wallSpacing) - double(p.repulsionCutoff));
+    const double nearReach = std::hypot(normalReach, double(p.wallSpacing)) + (double(p.listRadius) - double(p.supportRadius));
     std::vector<std::vector<std::uint32_t>> named(n);
     for (std::uint32_t c = 0; c < all; ++c) {
       const bool boundaryMembers = c >= clusters;
@@ -1109,26 +1130,35 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
         ASSERT_EQ(nb, 0u) << "boundary cluster " << c << " lists boundary particles";
       }
       std::map<std::uint32_t, int> seen;
-      auto take = [&](std::uint32_t k, bool boundary) {
+      auto take = [&](std::uint32_t k, bool back) {
         const std::uint32_t e = list[std::size_t(c) * cap + k];
         const std::uint32_t j = e & HEMO_CLUSTER_SLOT_MASK;
         const std::uint32_t mask = (e >> HEMO_CLUSTER_MEMBER_SHIFT) & ((1u << HEMO_CLUSTER_SIZE) - 1u);
         ASSERT_LT(j, n);
+        const bool boundary = j >= fluid;
         EXPECT_EQ((e & sim::SphSolver::kListBoundaryBit) != 0, boundary) << "cluster " << c << " entry " << k;
-        EXPECT_EQ(j >= fluid, boundary) << "cluster " << c << " entry " << k;
         EXPECT_NE(mask, 0u) << "an entry no member needs";
+        if (!boundary) {
+          EXPECT_FALSE(back) << "cluster " << c << " entry " << k << ": fluid in the boundary section";
+        }
         repeated += seen[j]++ > 0;
+        double nearest = 1e30;
         for (std::uint32_t m = 0; m < HEMO_CLUSTER_SIZE; ++m) {
           if (!(mask & (1u << m))) continue;
           const std::uint32_t i = first + m;
           ASSERT_LT(i, end) << "a mask names a member past its part";
           named[i].push_back(j);
+          nearest = std::min(nearest, distance(i, j));
+        }
+        if (boundary && std::abs(nearest - nearReach) > 1e-5 * nearReach) {  // (else float rounding decides)
+          EXPECT_EQ(back, nearest < nearReach) << "cluster " << c << " entry " << k << ": boundary slot " << j << " at "
+                                               << nearest / nearReach << " of the repulsion's reach and skin";
+          (back ? nearBoundary : farBoundary) += 1;
         }
       };
       for (std::uint32_t k = 0; k < nf; ++k) take(k, false);
       for (std::uint32_t k = cap - nb; k < cap; ++k) take(k, true);
     }
-    const auto& p = solver.params();
     const double radius = p.listRadius;
     std::size_t pairs = 0;
     for (std::uint32_t i = 0; i < n; ++i) {
@@ -1136,11 +1166,7 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
       std::sort(got.begin(), got.end());
       EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "slot " << i << " names a neighbour twice";
       for (std::uint32_t j = 0; j < (i < fluid ? n : fluid); ++j) {  // boundary members: fluid neighbours only
-        glm::dvec3 d = glm::dvec3(x[i]) - glm::dvec3(x[j]);
-        for (int a = 0; a < 3; ++a) {
-          if (p.period[a] > 0.0f) d[a] -= double(p.period[a]) * std::round(d[a] / double(p.period[a]));
-        }
-        const double r = glm::length(d);
+        const double r = distance(i, j);
         if (std::abs(r - radius) < 1e-5 * radius) continue;  // float rounding decides
         const bool listed = std::binary_search(got.begin(), got.end(), j);
         EXPECT_EQ(listed, r < radius) << "slots " << i << " and " << j << " at " << r / radius << " list radii";
@@ -1152,6 +1178,8 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
   }
   EXPECT_GT(repeated, 0u) << "no cluster spans rows of cells";
   EXPECT_GT(boundaryPairs, 1000u) << "the boundary clusters' lists were tested";
+  EXPECT_GT(nearBoundary, 100u) << "boundary entries within the repulsion's reach were tested";
+  EXPECT_GT(farBoundary, 100u) << "boundary entries beyond the repulsion's reach were tested";
 }
 
 }  // namespace

@@ -226,8 +226,9 @@ class SphSolver {
   // Clusters (interface/sph.h, "Clusters"): whether the fluid passes walk them (they do while
   // the slots are in grid order), whether the boundary particles' slots are in clusters too
   // (then numbered after the fluid's, without per-particle lists), the entries per cluster,
-  // and the lists as the last build left them: a count per cluster (fluid | boundary << 16)
-  // and clusterCapacity() entries per cluster.
+  // and the lists as the last build left them: a count per cluster (front | back << 16: the
+  // back holds the boundary entries within the repulsion's reach, interface/sph.h) and
+  // clusterCapacity() entries per cluster.
   bool usesClusters() const { return clusterPath(); }
   bool usesBoundaryClusters() const { return boundaryClusterPath(); }
   std::uint32_t clusterCapacity() const { return clusterCapacity_; }
