@@ -49,6 +49,35 @@ uint gNamed[M]; // entries naming each member (itself included)
 // at most while the list lasts (the rebuild test).
 float gNear2;
 
+// Candidate slot j at xj against the members named in `members` (none: a padding candidate,
+// written where the next entry goes but not kept). It is written to the next free entry of its
+// end and kept (the end advances) only if some member is close enough.
+void candidate(uint base, uint j, vec3 xj, uint members, uint mark, HemoPairParams pp, float list2) {
+  const uint last = pc.capacity - 1u;
+  uint mask = 0u;
+  uint near = 0u;
+  for (uint m = 0u; m < M; ++m) {
+    const vec3 d = hemo_min_image(gX[m] - xj, pp);
+    const float d2 = dot(d, d);
+    mask |= d2 < list2 ? 1u << m : 0u;
+    near |= d2 < gNear2 ? 1u << m : 0u;
+  }
+  mask &= members;
+  for (uint m = 0u; m < M; ++m) {
+    gNamed[m] += (mask >> m) & 1u;
+  }
+  // A boundary entry that no member can come within the repulsion's reach of joins the
+  // fluid's section, the force pass's loop without the repulsion (it keeps its mark).
+  const bool boundary = mark != 0u && (near & members) != 0u;
+  // With used == last one entry is free, at gNf = last - gNb; past that the cluster has
+  // overflowed (the run stops) and any entry of its own will do.
+  const uint used = gNf + gNb;
+  const uint at = used > last ? 0u : (boundary ? last - gNb : gNf);
+  clusterList[base + at] = j | mask << HEMO_CLUSTER_MEMBER_SHIFT | mark;
+  gNf += mask != 0u && !boundary ? 1u : 0u;
+  gNb += mask != 0u && boundary ? 1u : 0u;
+}
+
 // The members [g0, g1) (one row of cells): walk their candidates and keep each one within the
 // list radius of at least one of them, with that mask.
 void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
@@ -64,10 +93,8 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
   gListPointMask = members;
   // the rows around the group's box (common/list_ranges.glsl)
   const uint rangeCount = hemo_list_ranges(pc.grid, gC[g0], lo, hi, pc.boundary == 0u, params.listRadius);
-  // The candidates as one flat loop (sph/build_list.comp). Each is written to the next free
-  // entry of its end and kept (the end advances) only if some member is close enough.
+  // The candidates as one flat loop (sph/build_list.comp).
   const uint base = cluster * pc.capacity;
-  const uint last = pc.capacity - 1u;
   uint next = 0u;
   uint j = 0u;
   uint jEnd = 0u;
@@ -83,28 +110,19 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
       jEnd = r.y & ~HEMO_LIST_BOUNDARY_BIT;
       mark = r.y & HEMO_LIST_BOUNDARY_BIT;
     }
-    const vec3 xj = texelFetch(positions, int(j)).xyz;
-    uint mask = 0u;
-    uint near = 0u;
-    for (uint m = 0u; m < M; ++m) {
-      const vec3 d = hemo_min_image(gX[m] - xj, pp);
-      const float d2 = dot(d, d);
-      mask |= d2 < list2 ? 1u << m : 0u;
-      near |= d2 < gNear2 ? 1u << m : 0u;
-    }
-    mask &= members;
-    for (uint m = 0u; m < M; ++m) {
-      gNamed[m] += (mask >> m) & 1u;
-    }
-    // A boundary entry that no member can come within the repulsion's reach of joins the
-    // fluid's section, the force pass's loop without the repulsion (it keeps its mark).
-    const bool boundary = mark != 0u && (near & members) != 0u;
-    const uint used = gNf + gNb;
-    const uint at = used >= last ? (boundary ? 0u : last) : (boundary ? last - gNb : gNf);
-    clusterList[base + at] = j | mask << HEMO_CLUSTER_MEMBER_SHIFT | mark;
-    gNf += mask != 0u && !boundary ? 1u : 0u;
-    gNb += mask != 0u && boundary ? 1u : 0u;
-    ++j;
+    // up to four candidates of the range, their positions fetched together (llvmpipe's
+    // fetches are calls that spill the live registers: one run of calls instead of four)
+    const uint count = min(jEnd - j, 4u);
+    const uint j3 = j + count - 1u;
+    const vec3 x0 = texelFetch(positions, int(j)).xyz;
+    const vec3 x1 = texelFetch(positions, int(min(j + 1u, j3))).xyz;
+    const vec3 x2 = texelFetch(positions, int(min(j + 2u, j3))).xyz;
+    const vec3 x3 = texelFetch(positions, int(j3)).xyz;
+    candidate(base, j, x0, members, mark, pp, list2);
+    candidate(base, j + 1u, x1, count > 1u ? members : 0u, mark, pp, list2);
+    candidate(base, j + 2u, x2, count > 2u ? members : 0u, mark, pp, list2);
+    candidate(base, j + 3u, x3, count > 3u ? members : 0u, mark, pp, list2);
+    j += count;
   }
 }
 

@@ -77,9 +77,12 @@ void main() {
     // Every candidate is written to the next free slot, and the slot is kept (count
     // advances) only if the candidate is a neighbour: a store under a data-dependent
     // condition cost llvmpipe more than the candidate test itself (dam break: list
-    // build 20 -> 14 ms, docs/benchmarks.md). Past the capacity the last slot is
-    // overwritten; that overflow stops the run at the end of the batch (status).
-    neighbourList[hemo_list_slot(i, min(count, capacity - 1u), pp)] = j | mark;
+    // build 20 -> 14 ms, docs/benchmarks.md). A full list takes no more writes: a
+    // further neighbour overflows it, which stops the run at the end of the batch (status),
+    // and any other candidate must not take the last neighbour's slot.
+    if (count < capacity) {
+      neighbourList[hemo_list_slot(i, count, pp)] = j | mark;
+    }
     if (j != i && dot(d, d) < list2) {
       ++count;
     }

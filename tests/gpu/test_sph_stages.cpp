@@ -477,6 +477,52 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
   }
 }
 
+// A particle's list filled to exactly its capacity keeps every neighbour: the candidates the
+// build walks after the last neighbour must not take its slot (until session 28 they did, and a
+// particle with exactly `capacity` neighbours silently lost one). One neighbour more is an
+// overflow. The capacity is set to the largest count a first build finds.
+TEST_F(SphStageTest, ListFilledToItsCapacityKeepsEveryNeighbour) {
+  auto rng = rngFor();
+  sim::SphSettings s = settings();
+  s.listLayout = sim::ListLayout::Contiguous;
+  const Case c = makeCase(rng, s, 8, 7, 6);
+  const auto n = static_cast<std::uint32_t>(c.pos.size());
+  auto lists = [&](std::uint32_t capacity, std::uint32_t& overflow, std::uint32_t& most) {
+    s.neighbourCapacity = capacity;
+    const Stages st = runStages(c, s, glm::vec3(0.15f), glm::vec3(-0.05f), true);
+    const auto status = st.solver->readStatus();
+    overflow = status.neighbourOverflow;
+    most = status.maxNeighbours;
+    const auto slotIds = st.store->readIds();
+    const auto counts = st.solver->neighbourCounts().readback<std::uint32_t>(n);
+    const auto list = st.solver->neighbourList().readback<std::uint32_t>(std::size_t(n) * capacity);
+    std::vector<std::vector<std::uint32_t>> byId(n);
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      auto& got = byId[slotIds[slot]];
+      for (std::uint32_t k = 0; k < std::min(counts[slot], capacity); ++k) {
+        got.push_back(slotIds[list[std::size_t(slot) * capacity + k] & ~sim::SphSolver::kListBoundaryBit]);
+      }
+      std::sort(got.begin(), got.end());
+    }
+    return byId;
+  };
+  std::uint32_t overflow = 0, most = 0;
+  const auto roomy = lists(512, overflow, most);
+  ASSERT_EQ(overflow, 0u);
+  ASSERT_GT(most, 30u);
+  std::size_t full = 0;
+  for (const auto& l : roomy) full += l.size() == most;
+  std::uint32_t mostAgain = 0;
+  const auto exact = lists(most, overflow, mostAgain);
+  EXPECT_EQ(overflow, 0u) << "a list of exactly its capacity is not an overflow";
+  EXPECT_EQ(mostAgain, most);
+  std::size_t differ = 0;
+  for (std::uint32_t i = 0; i < n; ++i) differ += exact[i] != roomy[i];
+  EXPECT_EQ(differ, 0u) << "particles whose list at capacity " << most << " differs (" << full << " fill it)";
+  lists(most - 1, overflow, mostAgain);
+  EXPECT_EQ(overflow, std::uint32_t(full)) << "every particle with one neighbour too many overflows";
+}
+
 // A build that sorts only the fluid's slots (the rigid boundary particles stay where the last
 // whole build put them, sph.cpp recordStep) gives the grid, slots and lists a whole build
 // gives, after the fluid has moved: bit for bit.
