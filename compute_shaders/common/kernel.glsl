@@ -16,12 +16,13 @@ float hemo_kernel_w_inv(float r, float invH, float kernelNorm) {
   return kernelNorm * t2 * t2 * (2.0 * q + 1.0);
 }
 
-// W / kernelNorm, (1 - q/2)^4 (2q + 1), for sums that apply the norm once at the end.
-float hemo_kernel_w_shape(float r, float invH) {
-  const float q = r * invH;
-  const float t = 1.0 - 0.5 * q;
+// W / kernelNorm, (1 - q/2)^4 (2q + 1) = (1 - s)^4 (4s + 1) with s = q/2 = r halfInvH
+// (halfInvH = 1 / 2h), for sums that apply the norm once at the end.
+float hemo_kernel_w_shape(float r, float halfInvH) {
+  const float s = r * halfInvH;
+  const float t = 1.0 - s;
   const float t2 = t * t;
-  return t2 * t2 * (2.0 * q + 1.0);
+  return t2 * t2 * (4.0 * s + 1.0);
 }
 
 // dW/dr / r, the factor that turns a separation d (|d| = r) into grad W = d * factor:
@@ -38,8 +39,9 @@ float hemo_kernel_grad_factor(float r, float invH, float gradNorm) {
   return gradNorm * t * t * t;
 }
 
-// The same over gradNorm, (1 - q/2)^3 clamped at 0, for sums that apply gradNorm once at the end.
-float hemo_kernel_grad_shape(float r, float invH) {
-  const float t = max(1.0 - 0.5 * r * invH, 0.0);
+// The same over gradNorm, (1 - q/2)^3 clamped at 0, for sums that apply gradNorm once at the
+// end; halfInvH = 1 / 2h.
+float hemo_kernel_grad_shape(float r, float halfInvH) {
+  const float t = max(1.0 - r * halfInvH, 0.0);
   return t * t * t;
 }

@@ -40,7 +40,7 @@ const uint M = HEMO_CLUSTER_SIZE;
 
 vec3 gX[M];
 HemoPairParams gPp;
-float gInvH, gSupport;
+float gHalfInvH, gSupport;
 float gSumW[M], gSumP[M];
 vec3 gSumRhoR[M], gSumV[M];
 
@@ -52,7 +52,7 @@ void pair(uint entry, vec3 xf, vec2 sf, vec3 vf, bool valid) {
     const vec3 d = hemo_min_image(gX[m] - xf, gPp);
     const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
     // (the norm cancels in every ratio of common/boundary_state.glsl)
-    const float w = (mask & (1u << m)) != 0u ? hemo_kernel_w_shape(r, gInvH) : 0.0;
+    const float w = (mask & (1u << m)) != 0u ? hemo_kernel_w_shape(r, gHalfInvH) : 0.0;
     gSumW[m] += w;
     gSumP[m] += sf.y * w;
     gSumRhoR[m] += sf.x * d * w;
@@ -99,7 +99,7 @@ void main() {
     return;
   }
   gPp = hemo_pair_params();
-  gInvH = 1.0 / gPp.h;
+  gHalfInvH = 0.5 / gPp.h;
   gSupport = 2.0 * gPp.h;
   for (uint m = 0u; m < M; ++m) {
     // a missing member repeats the last one (never in a mask)

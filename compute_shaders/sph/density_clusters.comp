@@ -34,7 +34,7 @@ const uint M = HEMO_CLUSTER_SIZE;
 vec3 gX[M];
 float gRho[M];
 HemoPairParams gPp;
-float gInvH, gSupport;
+float gHalfInvH, gSupport;
 
 // One entry whose data is fetched; `valid` is false for the padding of the last texel.
 void pair(uint entry, vec4 pj, bool valid) {
@@ -42,7 +42,7 @@ void pair(uint entry, vec4 pj, bool valid) {
   for (uint m = 0u; m < M; ++m) {
     const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
     const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
-    const float w = hemo_kernel_w_shape(r, gInvH);  // the norm applied to the sum
+    const float w = hemo_kernel_w_shape(r, gHalfInvH);  // the norm applied to the sum
     gRho[m] += (mask & (1u << m)) != 0u ? pj.w * w : 0.0;
   }
 }
@@ -72,7 +72,7 @@ void main() {
   }
   const uint count = min(M, pc.fluid - first);
   gPp = hemo_pair_params();
-  gInvH = 1.0 / gPp.h;
+  gHalfInvH = 0.5 / gPp.h;
   gSupport = 2.0 * gPp.h;
   for (uint m = 0u; m < M; ++m) {
     gX[m] = texelFetch(positions, int(first + min(m, count - 1u))).xyz;

@@ -53,7 +53,7 @@ float gP[M];
 vec3 gSum[M];
 vec4 gRepulsion[M];  // (sum n N T, sum T)
 HemoPairParams gPp;
-float gInvH, gGradNorm, gEtaSq, gTwoMu;
+float gHalfInvH, gGradNorm, gEtaSq, gTwoMu;
 HemoRepulsionParams gRp;
 
 // One entry (the front section, or the back with the repulsion: a constant at each call);
@@ -68,7 +68,7 @@ void pair(uint entry, vec4 pj, vec4 vj, vec3 nrm, bool valid, const bool boundar
     const float r2 = dot(d, d);
     // grad W = F d, so x_ij . grad W = F r^2: both terms carry F (over gradNorm: the sum's
     // factor, applied once at the end)
-    const float f = take ? hemo_kernel_grad_shape(sqrt(r2), gInvH) : 0.0;
+    const float f = take ? hemo_kernel_grad_shape(sqrt(r2), gHalfInvH) : 0.0;
     gSum[m] += f * ((viscJ * r2 / (r2 + gEtaSq)) * (gV[m] - vj.xyz) - (volumeJ * gP[m] + pj.w) * d);
     if (boundary) {
       // boundary and wall particles; detached ones (V = 0) do not repel, nor does a
@@ -124,7 +124,7 @@ void main() {
   if (cluster < clusters) {
     const uint count = min(M, pc.fluid - first);
     gPp = hemo_pair_params();
-    gInvH = 1.0 / gPp.h;
+    gHalfInvH = 0.5 / gPp.h;
     gGradNorm = hemo_kernel_grad_norm(gPp.h, gPp.kernelNorm);
     gEtaSq = params.etaSq;
     gTwoMu = 2.0 * params.mu;
