@@ -42,7 +42,13 @@ uint gListPointMask;
 vec3 gX[M];    // members' positions
 ivec3 gC[M];   // members' cells
 uint gNf, gNb; // entries kept: fluid from the front, boundary from the back
-uint gNamed[M]; // entries naming each member (itself included)
+// Entries naming each member (itself included), two members per word in 16-bit halves
+// (members 0 and 1, then 2 and 3): fewer operations per candidate than a counter each. An
+// entry names a member at most once and a cluster holds fewer than 2^16 entries.
+#if HEMO_CLUSTER_SIZE != 4
+#error "the packed member counts assume clusters of four"
+#endif
+uvec2 gNamed;
 // The squared distance within which a boundary neighbour may come into the repulsion's reach
 // before the next build: that reach (common/repulsion.glsl: within D of the neighbour's plane,
 // behind it by less than dp - D, within dp along it) plus the skin, by which a pair closes in
@@ -63,9 +69,7 @@ void candidate(uint base, uint j, vec3 xj, uint members, uint mark, HemoPairPara
     near |= d2 < gNear2 ? 1u << m : 0u;
   }
   mask &= members;
-  for (uint m = 0u; m < M; ++m) {
-    gNamed[m] += (mask >> m) & 1u;
-  }
+  gNamed += uvec2((mask & 1u) | (mask & 2u) << 15u, (mask >> 2u & 1u) | (mask & 8u) << 13u);
   // A boundary entry that no member can come within the repulsion's reach of joins the
   // fluid's section, the force pass's loop without the repulsion (it keeps its mark).
   const bool boundary = mark != 0u && (near & members) != 0u;
@@ -155,10 +159,10 @@ void main() {
     // clamped into the grid like the cell, so a member outside it stays in its cell's box
     gListPoints[m] = clamp(u, vec3(gC[m]), vec3(gC[m]) + 0.999999);
     gX[m] = x;
-    gNamed[m] = 0u;
   }
   gNf = 0u;
   gNb = 0u;
+  gNamed = uvec2(0u);
   // The members' rows, in order: [g0, g1) share (cell y, cell z).
   uint g0 = 0u;
   while (g0 < count) {
@@ -176,7 +180,8 @@ void main() {
   const uint self = 1u - pc.boundary;
   uint most = 0u;
   for (uint m = 0u; m < M; ++m) {
-    most = max(most, max(gNamed[m], self) - self);
+    const uint named = (gNamed[m >> 1u] >> (16u * (m & 1u))) & 0xffffu;
+    most = max(most, max(named, self) - self);
   }
   const uint used = gNf + gNb;
   const bool overflow = used > pc.capacity - 1u || most > params.neighbourCapacity;

@@ -1148,7 +1148,8 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     const auto v = st.store->readVelocities();
     const auto counts = solver.clusterCounts().readback<std::uint32_t>(all);
     const auto list = solver.clusterLists().readback<std::uint32_t>(std::size_t(all) * cap);
-    EXPECT_EQ(solver.readStatus().neighbourOverflow, 0u);
+    const auto status = solver.readStatus();
+    EXPECT_EQ(status.neighbourOverflow, 0u);
     for (std::uint32_t slot = 0; slot < n; ++slot) {
       ASSERT_EQ(v[slot].w == float(sim::ParticleKind::Fluid), slot < fluid) << "the fluid's slots come first";
     }
@@ -1207,8 +1208,10 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     }
     const double radius = p.listRadius;
     std::size_t pairs = 0;
+    std::uint32_t most = 0;  // neighbours of the most crowded member, itself not counted
     for (std::uint32_t i = 0; i < n; ++i) {
       auto& got = named[i];
+      most = std::max(most, std::uint32_t(got.size()) - (i < fluid ? 1u : 0u));
       std::sort(got.begin(), got.end());
       EXPECT_TRUE(std::adjacent_find(got.begin(), got.end()) == got.end()) << "slot " << i << " names a neighbour twice";
       for (std::uint32_t j = 0; j < (i < fluid ? n : fluid); ++j) {  // boundary members: fluid neighbours only
@@ -1221,6 +1224,7 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
       }
     }
     EXPECT_GT(pairs, 20u * fluid);
+    EXPECT_EQ(status.maxNeighbours, most) << "the builds' count of the most crowded member's neighbours";
   }
   EXPECT_GT(repeated, 0u) << "no cluster spans rows of cells";
   EXPECT_GT(boundaryPairs, 1000u) << "the boundary clusters' lists were tested";
