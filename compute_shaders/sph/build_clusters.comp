@@ -41,7 +41,7 @@ uint gListPointMask;
 
 vec3 gX[M];    // members' positions
 ivec3 gC[M];   // members' cells
-uint gNf, gNb; // entries kept: fluid from the front, boundary from the back
+uint gNf, gNb; // entries kept: the front section (from entry 0 up) and the back (from the last down)
 // Entries naming each member (itself included), two members per word in 16-bit halves
 // (members 0 and 1, then 2 and 3): fewer operations per candidate than a counter each. An
 // entry names a member at most once and a cluster holds fewer than 2^16 entries.
