@@ -33,3 +33,10 @@ float hemo_repulsion(float x, float y, HemoRepulsionParams rp, out float weight)
   const float q = max(x * rp.invTwoH, 1.0e-3);
   return rp.psi * (1.0 - q) * inversesqrt(q) * weight;
 }
+
+// The farthest a fluid particle feels the repulsion of a boundary particle, |x_ij| at most,
+// from the reach hemo_repulsion tests: |x| < max(D, dp - D) and y < dp (m).
+float hemo_repulsion_reach(float cutoff, float wallSpacing) {
+  const float normal = max(cutoff, wallSpacing - cutoff);
+  return sqrt(normal * normal + wallSpacing * wallSpacing);
+}

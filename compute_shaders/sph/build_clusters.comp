@@ -13,6 +13,7 @@
 #include "common/index.glsl"
 #include "common/grid.glsl"
 #include "common/sph_params.glsl"
+#include "common/repulsion.glsl"
 
 layout(binding = HEMO_CBUILD_BINDING_POSITIONS) uniform samplerBuffer positions;
 layout(binding = HEMO_CBUILD_BINDING_CELL_START) uniform usamplerBuffer cellStart;
@@ -50,9 +51,8 @@ uint gNf, gNb; // entries kept: the front section (from entry 0 up) and the back
 #endif
 uvec2 gNamed;
 // The squared distance within which a boundary neighbour may come into the repulsion's reach
-// before the next build: that reach (common/repulsion.glsl: within D of the neighbour's plane,
-// behind it by less than dp - D, within dp along it) plus the skin, by which a pair closes in
-// at most while the list lasts (the rebuild test).
+// (common/repulsion.glsl) before the next build: that reach plus the skin, by which a pair
+// closes in at most while the list lasts (the rebuild test).
 float gNear2;
 
 // Candidate slot j at xj against the members named in `members` (none: a padding candidate,
@@ -142,12 +142,9 @@ void main() {
   const uint count = min(M, pc.end - first);
   const HemoPairParams pp = hemo_pair_params();
   const float list2 = params.listRadius * params.listRadius;
-  {
-    const float normal = max(params.repulsionCutoff, params.wallSpacing - params.repulsionCutoff);
-    const float reach = sqrt(normal * normal + params.wallSpacing * params.wallSpacing) +
-                        (params.listRadius - params.supportRadius);
-    gNear2 = reach * reach;
-  }
+  const float near = hemo_repulsion_reach(params.repulsionCutoff, params.wallSpacing) +
+                     (params.listRadius - params.supportRadius);
+  gNear2 = near * near;
   const vec3 dimsF = vec3(pc.grid.dimsN.xyz);
   for (uint m = 0u; m < M; ++m) {
     // a missing member repeats the last one (same cells, never in a mask)
