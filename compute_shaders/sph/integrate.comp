@@ -83,6 +83,9 @@ layout(constant_id = 1) const uint kContinuity = 0u;
 // llvmpipe runs the body of a branch under a lane mask even when no lane takes it, and the
 // stores of the RK2 stages cost the symplectic step about a third of this pass.
 layout(constant_id = 2) const uint kMode = 0u;
+// 1: the scene has an inflow zone (common/inflow.glsl); 0 compiles its code out, for llvmpipe
+// runs the body of a branch no lane takes.
+layout(constant_id = 3) const uint kInflow = 1u;
 layout(push_constant) uniform Push {
   uint n;
   uint step;
@@ -243,7 +246,7 @@ float hemo_inflow_mean_speed(float time) {
 bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2) {
   u = vec3(0.0);
   s2 = 0.0;
-  if (inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || x.x < inflow.zoneStart || x.x >= inflow.zoneEnd) {
+  if (kInflow == 0u || inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || x.x < inflow.zoneStart || x.x >= inflow.zoneEnd) {
     return false;
   }
   const vec2 d = x.yz - vec2(inflow.centreY, inflow.centreZ);

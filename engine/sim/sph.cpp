@@ -393,17 +393,13 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                             1u << HEMO_FORCES_BINDING_NCOUNT | 1u << HEMO_FORCES_BINDING_NORMALS | 1u << HEMO_FORCES_BINDING_NLIST | 1u << HEMO_FORCES_BINDING_TAU_A |
                             1u << HEMO_FORCES_BINDING_TAU_B | 1u << HEMO_FORCES_BINDING_VISCOUS_VEL |
                             1u << HEMO_FORCES_BINDING_PAIR_POSITION});
-  // constant 2: the stage (symplectic Euler, or RK2's two), one pipeline each; their sets'
-  // layouts are identical, so one descriptor set serves all three.
-  for (std::uint32_t mode = 0; mode < 3; ++mode) {
-    integrate_[mode] = &cache.get({"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup, {continuity, mode},
-                           1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW |
-                               1u << HEMO_INTEGRATE_BINDING_DT | 1u << HEMO_INTEGRATE_BINDING_DRIFT_RANGE |
-                               1u << HEMO_INTEGRATE_BINDING_TILE_GRID,
-                           1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD |
-                               1u << HEMO_INTEGRATE_BINDING_STATE | 1u << HEMO_INTEGRATE_BINDING_POSITIONS_IN |
-                               1u << HEMO_INTEGRATE_BINDING_VELOCITIES_IN});
-  }
+  // constant 2: the stage (symplectic Euler, or RK2's two), one pipeline each; constant 3: the
+  // inflow zone's code compiled in or out (llvmpipe runs a branch's body under an empty lane
+  // mask: the zone's test, waveform and mass supply cost the dam break's integrator about a
+  // sixth, docs/benchmarks.md "Session 29"). All their sets' layouts are identical, so one
+  // descriptor set serves them all.
+  continuity_ = continuity;
+  for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, false);
   tileStatic_ = &cache.get({"sph/tile_static", HEMO_TILE_STATIC_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {},
                             1u << HEMO_TILE_STATIC_BINDING_TILE_GRID,
                             1u << HEMO_TILE_STATIC_BINDING_POSITIONS | 1u << HEMO_TILE_STATIC_BINDING_VELOCITIES});
@@ -531,7 +527,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  gpu::texelBinding(HEMO_FORCES_BINDING_TAU_B, &tauB_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)});
-  integrateSet_ = integrate_[HEMO_INTEGRATE_SYMPLECTIC_EULER]->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
+  integrateSet_ = integrate_[0][HEMO_INTEGRATE_SYMPLECTIC_EULER]->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_ACCEL, &accel_, gpu::texel::kVec4),
                                        {HEMO_INTEGRATE_BINDING_PARAMS, &paramsBuffer_},
@@ -591,7 +587,28 @@ void SphSolver::attachWall(const SpringNetwork& network) {
                                        params_.cflAcoustic * params_.h, params_.c0);
 }
 
-void SphSolver::setInflow(const Inflow& inflow) { inflow_.upload(std::vector<InflowParams>{makeInflowParams(inflow, settings_.restDensity, settings_.particleMass())}); }
+const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, bool inflow) {
+  const gpu::ComputePipeline*& pipeline = integrate_[inflow ? 1 : 0][mode];
+  if (!pipeline) {
+    pipeline = &context_->pipelines().get(
+        {"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup,
+         {continuity_, mode, inflow ? 1u : 0u},
+         1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW | 1u << HEMO_INTEGRATE_BINDING_DT |
+             1u << HEMO_INTEGRATE_BINDING_DRIFT_RANGE | 1u << HEMO_INTEGRATE_BINDING_TILE_GRID,
+         1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD | 1u << HEMO_INTEGRATE_BINDING_STATE |
+             1u << HEMO_INTEGRATE_BINDING_POSITIONS_IN | 1u << HEMO_INTEGRATE_BINDING_VELOCITIES_IN});
+  }
+  return *pipeline;
+}
+
+void SphSolver::setInflow(const Inflow& inflow) {
+  const InflowParams p = makeInflowParams(inflow, settings_.restDensity, settings_.particleMass());
+  inflow_.upload(std::vector<InflowParams>{p});
+  inflowOn_ = p.enabled != 0u;
+  if (inflowOn_) {
+    for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, true);
+  }
+}
 
 void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   if (wall_) wall_->recordReset(rec);
@@ -760,7 +777,8 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   // At least one workgroup: invocation 0 advances the clock even with no particles, and a
   // full stage's partials of the rebuild test must not be empty.
   const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold()};
-  rec.dispatch(*integrate_[mode], integrateSet_, push, integrate_[mode]->groupsFor(std::max(moving, 1u)));
+  const gpu::ComputePipeline& integrate = *integrate_[inflowOn_ ? 1 : 0][mode];
+  rec.dispatch(integrate, integrateSet_, push, integrate.groupsFor(std::max(moving, 1u)));
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     // the rebuild test's reduction (with the tile test after symplectic Euler) decides and
     // arms the gate (interface/sph.h)

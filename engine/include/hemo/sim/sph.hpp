@@ -337,7 +337,12 @@ class SphSolver {
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* dtReduce_;
   gpu::DescriptorSet dtReduceSet_;
-  const gpu::ComputePipeline* integrate_[3];  // by stage (HEMO_INTEGRATE_*)
+  // by stage (HEMO_INTEGRATE_*), without and with the inflow zone's code (made on the first
+  // setInflow: scenes without one never compile it)
+  const gpu::ComputePipeline* integrate_[2][3] = {};
+  std::uint32_t continuity_ = 0;  // the integrator's constant 1
+  bool inflowOn_ = false;        // setInflow has given a zone: the integrator with its code
+  const gpu::ComputePipeline& integratePipeline(std::uint32_t mode, bool inflow);
   gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_;
   // The gate must be armed by its own pass before the next step (after a reset or a rebuild
   // request); otherwise the last step's rebuild check has armed it.
