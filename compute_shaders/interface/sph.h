@@ -342,7 +342,10 @@
 #define HEMO_DECIDE_BINDING_GATE_OPENED 7
 #define HEMO_DECIDE_BINDING_CHECK_PARTIALS 8  // texel vec4: the integrator's partials
 #define HEMO_DECIDE_BINDING_CHECK_COUNT 9     // uint: how many it wrote
-#define HEMO_DECIDE_BINDING_COUNT 10
+// uvec4[2]: the next step's indirect arguments for the integrator that collects the tile boxes
+// ([0]) and the one that does not ([1]); one of them is (0, 1, 1) (tile test only)
+#define HEMO_DECIDE_BINDING_INTEGRATE_ARGS 10
+#define HEMO_DECIDE_BINDING_COUNT 11
 
 // sph/tile_static.comp: marks the tiles that hold rigid boundary particles (once per upload).
 #define HEMO_TILE_STATIC_BINDING_POSITIONS 0  // texel vec4

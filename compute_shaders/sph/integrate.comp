@@ -86,6 +86,8 @@ layout(constant_id = 2) const uint kMode = 0u;
 // 1: the scene has an inflow zone (common/inflow.glsl); 0 compiles its code out, for llvmpipe
 // runs the body of a branch no lane takes.
 layout(constant_id = 3) const uint kInflow = 1u;
+// 1: this symplectic-Euler integrator collects the tile boxes (see gCollectTiles).
+layout(constant_id = 4) const uint kCollect = 0u;
 layout(push_constant) uniform Push {
   uint n;
   uint step;
@@ -160,16 +162,10 @@ vec2 hemo_subgroup_top2(vec2 t) {
 // surge) the boxes stay small while single particles travel far: the reach test alone rebuilt
 // the list for displacements common to both particles of every pair.
 
-// Whether this step collects the tile boxes: only where the reach test may fail, which the
-// last step's half-sum predicts (past HEMO_TILE_COLLECT_FROM of the threshold; the same for
-// every invocation). Collecting cost the dam break's integrator 0.4-0.6 ms a step (subgroup
-// reductions and atomics); the tiles decide only where the reach test has failed. A step
-// whose half-sum jumps past the threshold without having collected rebuilds
-// (sph/rebuild_decide.comp).
-bool hemo_collect_tiles() {
-  return kMode == HEMO_INTEGRATE_SYMPLECTIC_EULER && !(lastCheck.z <= float(HEMO_TILE_COLLECT_FROM) * pc.threshold);
-}
-bool gCollectTiles;  // the same for every invocation
+// Whether this pipeline collects the tile boxes (symplectic Euler, constant 4): the previous
+// step's sph/rebuild_decide.comp picks it or the other through their indirect arguments, only
+// where the reach test may fail (a step after the host reset the test always collects).
+const bool gCollectTiles = kMode == HEMO_INTEGRATE_SYMPLECTIC_EULER && kCollect != 0u;
 
 // Widens tile t's box by [lo, hi]; the first to widen it lists the tile as occupied (the
 // list's order varies from run to run, the check's maximum over it does not).
@@ -326,7 +322,6 @@ vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running, out vec3 d,
 
 void main() {
   const uint i = hemo_global_index();
-  gCollectTiles = hemo_collect_tiles();
   const ClockRecord clock = clocks[pc.clockIn];
   // The step's dt: from the reduction (Euler, RK2 first stage), or the one the first stage
   // stored (RK2 second stage, so both stages use the same dt).

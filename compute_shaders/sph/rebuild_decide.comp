@@ -40,10 +40,13 @@ layout(std430, binding = HEMO_DECIDE_BINDING_GATE_ARGS) writeonly buffer GateArg
 layout(std430, binding = HEMO_DECIDE_BINDING_GATE_OPENED) buffer GateOpened { uint gateOpened; };
 layout(binding = HEMO_DECIDE_BINDING_CHECK_PARTIALS) uniform samplerBuffer partials;
 layout(std430, binding = HEMO_DECIDE_BINDING_CHECK_COUNT) readonly buffer PartialCount { uint partialCount; };
+layout(std430, binding = HEMO_DECIDE_BINDING_INTEGRATE_ARGS) writeonly buffer IntegrateArgs { uvec4 integrateArgs[2]; };
 layout(push_constant) uniform Push {
   float threshold;   // half the skin, m
   uint gateSlots;
   uint staticSlots;  // 1: slots the integrator left out hold rigid boundary particles
+  uint groupsX;      // the integrator's workgroups (x, y), for the next step's arguments
+  uint groupsY;
 } pc;
 
 #include "common/gate.glsl"
@@ -170,7 +173,21 @@ void main() {
     tilesCollected = 0u;
   }
   const float lastMiddle = 0.5 * (last.x + last.y);  // the step before's, for the extrapolation
-  checkResult = open ? vec4(0.0, 0.0, pairReach, 0.0)
-                     : anyNan ? vec4(uintBitsToFloat(0x7fc00000u)) : vec4(total.xy, pairReach, lastMiddle);
+  const vec4 result = open ? vec4(0.0, 0.0, pairReach, 0.0)
+                           : anyNan ? vec4(uintBitsToFloat(0x7fc00000u)) : vec4(total.xy, pairReach, lastMiddle);
+  checkResult = result;
+  if (kTiles != 0u) {
+    // Which integrator the next step runs: the one that collects the tile boxes only where the
+    // reach test may fail, past HEMO_TILE_COLLECT_FROM of the threshold (or NaN). Collecting
+    // cost the dam break's integrator 0.4-0.6 ms a step, and compiled in but skipped under an
+    // empty lane mask it still cost about 40% of the pass (llvmpipe runs a branch's body
+    // whether or not a lane takes it; docs/benchmarks.md "Session 29"). A step whose half-sum
+    // jumps past the threshold without having collected rebuilds.
+    const bool collect = !(result.z <= float(HEMO_TILE_COLLECT_FROM) * pc.threshold);
+    const uvec4 run = uvec4(pc.groupsX, pc.groupsY, 1u, 0u);
+    const uvec4 skip = uvec4(0u, 1u, 1u, 0u);
+    integrateArgs[0] = collect ? run : skip;
+    integrateArgs[1] = collect ? skip : run;
+  }
   hemo_gate_arm(open, pc.gateSlots);
 }

@@ -64,6 +64,7 @@ struct DecidePush {  // sph/rebuild_decide.comp
   float threshold;            // half the skin, m
   std::uint32_t gateSlots;    // the rebuild gate's slots
   std::uint32_t staticSlots;  // 1: slots the integrator left out hold rigid boundary particles (displacement 0)
+  std::uint32_t groupsX, groupsY;  // the integrator's workgroups, for the next step's indirect arguments
 };
 static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
 static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
@@ -312,6 +313,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
       activeArgs_(context, 16, gpu::MemoryUse::Device, "boundary-pressure indirect arguments"),
+      integrateArgs_(context, 32, gpu::MemoryUse::Device, "integrator indirect arguments"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
@@ -400,6 +402,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   // descriptor set serves them all.
   continuity_ = continuity;
   for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, false);
+  integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, false, true);
   tileStatic_ = &cache.get({"sph/tile_static", HEMO_TILE_STATIC_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {},
                             1u << HEMO_TILE_STATIC_BINDING_TILE_GRID,
                             1u << HEMO_TILE_STATIC_BINDING_POSITIONS | 1u << HEMO_TILE_STATIC_BINDING_VELOCITIES});
@@ -560,7 +563,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                                   {HEMO_DECIDE_BINDING_GATE_ARGS, &rebuildGate_.arguments()},
                                                   {HEMO_DECIDE_BINDING_GATE_OPENED, &rebuildGate_.openings()},
                                                   gpu::texelBinding(HEMO_DECIDE_BINDING_CHECK_PARTIALS, &checkPartials_, gpu::texel::kVec4),
-                                                  {HEMO_DECIDE_BINDING_CHECK_COUNT, &checkCount_}});
+                                                  {HEMO_DECIDE_BINDING_CHECK_COUNT, &checkCount_},
+                                                  {HEMO_DECIDE_BINDING_INTEGRATE_ARGS, &integrateArgs_}});
   checkCount_.upload(std::vector<std::uint32_t>{0u});
   dtCounts_.upload(std::vector<std::uint32_t>{0u, 0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
@@ -587,12 +591,12 @@ void SphSolver::attachWall(const SpringNetwork& network) {
                                        params_.cflAcoustic * params_.h, params_.c0);
 }
 
-const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, bool inflow) {
-  const gpu::ComputePipeline*& pipeline = integrate_[inflow ? 1 : 0][mode];
+const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, bool inflow, bool collect) {
+  const gpu::ComputePipeline*& pipeline = integrate_[inflow ? 1 : 0][collect ? 3 : mode];
   if (!pipeline) {
     pipeline = &context_->pipelines().get(
         {"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup,
-         {continuity_, mode, inflow ? 1u : 0u},
+         {continuity_, mode, inflow ? 1u : 0u, collect ? 1u : 0u},
          1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW | 1u << HEMO_INTEGRATE_BINDING_DT |
              1u << HEMO_INTEGRATE_BINDING_DRIFT_RANGE | 1u << HEMO_INTEGRATE_BINDING_TILE_GRID,
          1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD | 1u << HEMO_INTEGRATE_BINDING_STATE |
@@ -607,6 +611,7 @@ void SphSolver::setInflow(const Inflow& inflow) {
   inflowOn_ = p.enabled != 0u;
   if (inflowOn_) {
     for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, true);
+    integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, true, true);
   }
 }
 
@@ -623,6 +628,7 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   // the first step builds the list
   rec.fill(checkResult_, 0u, 0, 8);  // displacement range (0, 0): the build restarts it
   rec.fill(checkResult_, 0x7f800000u, HEMO_CHECK_RESULT_REACH * 4, 4);  // reach +inf: the gate opens
+  integrateArgsValid_ = false;  // (and the next integrator collects: the reach is +inf)
   grid_.resetCounters(rec);
   rebuildGate_.recordReset(rec);
   armPending_ = true;
@@ -633,6 +639,7 @@ void SphSolver::recordRebuildRequest(gpu::CommandRecorder& rec) {
   rec.fill(checkResult_, 0u, 0, 8);  // displacement range (0, 0): the build restarts it
   rec.fill(checkResult_, 0x7f800000u, HEMO_CHECK_RESULT_REACH * 4, 4);  // reach +inf: the gate opens
   rec.transferToCompute();
+  integrateArgsValid_ = false;
   armPending_ = true;
 }
 
@@ -777,16 +784,32 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   // At least one workgroup: invocation 0 advances the clock even with no particles, and a
   // full stage's partials of the rebuild test must not be empty.
   const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold()};
-  const gpu::ComputePipeline& integrate = *integrate_[inflowOn_ ? 1 : 0][mode];
-  rec.dispatch(integrate, integrateSet_, push, integrate.groupsFor(std::max(moving, 1u)));
+  const std::uint32_t inflow = inflowOn_ ? 1 : 0;
+  const gpu::ComputePipeline& integrate = *integrate_[inflow][mode];
+  const gpu::Groups groups = integrate.groupsFor(std::max(moving, 1u));
+  if (mode != HEMO_INTEGRATE_SYMPLECTIC_EULER) {
+    rec.dispatch(integrate, integrateSet_, push, groups);
+  } else if (integrateArgsValid_ && integrateArgsGroups_.x == groups.x && integrateArgsGroups_.y == groups.y) {
+    // the variant the last step's decision chose; the other gets no workgroups
+    rec.dispatchIndirect(*integrate_[inflow][3], integrateSet_, push, integrateArgs_, 0);
+    rec.dispatchIndirect(integrate, integrateSet_, push, integrateArgs_, 16);
+  } else {
+    // after a reset of the rebuild test (the reach is +inf, so the test collects), or with
+    // other workgroups than the decision wrote: collecting is always a valid choice
+    rec.dispatch(*integrate_[inflow][3], integrateSet_, push, groups);
+  }
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     // the rebuild test's reduction (with the tile test after symplectic Euler) decides and
     // arms the gate (interface/sph.h)
     rec.computeToCompute();
     const std::uint32_t tiles = mode == HEMO_INTEGRATE_SYMPLECTIC_EULER ? 1u : 0u;
     rec.dispatch(*rebuildDecide_[tiles], rebuildDecideSet_,
-                 DecidePush{rebuildThreshold(), rebuildGate_.slots(), moving < n ? 1u : 0u},
+                 DecidePush{rebuildThreshold(), rebuildGate_.slots(), moving < n ? 1u : 0u, groups.x, groups.y},
                  rebuildDecide_[tiles]->groupsFor(1u));
+    if (tiles != 0u) {
+      integrateArgsValid_ = true;
+      integrateArgsGroups_ = groups;
+    }
   }
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone

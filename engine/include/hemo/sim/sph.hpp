@@ -306,6 +306,7 @@ class SphSolver {
   // The boundary and wall slots with fluid in their list, and the indirect arguments of the
   // boundary-pressure pass over them (interface/sph.h, HEMO_BPRESSURE_SORT).
   gpu::Buffer activeSlots_, activeArgs_;
+  gpu::Buffer integrateArgs_;  // the integrator's two variants' indirect arguments
   std::uint32_t boundaryClockIn_ = ~0u;  // the clock record of the last boundary-pressure pass (~0: none since the reset)
   gpu::Buffer clock_, status_, log_;
   gpu::Buffer inflow_;  // InflowParams
@@ -337,12 +338,18 @@ class SphSolver {
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* dtReduce_;
   gpu::DescriptorSet dtReduceSet_;
-  // by stage (HEMO_INTEGRATE_*), without and with the inflow zone's code (made on the first
-  // setInflow: scenes without one never compile it)
-  const gpu::ComputePipeline* integrate_[2][3] = {};
+  // by stage (HEMO_INTEGRATE_*; index 3: symplectic Euler collecting the tile boxes), without
+  // and with the inflow zone's code (made on the first setInflow: scenes without one never
+  // compile it)
+  const gpu::ComputePipeline* integrate_[2][4] = {};
   std::uint32_t continuity_ = 0;  // the integrator's constant 1
   bool inflowOn_ = false;        // setInflow has given a zone: the integrator with its code
-  const gpu::ComputePipeline& integratePipeline(std::uint32_t mode, bool inflow);
+  const gpu::ComputePipeline& integratePipeline(std::uint32_t mode, bool inflow, bool collect = false);
+  // The symplectic-Euler integrator's two variants run by indirect arguments (integrateArgs_)
+  // that the rebuild decision writes for the next step (sph/rebuild_decide.comp): valid once a
+  // decision has been recorded for these workgroups since the host last reset the test.
+  bool integrateArgsValid_ = false;
+  gpu::Groups integrateArgsGroups_;
   gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_;
   // The gate must be armed by its own pass before the next step (after a reset or a rebuild
   // request); otherwise the last step's rebuild check has armed it.
