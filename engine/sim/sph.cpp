@@ -66,6 +66,9 @@ struct DecidePush {  // sph/rebuild_decide.comp
   std::uint32_t staticSlots;  // 1: slots the integrator left out hold rigid boundary particles (displacement 0)
   std::uint32_t groupsX, groupsY;  // the integrator's workgroups, for the next step's indirect arguments
 };
+// Scalars only, so the GLSL block has the same offsets (a uvec2 there would align to 8 and
+// read past this struct: session 29's hang).
+static_assert(sizeof(DecidePush) == 20);
 static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
 static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
 
