@@ -45,6 +45,8 @@
 
 // grid/cell_scan.comp: exclusive scan of the key counts within blocks of workgroupSize * HEMO_SCAN_ITEMS keys, and of the block totals (by
 // the last workgroup to finish; the counter starts and ends at 0).
+// The per-key buffers (counts, offsets in block, cellStart) hold whole uvec4 texels: their
+// entries are padded to a multiple of 4.
 #define HEMO_CELL_SCAN_BINDING_KEY_COUNTS 0
 #define HEMO_CELL_SCAN_BINDING_LOCAL 1    // uint per key: offset within its block
 #define HEMO_CELL_SCAN_BINDING_BLOCKS 2   // uint per block: total, then offset
@@ -59,7 +61,8 @@
 #define HEMO_SCATTER_BINDING_CELL_START 3
 #define HEMO_SCATTER_BINDING_ORDER 4  // uvec2 per slot: (key, source slot), in key order
 #define HEMO_SCATTER_BINDING_KEY_COUNTS 5  // set back to zero for the next build
-#define HEMO_SCATTER_BINDING_COUNT 6
+#define HEMO_SCATTER_BINDING_CELL_START_IN 6  // cellStart as uvec4 texels (the entries a partial build keeps)
+#define HEMO_SCATTER_BINDING_COUNT 7
 
 // grid/reorder.comp: moves particle data (from the scratch arrays) into sorted order in the
 // live arrays, records the positions at this build, and updates id -> slot.

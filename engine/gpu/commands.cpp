@@ -123,10 +123,10 @@ void CommandRecorder::dispatchIndirect(const ComputePipeline& pipeline, const De
   ++dispatches_;
 }
 
-void CommandRecorder::beginGate(DispatchGate& gate) {
+void CommandRecorder::beginGate(DispatchGate& gate, std::uint32_t variant) {
   if (gate_) throw std::logic_error("gated regions do not nest ('" + gate.name() + "' inside '" + gate_->name() + "')");
   gate_ = &gate;
-  gate.beginRegion();
+  gate.beginRegion(variant);
 }
 
 void CommandRecorder::endGate() {

@@ -18,13 +18,19 @@ struct ArmPush {
 static_assert(sizeof(ArmPush) == 12);
 }  // namespace
 
-DispatchGate::DispatchGate(Context& context, const Buffer& values, std::uint32_t maxSlots, std::string name)
+DispatchGate::DispatchGate(Context& context, const Buffer& values, std::uint32_t maxSlots, std::string name,
+                           std::uint32_t variants)
     : name_(std::move(name)),
       maxSlots_(std::max(maxSlots, 1u)),
+      variants_(variants),
       armed_(context, VkDeviceSize(maxSlots_) * 16, MemoryUse::Device, name_ + " armed counts"),
       args_(context, VkDeviceSize(maxSlots_) * 16, MemoryUse::Device, name_ + " indirect args"),
       opened_(context, 4, MemoryUse::Device, name_ + " openings"),
       table_(std::size_t(maxSlots_) * 4, 0u) {
+  if (variants_ == 0 || variants_ > maxSlots_) {
+    throw std::invalid_argument("dispatch gate '" + name_ + "': " + std::to_string(variants_) +
+                                " variants for " + std::to_string(maxSlots_) + " slots");
+  }
   arm_ = &context.pipelines().get({"gate/arm", HEMO_GATE_BINDING_COUNT, sizeof(ArmPush), kWorkgroup, {}});
   set_ = arm_->makeSet({{HEMO_GATE_BINDING_VALUES, &values},
                         {HEMO_GATE_BINDING_ARMED, &armed_},
@@ -47,9 +53,19 @@ std::uint32_t DispatchGate::readOpened() const { return opened_.readback<std::ui
 
 bool DispatchGate::readIsOpen() const { return args_.readback<std::uint32_t>(1)[0] != 0u; }
 
+void DispatchGate::beginRegion(std::uint32_t variant) {
+  if (variant >= variants_) {
+    throw std::out_of_range("dispatch gate '" + name_ + "': variant " + std::to_string(variant) + " of " +
+                            std::to_string(variants_));
+  }
+  const std::uint32_t share = maxSlots_ / variants_;
+  cursor_ = variant * share;
+  cursorEnd_ = cursor_ + share;
+}
+
 VkDeviceSize DispatchGate::claim(Groups groups) {
-  if (cursor_ >= maxSlots_) {
-    throw std::length_error("dispatch gate '" + name_ + "': more than " + std::to_string(maxSlots_) +
+  if (cursor_ >= cursorEnd_) {
+    throw std::length_error("dispatch gate '" + name_ + "': more than " + std::to_string(maxSlots_ / variants_) +
                             " dispatches in one gated region");
   }
   std::uint32_t* slot = &table_[std::size_t(cursor_) * 4];

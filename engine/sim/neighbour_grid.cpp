@@ -16,6 +16,9 @@ constexpr std::uint32_t kWorkgroup = 256;
 constexpr std::uint32_t kScanWorkgroup = 256;
 constexpr std::uint32_t kScanBlock = kScanWorkgroup * HEMO_SCAN_ITEMS;
 std::uint64_t ceilDivKeys(std::uint64_t keys) { return (keys + kScanBlock - 1) / kScanBlock; }
+// Entries of the per-key buffers: cellStart's keyCount + 1, padded to whole uvec4 texels (the
+// scan and the scatter read and write four at a time).
+std::uint64_t keyEntries(const GridSpec& spec) { return (spec.keyCount() + 1 + 3) / 4 * 4; }
 
 struct CellScanPush {
   std::uint32_t keys;
@@ -116,12 +119,12 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
       particles_(&particles),
       pairs_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "grid pairs"),
       order_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "grid order"),
-      keyCounts_(context, (spec.keyCount() + 1) * 4, gpu::MemoryUse::Device, "grid key counts"),
-      keyLocal_(context, (spec.keyCount() + 1) * 4, gpu::MemoryUse::Device, "grid key offsets in block"),
+      keyCounts_(context, keyEntries(spec) * 4, gpu::MemoryUse::Device, "grid key counts"),
+      keyLocal_(context, keyEntries(spec) * 4, gpu::MemoryUse::Device, "grid key offsets in block"),
       blocks_(context, std::max<std::uint64_t>(ceilDivKeys(spec.keyCount() + 1), 1) * 4, gpu::MemoryUse::Device,
               "grid block offsets"),
       finished_(context, 16, gpu::MemoryUse::Device, "grid scan workgroups finished"),
-      cellStart_(context, (spec.keyCount() + 1) * 4, gpu::MemoryUse::Device, "grid cellStart"),
+      cellStart_(context, keyEntries(spec) * 4, gpu::MemoryUse::Device, "grid cellStart"),
       counters_(context, HEMO_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "grid counters"),
       slotOfId_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 4, gpu::MemoryUse::Device, "slot of id"),
       posAtBuild_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
@@ -129,7 +132,9 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
   spec_.validate();
   // The counts start at zero, and every build's scatter leaves them at zero again; the scan's
   // finished-workgroup counter likewise.
-  keyCounts_.upload(std::vector<std::uint32_t>(spec_.keyCount() + 1, 0u));
+  keyCounts_.upload(std::vector<std::uint32_t>(keyEntries(spec_), 0u));
+  // (cellStart's padding is only ever copied back by the scatter, but defined all the same)
+  cellStart_.upload(std::vector<std::uint32_t>(keyEntries(spec_), 0u));
   finished_.upload(std::vector<std::uint32_t>(4, 0u));
   // Read-only inputs are texel slots (gpu/pipeline.hpp, texelSlots): llvmpipe reads a storage
   // buffer lane by lane.
@@ -141,7 +146,7 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
   scatter_ = &context.pipelines().get({"grid/scatter", HEMO_SCATTER_BINDING_COUNT, sizeof(ScatterPush), kWorkgroup, {},
                                        0u,
                                        1u << HEMO_SCATTER_BINDING_PAIRS | 1u << HEMO_SCATTER_BINDING_LOCAL |
-                                           1u << HEMO_SCATTER_BINDING_BLOCKS});
+                                           1u << HEMO_SCATTER_BINDING_BLOCKS | 1u << HEMO_SCATTER_BINDING_CELL_START_IN});
   reorder_ = &context.pipelines().get({"grid/reorder", HEMO_REORDER_BINDING_COUNT, sizeof(ReorderPush), kWorkgroup, {}, 0u,
                                        1u << HEMO_REORDER_BINDING_ORDER | 1u << HEMO_REORDER_BINDING_CELL_START |
                                            1u << HEMO_REORDER_BINDING_POS_IN | 1u << HEMO_REORDER_BINDING_VEL_IN |
@@ -159,16 +164,17 @@ NeighbourGrid::NeighbourGrid(gpu::Context& context, const GridSpec& spec, Partic
                              {HEMO_HASH_BINDING_VEL_OUT, &scratch.velocities},
                              {HEMO_HASH_BINDING_NORMAL_OUT, &scratch.normals},
                              {HEMO_HASH_BINDING_ID_OUT, &scratch.ids}});
-  cellScanSet_ = cellScan_->makeSet({gpu::texelBinding(HEMO_CELL_SCAN_BINDING_KEY_COUNTS, &keyCounts_, gpu::texel::kUint),
+  cellScanSet_ = cellScan_->makeSet({gpu::texelBinding(HEMO_CELL_SCAN_BINDING_KEY_COUNTS, &keyCounts_, gpu::texel::kUvec4),
                                      {HEMO_CELL_SCAN_BINDING_LOCAL, &keyLocal_},
                                      {HEMO_CELL_SCAN_BINDING_BLOCKS, &blocks_},
                                      {HEMO_CELL_SCAN_BINDING_FINISHED, &finished_}});
   scatterSet_ = scatter_->makeSet({gpu::texelBinding(HEMO_SCATTER_BINDING_PAIRS, &pairs_, gpu::texel::kUvec2),
-                                   gpu::texelBinding(HEMO_SCATTER_BINDING_LOCAL, &keyLocal_, gpu::texel::kUint),
+                                   gpu::texelBinding(HEMO_SCATTER_BINDING_LOCAL, &keyLocal_, gpu::texel::kUvec4),
                                    gpu::texelBinding(HEMO_SCATTER_BINDING_BLOCKS, &blocks_, gpu::texel::kUint),
                                    {HEMO_SCATTER_BINDING_CELL_START, &cellStart_},
                                    {HEMO_SCATTER_BINDING_ORDER, &order_},
-                                   {HEMO_SCATTER_BINDING_KEY_COUNTS, &keyCounts_}});
+                                   {HEMO_SCATTER_BINDING_KEY_COUNTS, &keyCounts_},
+                                   gpu::texelBinding(HEMO_SCATTER_BINDING_CELL_START_IN, &cellStart_, gpu::texel::kUvec4)});
   reorderSet_ = reorder_->makeSet({gpu::texelBinding(HEMO_REORDER_BINDING_ORDER, &order_, gpu::texel::kUvec2),
                                    gpu::texelBinding(HEMO_REORDER_BINDING_CELL_START, &cellStart_, gpu::texel::kUint),
                                    gpu::texelBinding(HEMO_REORDER_BINDING_POS_IN, &scratch.positions, gpu::texel::kVec4),
@@ -217,16 +223,20 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, std::uint
   // A counting sort (interface/grid.h): five dispatches in all with the reorder and the list
   // where the radix sort took eleven. (Inside the solver's rebuild gate, a step that skips
   // them pays about 1 us each on llvmpipe: dispatch_closed in hemo-bench primitives.)
-  rec.dispatch(*hash_, hashSet_, push(sorted), hash_->groupsFor(n));
+  // Each pass is dispatched over what it sorts only: llvmpipe runs a SIMD group's code even
+  // when none of its lanes has work (a solver that sorts only the moving slots records the
+  // two shapes in two variants of its rebuild gate).
+  rec.dispatch(*hash_, hashSet_, push(sorted), hash_->groupsFor(std::max(sorted, 1u)));
   rec.computeToCompute();
   mark("hash");
-  rec.dispatch(*cellScan_, cellScanSet_, CellScanPush{keysSorted}, cellScan_->groupsFor(keys, HEMO_SCAN_ITEMS));
+  rec.dispatch(*cellScan_, cellScanSet_, CellScanPush{keysSorted}, cellScan_->groupsFor(keysSorted, HEMO_SCAN_ITEMS));
   rec.computeToCompute();
   rec.dispatch(*scatter_, scatterSet_, ScatterPush{sorted, keysSorted, kScanBlock},
-               scatter_->groupsFor(std::max<std::uint64_t>(n, keys)));
+               scatter_->groupsFor(std::max<std::uint64_t>(sorted, (keysSorted + 3) / 4)));
   rec.computeToCompute();
   mark("sort");
-  rec.dispatch(*reorder_, reorderSet_, ReorderPush{sorted, particles_->capacity()}, reorder_->groupsFor(n));
+  rec.dispatch(*reorder_, reorderSet_, ReorderPush{sorted, particles_->capacity()},
+               reorder_->groupsFor(std::max(sorted, 1u)));
   rec.computeToCompute();
   mark("reorder");
 }

@@ -342,7 +342,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                  "rebuild tile boxes"),
       tileResult_(context, 4, gpu::MemoryUse::Device, "rebuild tile result"),
       tileOccupied_(context, (std::uint64_t(tileSpec_.tiles()) + 2) * 4, gpu::MemoryUse::Device, "rebuild tiles occupied"),
-      rebuildGate_(context, checkResult_, 64, "neighbour rebuild") {
+      rebuildGate_(context, checkResult_, 64, "neighbour rebuild", 2) {
   // The list's layout (interface/sph.h): on a CPU device each SIMD lane walks its own list,
   // and entries next to each other stream from cache; interleaved entries, which coalesce
   // on a GPU, cost a cache miss per entry there (pair_gather in hemo-bench primitives).
@@ -882,7 +882,8 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
     armPending_ = false;
     sortedUpload_ = particles_->uploads();  // this step rebuilds: the slots are in grid order
   }
-  rec.beginGate(rebuildGate_);
+  // (two shapes of the region: every slot sorted, or the moving ones only)
+  rec.beginGate(rebuildGate_, sorted == particles_->count() ? 0u : 1u);
   recordNeighbours(rec, sorted, timestamps);
   rec.endGate();
   // Past movingSlots() only rigid boundary particles, for which the density and force passes

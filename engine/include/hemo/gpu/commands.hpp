@@ -55,8 +55,9 @@ class CommandRecorder {
     dispatchIndirect(pipeline, set, nullptr, 0, args, offset);
   }
 
-  // Dispatches between beginGate and endGate run only when the gate is open (see gate.hpp).
-  void beginGate(DispatchGate& gate);
+  // Dispatches between beginGate and endGate run only when the gate is open (see gate.hpp);
+  // `variant` picks one of the gate's regions.
+  void beginGate(DispatchGate& gate, std::uint32_t variant = 0);
   void endGate();
 
   // Named barriers (global memory barriers; the only raw masks live in commands.cpp).

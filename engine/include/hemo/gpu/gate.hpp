@@ -6,7 +6,9 @@
 // counts (gate open) or zeros (closed) into the slots, depending on a value another stage
 // computed: open when values[index] > threshold, or when the value is NaN.
 // A region must record the same dispatches with the same counts every time (the slots are
-// reused by every step of a batch); a mismatch throws. A shader may also arm the gate at the
+// reused by every step of a batch); a mismatch throws. A gate made with several variants
+// holds as many regions, each with its own share of the slots (beginGate's `variant`), for a
+// caller whose gated work takes one of a few shapes (the solver's full and partial sorts). A shader may also arm the gate at the
 // end of the pass that computes the decision (common/gate.glsl), saving recordArm's dispatch.
 #include "hemo/gpu/commands.hpp"
 
@@ -18,7 +20,9 @@ namespace hemo::gpu {
 
 class DispatchGate {
  public:
-  DispatchGate(Context& context, const Buffer& values, std::uint32_t maxSlots, std::string name);
+  // maxSlots in all, split evenly between `variants` regions.
+  DispatchGate(Context& context, const Buffer& values, std::uint32_t maxSlots, std::string name,
+               std::uint32_t variants = 1);
 
   // Records the decision for the next gated region. Needs the writes of `values` visible to
   // compute (a computeToCompute barrier before), and leaves the arguments ready for indirect
@@ -46,11 +50,13 @@ class DispatchGate {
   friend class CommandRecorder;
   // The indirect-argument offset for the next dispatch of the region being recorded.
   VkDeviceSize claim(Groups groups);
-  void beginRegion() { cursor_ = 0; }
+  void beginRegion(std::uint32_t variant);
   void endRegion();
 
   std::string name_;
   std::uint32_t maxSlots_;
+  std::uint32_t variants_;
+  std::uint32_t cursorEnd_ = 0;  // past the slots of the region being recorded
   const ComputePipeline* arm_;
   Buffer armed_;   // host-written table of counts (uvec4 per slot)
   Buffer args_;    // indirect arguments (uvec4 per slot; the first three are x, y, z)
