@@ -125,8 +125,8 @@ void CommandRecorder::dispatchIndirect(const ComputePipeline& pipeline, const De
 
 void CommandRecorder::beginGate(DispatchGate& gate, std::uint32_t variant) {
   if (gate_) throw std::logic_error("gated regions do not nest ('" + gate.name() + "' inside '" + gate_->name() + "')");
+  gate.beginRegion(variant);  // (throws for a variant the gate does not have)
   gate_ = &gate;
-  gate.beginRegion(variant);
 }
 
 void CommandRecorder::endGate() {

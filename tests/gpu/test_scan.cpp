@@ -142,5 +142,53 @@ TEST_F(ScanTest, DispatchGateRunsItsRegionOnlyWhenOpen) {
   rec.end();
 }
 
+// A gate of two variants holds two regions of different shapes (the solver's full and
+// partial sorts): each runs with its own workgroup counts, and each still rejects a change.
+TEST_F(ScanTest, DispatchGateVariantsHoldRegionsOfDifferentShapes) {
+  const std::size_t n = 70000, m = 3000;  // three scan levels, then one
+  std::vector<std::uint32_t> input(n, 1u);
+  gpu::Buffer data(ctx(), n * 4, gpu::MemoryUse::Device, "gated scan data");
+  gpu::Buffer values(ctx(), 16, gpu::MemoryUse::Device, "gate values");
+  gpu::PrefixScan scan(ctx(), data, n);
+  EXPECT_THROW(gpu::DispatchGate(ctx(), values, 4, "too many variants", 5), std::invalid_argument);
+  gpu::DispatchGate gate(ctx(), values, 16, "test gate", 2);
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  gate.recordReset(rec);
+  rec.end();
+  rec.submitAndWait();
+  auto run = [&](std::uint32_t variant, std::size_t count, float value) {
+    data.upload(input);
+    values.upload(std::vector<float>{0.0f, value, 0.0f, 0.0f});
+    rec.begin();
+    gate.recordArm(rec, 1, 0.5f);
+    rec.beginGate(gate, variant);
+    scan.record(rec, count);
+    rec.endGate();
+    rec.end();
+    rec.submitAndWait();
+    return data.readback<std::uint32_t>(n);
+  };
+  auto expected = [&](std::size_t count) {
+    std::vector<std::uint32_t> out = input;
+    const std::vector<std::uint32_t> head = cpuScan(std::vector<std::uint32_t>(input.begin(), input.begin() + count));
+    std::copy(head.begin(), head.end(), out.begin());
+    return out;
+  };
+  for (int round = 0; round < 2; ++round) {
+    EXPECT_EQ(run(0, n, 1.0f), expected(n)) << "variant 0, round " << round;
+    EXPECT_EQ(run(1, m, 1.0f), expected(m)) << "variant 1, round " << round;
+    EXPECT_EQ(run(1, m, 0.0f), input) << "variant 1 closed, round " << round;
+  }
+  EXPECT_EQ(gate.readOpened(), 4u);
+  rec.begin();
+  rec.beginGate(gate, 1);
+  EXPECT_THROW(scan.record(rec, n), std::logic_error);  // variant 1 was recorded with m
+  rec.endGate();
+  EXPECT_THROW(rec.beginGate(gate, 2), std::out_of_range);
+  EXPECT_THROW(rec.endGate(), std::logic_error);  // the failed begin opened no region
+  rec.end();
+}
+
 }  // namespace
 }  // namespace hemo::test
