@@ -345,7 +345,8 @@
 // uvec4[2]: the next step's indirect arguments for the integrator that collects the tile boxes
 // ([0]) and the one that does not ([1]); one of them is (0, 1, 1) (tile test only)
 #define HEMO_DECIDE_BINDING_INTEGRATE_ARGS 10
-#define HEMO_DECIDE_BINDING_COUNT 11
+#define HEMO_DECIDE_BINDING_TILE_BOXES_IN 11  // the tile boxes as uvec4 texels, two per tile (for the reads)
+#define HEMO_DECIDE_BINDING_COUNT 12
 
 // sph/tile_static.comp: marks the tiles that hold rigid boundary particles (once per upload).
 #define HEMO_TILE_STATIC_BINDING_POSITIONS 0  // texel vec4

@@ -26,7 +26,14 @@
 layout(constant_id = 1) const uint kTiles = 1u;
 
 layout(std140, binding = HEMO_DECIDE_BINDING_TILE_GRID) uniform TileGridBlock { TileGrid tiles; };
-layout(std430, binding = HEMO_DECIDE_BINDING_TILE_BOXES) buffer TileBoxes { uint tileBox[]; };
+// A tile's HEMO_TILE_WORDS words as two uvec4: read as texels (llvmpipe loads a storage buffer
+// lane by lane and word by word: with seven loads per box and 27 boxes per occupied tile the
+// comparison took most of this pass; docs/benchmarks.md "Session 30"), cleared as stores.
+#if HEMO_TILE_WORDS != 8 || HEMO_TILE_STATIC_WORD != 3
+#error "the tile boxes are read and cleared as two uvec4 per tile"
+#endif
+layout(std430, binding = HEMO_DECIDE_BINDING_TILE_BOXES) writeonly buffer TileBoxes { uvec4 tileBox[]; };
+layout(binding = HEMO_DECIDE_BINDING_TILE_BOXES_IN) uniform usamplerBuffer tileBoxIn;
 layout(std430, binding = HEMO_DECIDE_BINDING_TILE_OCCUPIED) buffer TileOccupied {
   uint tileOccupied;
   uint tilesCollected;  // 0: the integrator did not collect this step (then the tiles cannot decide)
@@ -53,14 +60,15 @@ layout(push_constant) uniform Push {
 
 // Tile t's box of displacements [lo, hi] (rigid particles: the point 0); false when empty.
 bool hemo_tile_box(uint t, out vec3 lo, out vec3 hi) {
-  const uint b = t * HEMO_TILE_WORDS;
-  const bool moving = tileBox[b + 4u] != 0u;
-  const bool rigid = tileBox[b + HEMO_TILE_STATIC_WORD] != 0u;
+  const uvec4 a = texelFetch(tileBoxIn, int(2u * t));       // the largest -d per axis, the static word
+  const uvec4 b = texelFetch(tileBoxIn, int(2u * t + 1u));  // the largest d per axis
+  const bool moving = b.x != 0u;
+  const bool rigid = a.w != 0u;
   lo = vec3(0.0);
   hi = vec3(0.0);
   if (moving) {
-    lo = -vec3(hemo_order_value(tileBox[b]), hemo_order_value(tileBox[b + 1u]), hemo_order_value(tileBox[b + 2u]));
-    hi = vec3(hemo_order_value(tileBox[b + 4u]), hemo_order_value(tileBox[b + 5u]), hemo_order_value(tileBox[b + 6u]));
+    lo = -vec3(hemo_order_value(a.x), hemo_order_value(a.y), hemo_order_value(a.z));
+    hi = vec3(hemo_order_value(b.x), hemo_order_value(b.y), hemo_order_value(b.z));
     if (rigid) {
       lo = min(lo, vec3(0.0));
       hi = max(hi, vec3(0.0));
@@ -102,18 +110,15 @@ float hemo_tile_worst() {
   return worst;
 }
 
-// Clears the occupied tiles' boxes (this invocation's share).
+// Clears the occupied tiles' boxes (this invocation's share), keeping each tile's static word
+// (and the unused last one).
 void hemo_tile_clear() {
   const uvec3 n = tiles.count.xyz;
   const uint occupied = min(tileOccupied, n.x * n.y * n.z);
   for (uint p = gl_LocalInvocationID.x; p < occupied; p += gl_WorkGroupSize.x) {
-    const uint b = occupiedTiles[p] * HEMO_TILE_WORDS;
-    tileBox[b] = 0u;
-    tileBox[b + 1u] = 0u;
-    tileBox[b + 2u] = 0u;
-    tileBox[b + 4u] = 0u;
-    tileBox[b + 5u] = 0u;
-    tileBox[b + 6u] = 0u;
+    const uint t = occupiedTiles[p];
+    tileBox[2u * t] = uvec4(0u, 0u, 0u, texelFetch(tileBoxIn, int(2u * t)).w);
+    tileBox[2u * t + 1u] = uvec4(0u, 0u, 0u, texelFetch(tileBoxIn, int(2u * t + 1u)).w);
   }
 }
 

@@ -412,7 +412,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   // constant 1: the tile test (after symplectic Euler) or the reach test alone (after RK2)
   for (std::uint32_t tiles = 0; tiles < 2; ++tiles) {
     rebuildDecide_[tiles] = &cache.get({"sph/rebuild_decide", HEMO_DECIDE_BINDING_COUNT, sizeof(DecidePush), kWorkgroup, {tiles},
-                                        1u << HEMO_DECIDE_BINDING_TILE_GRID, 1u << HEMO_DECIDE_BINDING_CHECK_PARTIALS});
+                                        1u << HEMO_DECIDE_BINDING_TILE_GRID,
+                                        1u << HEMO_DECIDE_BINDING_CHECK_PARTIALS | 1u << HEMO_DECIDE_BINDING_TILE_BOXES_IN});
   }
   const ParticleArrays& a = particles.live();
   tileStaticSet_ = tileStatic_->makeSet({gpu::texelBinding(HEMO_TILE_STATIC_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
@@ -567,7 +568,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                                   {HEMO_DECIDE_BINDING_GATE_OPENED, &rebuildGate_.openings()},
                                                   gpu::texelBinding(HEMO_DECIDE_BINDING_CHECK_PARTIALS, &checkPartials_, gpu::texel::kVec4),
                                                   {HEMO_DECIDE_BINDING_CHECK_COUNT, &checkCount_},
-                                                  {HEMO_DECIDE_BINDING_INTEGRATE_ARGS, &integrateArgs_}});
+                                                  {HEMO_DECIDE_BINDING_INTEGRATE_ARGS, &integrateArgs_},
+                                                  gpu::texelBinding(HEMO_DECIDE_BINDING_TILE_BOXES_IN, &tileBoxes_, gpu::texel::kUvec4)});
   checkCount_.upload(std::vector<std::uint32_t>{0u});
   dtCounts_.upload(std::vector<std::uint32_t>{0u, 0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
