@@ -186,27 +186,15 @@ void hemo_tile_widen(uint t, vec3 lo, vec3 hi) {
 }
 
 // A moving slot's displacement d into the box of the tile of its build position x0. Slots
-// next to each other were sorted by cell at the build, so a SIMD group's lanes lie in one tile
-// or straddle the border of two: the lowest and the highest tile index of the group are each
-// widened once, by the box of their lanes, and only lanes in a third tile widen their own. On
-// lavapipe an atomic costs each lane its own, and a group that straddled (most of them: eight
-// slots span about a tile's width along x) took eight lanes' atomics on the same tile's words.
-// One call either way: llvmpipe runs both sides of a branch, the atomics of each included.
+// next to each other were sorted by cell at the build and mostly share a tile: a SIMD group
+// whose lanes all do widens it once (on lavapipe an atomic costs each lane its own). One
+// call either way: llvmpipe runs both sides of a branch, the atomics of each included.
 void hemo_tile_collect(vec3 x0, vec3 d) {
   const uint t = hemo_tile_index(hemo_tile_cell(x0, tiles), tiles);
-  const uint tLo = subgroupMin(t), tHi = subgroupMax(t);
-  const bool inLo = t == tLo, inHi = t == tHi;
-  const vec3 inf = vec3(uintBitsToFloat(0x7f800000u));
-  const vec3 lo1 = subgroupMin(inLo ? d : inf), hi1 = subgroupMax(inLo ? d : -inf);
-  const vec3 lo2 = subgroupMin(inHi ? d : inf), hi2 = subgroupMax(inHi ? d : -inf);
-  if (!inLo && !inHi) {
-    hemo_tile_widen(t, d, d);
-  }
-  if (subgroupElect()) {
-    hemo_tile_widen(tLo, lo1, hi1);
-    if (tHi != tLo) {
-      hemo_tile_widen(tHi, lo2, hi2);
-    }
+  const bool together = subgroupAllEqual(t);
+  const vec3 lo = subgroupMin(d), hi = subgroupMax(d);
+  if (!together || subgroupElect()) {
+    hemo_tile_widen(t, together ? lo : d, together ? hi : d);
   }
 }
 
