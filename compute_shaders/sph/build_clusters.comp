@@ -9,6 +9,8 @@
 // its members. Boundary neighbours within the repulsion's reach (plus the skin) of a member go
 // to the back of the list, all others to the front (interface/sph.h).
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/grid.glsl"
@@ -186,5 +188,10 @@ void main() {
   if (overflow) {
     atomicAdd(status[HEMO_STATUS_NEIGHBOUR_OVERFLOW], 1u);
   }
-  atomicMax(status[HEMO_STATUS_MAX_NEIGHBOURS], most);
+  // One atomic per SIMD group: every invocation's own on the one word kept both cores' caches
+  // trading its line (the rebuild's busiest atomic).
+  const uint groupMost = subgroupMax(most);
+  if (subgroupElect()) {
+    atomicMax(status[HEMO_STATUS_MAX_NEIGHBOURS], groupMost);
+  }
 }

@@ -8,6 +8,8 @@
 // both parts, the fluid's first in each row of cells; boundary particles list only their
 // fluid neighbours (all boundary_pressure.comp needs), from the fluid part alone.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/grid.glsl"
@@ -92,5 +94,10 @@ void main() {
   if (count > capacity) {
     atomicAdd(status[HEMO_STATUS_NEIGHBOUR_OVERFLOW], 1u);
   }
-  atomicMax(status[HEMO_STATUS_MAX_NEIGHBOURS], count);
+  // One atomic per SIMD group: every invocation's own on the one word kept both cores' caches
+  // trading its line (the rebuild's busiest atomic).
+  const uint groupMost = subgroupMax(count);
+  if (subgroupElect()) {
+    atomicMax(status[HEMO_STATUS_MAX_NEIGHBOURS], groupMost);
+  }
 }
