@@ -7,8 +7,6 @@
 // active cluster without fluid within the support takes the values of a particle without
 // fluid neighbours, as the per-particle pass gives it.
 #extension GL_GOOGLE_include_directive : require
-#extension GL_KHR_shader_subgroup_basic : require
-#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/kernel.glsl"
@@ -28,7 +26,6 @@ layout(std140, binding = HEMO_BPRESSURE_BINDING_CLOCK) uniform Clock { ClockReco
 layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE) buffer Active { uint activeClusters[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE_ARGS) buffer ActiveArgs { uvec4 activeArgs; };
-#include "common/active_list.glsl"
 #include "common/boundary_state.glsl"
 layout(push_constant) uniform Push {
   uint first;     // the boundary slots [first, n), in clusters from `first` on
@@ -81,14 +78,17 @@ void main() {
   const uint count = min(M, pc.n - first);
   const uint fluidEntries = texelFetch(clusterCount, int(pc.base + c)).x & 0xffffu;
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
-  if (pc.mode == HEMO_BPRESSURE_SORT) {
-    const uint k = hemo_active_append(fluidEntries > 0u);  // (common/active_list.glsl)
-    if (fluidEntries > 0u) {
-      activeClusters[k] = c;
-    }
-  }
   if (pc.mode != HEMO_BPRESSURE_ACTIVE) {
     if (fluidEntries > 0u) {
+      if (pc.mode == HEMO_BPRESSURE_SORT) {
+        // (in whatever order the invocations run: each cluster's result does not depend on
+        // its place; the invocation that opens a workgroup's worth adds the workgroup)
+        const uint k = atomicAdd(activeArgs.w, 1u);
+        activeClusters[k] = c;
+        if (k % gl_WorkGroupSize.x == 0u) {
+          atomicAdd(activeArgs.x, 1u);
+        }
+      }
       return;
     }
     for (uint m = 0u; m < count; ++m) {

@@ -18,8 +18,6 @@
 // those without fluid neighbours in the list (no fluid particle reads them until the next
 // build) and lists the others; each force evaluation then runs over that active list only.
 #extension GL_GOOGLE_include_directive : require
-#extension GL_KHR_shader_subgroup_basic : require
-#extension GL_KHR_shader_subgroup_arithmetic : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/kernel.glsl"
@@ -42,7 +40,6 @@ layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer 
 layout(constant_id = 1) const uint kListWidth = 1u;
 layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE) buffer Active { uint activeSlots[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE_ARGS) buffer ActiveArgs { uvec4 activeArgs; };
-#include "common/active_list.glsl"
 #include "common/boundary_state.glsl"
 layout(push_constant) uniform Push {
   uint first;  // SORT and REST: the slots [first, n); after a sort the fluid's slots come
@@ -92,13 +89,17 @@ void main() {
     return;
   }
   const uint count = texelFetch(neighbourCount, int(b)).x;  // fluid neighbours only
-  if (pc.mode == HEMO_BPRESSURE_SORT) {
-    const uint k = hemo_active_append(count > 0u);  // (common/active_list.glsl)
-    if (count > 0u) {
-      activeSlots[k] = b;
-    }
-  }
   if (pc.mode != HEMO_BPRESSURE_ACTIVE && count > 0u) {
+    if (pc.mode == HEMO_BPRESSURE_SORT) {
+      // Appended in whatever order the invocations run; each entry's result does not depend
+      // on its place. The invocation that opens a workgroup's worth of entries adds that
+      // workgroup to the indirect dispatch.
+      const uint k = atomicAdd(activeArgs.w, 1u);
+      activeSlots[k] = b;
+      if (k % gl_WorkGroupSize.x == 0u) {
+        atomicAdd(activeArgs.x, 1u);
+      }
+    }
     return;
   }
   const vec4 xb4 = texelFetch(positions, int(b));
