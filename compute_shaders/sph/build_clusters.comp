@@ -188,8 +188,8 @@ void main() {
   if (overflow) {
     atomicAdd(status[HEMO_STATUS_NEIGHBOUR_OVERFLOW], 1u);
   }
-  // One atomic per SIMD group: every invocation's own on the one word kept both cores' caches
-  // trading its line (the rebuild's busiest atomic).
+  // One atomic per SIMD group on the shared word rather than one per invocation (on lavapipe
+  // the build measured the same either way; docs/benchmarks.md "Session 30").
   const uint groupMost = subgroupMax(most);
   if (subgroupElect()) {
     atomicMax(status[HEMO_STATUS_MAX_NEIGHBOURS], groupMost);
