@@ -292,6 +292,67 @@ TEST_F(NeighbourTest, TwoPartsPutTheFluidFirst) {
   EXPECT_THROW(spec.validate(), std::invalid_argument);
 }
 
+// A partial build (the fluid alone, as the solver's moving slots) scans part 0's entries four
+// at a time (grid/cell_scan.comp, grid/scatter.comp): the texel of part 0's last entry also
+// holds the first entries of part 1, which that build must leave as the last whole build set
+// them. Boundary particles fill part 1's first cells, so those entries differ from part 0's
+// last, and the partial build must agree with a whole build of the same positions.
+TEST_F(NeighbourTest, APartialBuildKeepsTheFirstRangesOfTheSecondPart) {
+  auto rng = rngFor();
+  const float h = 0.0625f;
+  auto spec = sim::GridSpec::covering({0, 0, 0}, {1.0f, 0.5f, 0.25f}, h);
+  spec.parts = 2;
+  ASSERT_EQ(spec.cellCount(), 512u);
+  ASSERT_EQ((spec.cellCount() + 1) % 4, 1u);  // entry cellCount shares its texel with part 1's cells 0-2
+  // (away from the first row of cells, y < h, which holds only the particles placed below)
+  auto pos = snapped(uniformBox(rng, 3000, {0, h, 0}, {1.0f, 0.5f, 0.25f}));
+  std::vector<float> kinds(pos.size());
+  std::bernoulli_distribution isFluid(0.5);
+  for (float& k : kinds) k = isFluid(rng) ? 0.0f : 1.0f;
+  for (int c = 0; c < 3; ++c) {  // boundary particles in the first cells of part 1 as well
+    for (int k = 0; k <= c; ++k) {
+      pos.emplace_back((float(c) + 0.5f) * h, 0.5f * h, (0.25f + 0.25f * float(k)) * h, 1.0f);
+      kinds.push_back(1.0f);
+    }
+  }
+  const auto n = static_cast<std::uint32_t>(pos.size());
+  const auto fluid = static_cast<std::uint32_t>(std::count(kinds.begin(), kinds.end(), 0.0f));
+  sim::ParticleStore store(ctx(), n);
+  std::vector<glm::vec4> vel(n);
+  for (std::uint32_t i = 0; i < n; ++i) vel[i] = glm::vec4(0.0f, 0.0f, 0.0f, kinds[i]);
+  std::vector<std::uint32_t> ids(n);
+  for (std::uint32_t i = 0; i < n; ++i) ids[i] = i;
+  store.upload(pos, vel, ids, std::vector<glm::vec4>(n, glm::vec4(0.0f)));
+  sim::NeighbourGrid grid(ctx(), spec, store);
+  auto build = [&](std::uint32_t sorted) {
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    grid.resetCounters(rec);
+    grid.record(rec, n, sorted);
+    rec.end();
+    rec.submitAndWait();
+    return grid.cellStart().readback<std::uint32_t>(spec.keyCount() + 1);
+  };
+  build(n);  // the slots in grid order: the fluid first
+  // The fluid moves (snapped, inside the box); the boundary particles stay.
+  auto moved = store.readPositions();
+  std::uniform_real_distribution<float> step(-0.1f, 0.1f);
+  for (std::uint32_t slot = 0; slot < fluid; ++slot) {
+    const glm::vec3 x = glm::clamp(glm::vec3(moved[slot]) + glm::vec3(step(rng), step(rng), step(rng)), glm::vec3(0.0f),
+                                   glm::vec3(0.999f, 0.499f, 0.249f));
+    moved[slot] = glm::vec4(glm::round(x * 4096.0f) / 4096.0f, 1.0f);
+  }
+  store.live().positions.upload(moved);
+  const auto partial = build(fluid);
+  const auto whole = build(n);
+  const std::size_t part1 = spec.cellCount();
+  EXPECT_EQ(partial[part1], fluid);
+  EXPECT_EQ(partial[part1 + 1], fluid + 1);  // one boundary particle in part 1's cell 0
+  EXPECT_EQ(partial[part1 + 2], fluid + 3);  // two in cell 1
+  EXPECT_EQ(partial[part1 + 3], fluid + 6);  // three in cell 2
+  EXPECT_EQ(partial, whole);
+}
+
 // The counting sort scans the keys in blocks of 4,096 (grid/cell_scan.comp) and the last
 // workgroup adds the blocks up: a grid of 32,768 keys (two parts of 16,384 cells) takes eight
 // blocks. Built twice in one recording, the second build must find the counts and the scan's
