@@ -15,6 +15,7 @@ constexpr std::uint32_t kWorkgroup = 256;
 // grid/cell_scan.comp: a workgroup scans kScanBlock keys.
 constexpr std::uint32_t kScanWorkgroup = 256;
 constexpr std::uint32_t kScanBlock = kScanWorkgroup * HEMO_SCAN_ITEMS;
+static_assert(kScanBlock % 4 == 0, "grid/scatter.comp writes four entries of one block per texel");
 std::uint64_t ceilDivKeys(std::uint64_t keys) { return (keys + kScanBlock - 1) / kScanBlock; }
 // Entries of the per-key buffers: cellStart's keyCount + 1, padded to whole uvec4 texels (the
 // scan and the scatter read and write four at a time).
