@@ -8,8 +8,9 @@
 // A region must record the same dispatches with the same counts every time (the slots are
 // reused by every step of a batch); a mismatch throws. A gate made with several variants
 // holds as many regions, each with its own share of the slots (beginGate's `variant`), for a
-// caller whose gated work takes one of a few shapes (the solver's full and partial sorts). A shader may also arm the gate at the
-// end of the pass that computes the decision (common/gate.glsl), saving recordArm's dispatch.
+// caller whose gated work takes one of a few shapes (the solver's full and partial sorts).
+// A shader may also arm the gate at the end of the pass that computes the decision
+// (common/gate.glsl), saving recordArm's dispatch.
 #include "hemo/gpu/commands.hpp"
 
 #include <cstdint>
