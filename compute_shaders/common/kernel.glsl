@@ -25,6 +25,16 @@ float hemo_kernel_w_shape(float r, float halfInvH) {
   return t2 * t2 * (4.0 * s + 1.0);
 }
 
+// The same, 0 from the support on, and 0 everywhere when `live` is 0: (max(live - s, 0))^4
+// (4s + 1) with live 1 (an entry to count) or 0 (the padding of a list texel), which the
+// cluster passes thus drop without a test per pair.
+float hemo_kernel_w_shape_live(float r, float halfInvH, float live) {
+  const float s = r * halfInvH;
+  const float t = max(live - s, 0.0);
+  const float t2 = t * t;
+  return t2 * t2 * (4.0 * s + 1.0);
+}
+
 // dW/dr / r, the factor that turns a separation d (|d| = r) into grad W = d * factor:
 //   kernelNorm * (-5 q (1 - q/2)^3) / (h r) = gradNorm * (1 - q/2)^3,  gradNorm = -5 kernelNorm / h^2.
 // No division by r, so a coincident pair gets grad W = 0; (1 - q/2) is clamped at 0, so any r
@@ -43,5 +53,11 @@ float hemo_kernel_grad_factor(float r, float invH, float gradNorm) {
 // end; halfInvH = 1 / 2h.
 float hemo_kernel_grad_shape(float r, float halfInvH) {
   const float t = max(1.0 - r * halfInvH, 0.0);
+  return t * t * t;
+}
+
+// The same, and 0 everywhere when `live` (1 or 0) is 0, as hemo_kernel_w_shape_live.
+float hemo_kernel_grad_shape_live(float r, float halfInvH, float live) {
+  const float t = max(live - r * halfInvH, 0.0);
   return t * t * t;
 }

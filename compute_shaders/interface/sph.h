@@ -92,9 +92,11 @@
 // the arithmetic, so a fetch that serves eight pairs costs an eighth (docs/benchmarks.md,
 // "Session 26"). An entry is a slot (bits 0-22) with the members within the list radius of it
 // as a mask (bit 23 + m for member m) and HEMO_LIST_BOUNDARY_BIT for a boundary or wall
-// neighbour. A cluster whose members lie in more than one row of grid cells walks each row's
-// members separately, so a slot may appear once per such group, each time with that group's
-// members only: no pair is counted twice. Boundary entries that a member may come within the
+// neighbour. A slot appears at most once in a cluster's list: a cluster whose members lie in
+// more than one row of grid cells walks each row's members separately, and a row keeps only
+// the slots that no earlier row's members are within the list radius of. So the passes count
+// every entry for every member (beyond the support the kernel is 0) and read no mask; the
+// masks serve the build's neighbour count and the tests. Boundary entries that a member may come within the
 // repulsion's reach of before the next build (common/repulsion.glsl; that reach plus the skin)
 // fill the list from entry capacity - 1 down, all other entries (fluid, and boundary ones
 // marked as such) from entry 0 up: the force pass runs the repulsion over the back section

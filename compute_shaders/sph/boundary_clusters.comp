@@ -3,9 +3,10 @@
 // "Clusters"; scenes without wall particles): the same model, modes and outputs, with one
 // invocation per cluster of HEMO_CLUSTER_SIZE boundary slots. Each fluid entry of the
 // cluster's list is fetched once (position, state, velocity) and evaluated against every
-// member its mask names. The active list holds clusters with a fluid entry; a member of an
-// active cluster without fluid within the support takes the values of a particle without
-// fluid neighbours, as the per-particle pass gives it.
+// member (the list names each fluid neighbour of a member once; W is 0 beyond the support).
+// The active list holds clusters with a fluid entry; a member of an active cluster without
+// fluid within the support takes the values of a particle without fluid neighbours, as the
+// per-particle pass gives it.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -40,19 +41,19 @@ const uint M = HEMO_CLUSTER_SIZE;
 
 vec3 gX[M];
 HemoPairParams gPp;
-float gHalfInvH, gSupport;
+float gHalfInvH;
 float gSumW[M], gSumP[M];
 vec3 gSumRhoR[M], gSumV[M];
 
-// One entry (a fluid slot) with its data: position, (rho, p), velocity; `valid` is false for
-// the padding of the last texel.
-void pair(uint entry, vec3 xf, vec2 sf, vec3 vf, bool valid) {
-  const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;
+// One entry (a fluid slot) with its data: position, (rho, p), velocity; `live` is 0 for the
+// padding of the last texel (whose fetches read a member's data instead), 1 otherwise. Every
+// member takes every entry: the list names each fluid neighbour of a member once, and W is 0
+// from the support on.
+void pair(vec3 xf, vec2 sf, vec3 vf, float live) {
   for (uint m = 0u; m < M; ++m) {
     const vec3 d = hemo_min_image(gX[m] - xf, gPp);
-    const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
     // (the norm cancels in every ratio of common/boundary_state.glsl)
-    const float w = (mask & (1u << m)) != 0u ? hemo_kernel_w_shape(r, gHalfInvH) : 0.0;
+    const float w = hemo_kernel_w_shape_live(sqrt(dot(d, d)), gHalfInvH, live);
     gSumW[m] += w;
     gSumP[m] += sf.y * w;
     gSumRhoR[m] += sf.x * d * w;
@@ -100,9 +101,8 @@ void main() {
   }
   gPp = hemo_pair_params();
   gHalfInvH = 0.5 / gPp.h;
-  gSupport = 2.0 * gPp.h;
   for (uint m = 0u; m < M; ++m) {
-    // a missing member repeats the last one (never in a mask)
+    // a missing member repeats the last one (its sums are not stored)
     gX[m] = texelFetch(positions, int(first + min(m, count - 1u))).xyz;
     gSumW[m] = 0.0;
     gSumP[m] = 0.0;
@@ -113,18 +113,21 @@ void main() {
   for (uint k = 0u; k < fluidEntries; k += 4u) {
     // a texel's four entries fetched together: the fetches (calls in llvmpipe, which spill the
     // live registers) come in one run
+    // (the padding fetches the first member's slot: finite data)
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    const ivec4 f = ivec4(e & HEMO_CLUSTER_SLOT_MASK);
+    const bvec4 valid = lessThan(uvec4(k) + uvec4(0u, 1u, 2u, 3u), uvec4(fluidEntries));
+    const ivec4 f = ivec4(mix(uvec4(first), e & HEMO_CLUSTER_SLOT_MASK, valid));
+    const vec4 live = vec4(valid);
     const vec3 x0 = texelFetch(positions, f.x).xyz, x1 = texelFetch(positions, f.y).xyz;
     const vec3 x2 = texelFetch(positions, f.z).xyz, x3 = texelFetch(positions, f.w).xyz;
     const vec2 s0 = texelFetch(fluidState, f.x).xy, s1 = texelFetch(fluidState, f.y).xy;
     const vec2 s2 = texelFetch(fluidState, f.z).xy, s3 = texelFetch(fluidState, f.w).xy;
     const vec3 v0 = texelFetch(velocities, f.x).xyz, v1 = texelFetch(velocities, f.y).xyz;
     const vec3 v2 = texelFetch(velocities, f.z).xyz, v3 = texelFetch(velocities, f.w).xyz;
-    pair(e.x, x0, s0, v0, true);
-    pair(e.y, x1, s1, v1, k + 1u < fluidEntries);
-    pair(e.z, x2, s2, v2, k + 2u < fluidEntries);
-    pair(e.w, x3, s3, v3, k + 3u < fluidEntries);
+    pair(x0, s0, v0, live.x);
+    pair(x1, s1, v1, live.y);
+    pair(x2, s2, v2, live.z);
+    pair(x3, s3, v3, live.w);
   }
   for (uint m = 0u; m < count; ++m) {
     const uint b = first + m;

@@ -52,14 +52,19 @@ uint gNf, gNb; // entries kept: the front section (from entry 0 up) and the back
 #error "the packed member counts assume clusters of four"
 #endif
 uvec2 gNamed;
+uint gMembers;  // the cluster's members (a missing member is in no mask)
+uint gEarlier;  // the members of the groups walked before this one
 // The squared distance within which a boundary neighbour may come into the repulsion's reach
 // (common/repulsion.glsl) before the next build: that reach plus the skin, by which a pair
 // closes in at most while the list lasts (the rebuild test).
 float gNear2;
 
-// Candidate slot j at xj against the members named in `members` (none: a padding candidate,
-// written where the next entry goes but not kept). It is written to the next free entry of its
-// end and kept (the end advances) only if some member is close enough.
+// Candidate slot j at xj, walked by the group of `members` (none: a padding candidate,
+// written where the next entry goes but not kept). It is written to the next free entry of
+// its end and kept (the end advances) only if this group is the first to reach it: some member
+// of the group is close enough and no member of an earlier group is (that group walked every
+// particle close to its members and kept it). Its mask names every member close enough, in
+// any group, so each pair of a member and a neighbour is listed exactly once.
 void candidate(uint base, uint j, vec3 xj, uint members, uint mark, HemoPairParams pp, float list2) {
   const uint last = pc.capacity - 1u;
   uint mask = 0u;
@@ -70,22 +75,24 @@ void candidate(uint base, uint j, vec3 xj, uint members, uint mark, HemoPairPara
     mask |= d2 < list2 ? 1u << m : 0u;
     near |= d2 < gNear2 ? 1u << m : 0u;
   }
-  mask &= members;
+  mask &= gMembers;
+  const bool keep = (mask & members) != 0u && (mask & gEarlier) == 0u;
+  mask = keep ? mask : 0u;
   gNamed += uvec2((mask & 1u) | (mask & 2u) << 15u, (mask >> 2u & 1u) | (mask & 8u) << 13u);
   // A boundary entry that no member can come within the repulsion's reach of joins the
   // fluid's section, the force pass's loop without the repulsion (it keeps its mark).
-  const bool boundary = mark != 0u && (near & members) != 0u;
+  const bool boundary = mark != 0u && (near & mask) != 0u;
   // With used == last one entry is free, at gNf = last - gNb; past that the cluster has
   // overflowed (the run stops) and any entry of its own will do.
   const uint used = gNf + gNb;
   const uint at = used > last ? 0u : (boundary ? last - gNb : gNf);
   clusterList[base + at] = j | mask << HEMO_CLUSTER_MEMBER_SHIFT | mark;
-  gNf += mask != 0u && !boundary ? 1u : 0u;
-  gNb += mask != 0u && boundary ? 1u : 0u;
+  gNf += keep && !boundary ? 1u : 0u;
+  gNb += keep && boundary ? 1u : 0u;
 }
 
 // The members [g0, g1) (one row of cells): walk their candidates and keep each one within the
-// list radius of at least one of them, with that mask.
+// list radius of at least one of them and of no member of an earlier row (candidate()).
 void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
   vec3 lo = gListPoints[g0];
   vec3 hi = gListPoints[g0];
@@ -162,6 +169,8 @@ void main() {
   gNf = 0u;
   gNb = 0u;
   gNamed = uvec2(0u);
+  gMembers = (1u << count) - 1u;
+  gEarlier = 0u;
   // The members' rows, in order: [g0, g1) share (cell y, cell z).
   uint g0 = 0u;
   while (g0 < count) {
@@ -170,6 +179,7 @@ void main() {
       ++g1;
     }
     group(cluster, g0, g1, pp, list2);
+    gEarlier |= (1u << g1) - (1u << g0);
     g0 = g1;
   }
   // Neighbours of the most crowded member (a fluid member not counting itself). The capacity holds every

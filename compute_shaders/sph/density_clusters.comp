@@ -1,11 +1,11 @@
 #version 450
 // sph/density.comp's summation density over the clusters' lists (interface/sph.h, "Clusters"):
 // one invocation per cluster, every entry fetched once and evaluated against all members,
-//   rho_i = sum_j m_j W(|x_i - x_j|, h)   (j includes i: each member is in its own mask)
+//   rho_i = sum_j m_j W(|x_i - x_j|, h)   (j includes i: each member is in its cluster's list)
 //   p_i   = B ((rho_i / rho0)^7 - 1) + p_bg   (common/tait.glsl)
 // and the pair data of interface/sph.h: pair position (x, V p) and viscous velocity (v, V).
-// A member counts an entry only where the entry's mask names it (within the list radius, and
-// counted once however the cluster's rows split its walk); W is 0 beyond the support.
+// Every member counts every entry: the build lists each neighbour of a member once, and W is 0
+// from the support on, so the entry's mask is not needed.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
@@ -34,33 +34,37 @@ const uint M = HEMO_CLUSTER_SIZE;
 vec3 gX[M];
 float gRho[M];
 HemoPairParams gPp;
-float gHalfInvH, gSupport;
+float gHalfInvH;
 
-// One entry whose data is fetched; `valid` is false for the padding of the last texel.
-void pair(uint entry, vec4 pj, bool valid) {
-  const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;  // the boundary bit lies past the members'
+// One entry whose data is fetched; `live` is 0 for the padding of a texel (whose fetch read a
+// member's data instead), 1 otherwise. Every member counts every entry: the list names each
+// neighbour once (the build's masks are not needed here), and W is 0 from the support on.
+void pair(vec4 pj, float live) {
   for (uint m = 0u; m < M; ++m) {
     const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
-    const float r = min(sqrt(dot(d, d)), gSupport);  // W(2h) = 0
-    const float w = hemo_kernel_w_shape(r, gHalfInvH);  // the norm applied to the sum
-    gRho[m] += (mask & (1u << m)) != 0u ? pj.w * w : 0.0;
+    const float w = hemo_kernel_w_shape_live(sqrt(dot(d, d)), gHalfInvH, live);  // the norm applied to the sum
+    gRho[m] += pj.w * w;
   }
 }
 
 // Entries [first, end) of the cluster's list: a texel's four entries fetched together, so that
-// the fetches (calls in llvmpipe, which spill the live registers) come in one run.
-void range(uint base, uint first, uint end) {
+// the fetches (calls in llvmpipe, which spill the live registers) come in one run. The padding
+// of a texel fetches slot `own` (a member: finite data) and counts for nothing.
+void range(uint base, uint first, uint end, uint own) {
   for (uint k = first & ~3u; k < end; k += 4u) {
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    const uvec4 j = e & HEMO_CLUSTER_SLOT_MASK;
-    const vec4 p0 = texelFetch(positions, int(j.x));
-    const vec4 p1 = texelFetch(positions, int(j.y));
-    const vec4 p2 = texelFetch(positions, int(j.z));
-    const vec4 p3 = texelFetch(positions, int(j.w));
-    pair(e.x, p0, k >= first);
-    pair(e.y, p1, k + 1u >= first && k + 1u < end);
-    pair(e.z, p2, k + 2u >= first && k + 2u < end);
-    pair(e.w, p3, k + 3u >= first && k + 3u < end);
+    const uvec4 at = uvec4(k) + uvec4(0u, 1u, 2u, 3u);
+    const bvec4 valid = bvec4(uvec4(greaterThanEqual(at, uvec4(first))) & uvec4(lessThan(at, uvec4(end))));
+    const ivec4 j = ivec4(mix(uvec4(own), e & HEMO_CLUSTER_SLOT_MASK, valid));
+    const vec4 live = vec4(valid);
+    const vec4 p0 = texelFetch(positions, j.x);
+    const vec4 p1 = texelFetch(positions, j.y);
+    const vec4 p2 = texelFetch(positions, j.z);
+    const vec4 p3 = texelFetch(positions, j.w);
+    pair(p0, live.x);
+    pair(p1, live.y);
+    pair(p2, live.z);
+    pair(p3, live.w);
   }
 }
 
@@ -73,15 +77,14 @@ void main() {
   const uint count = min(M, pc.fluid - first);
   gPp = hemo_pair_params();
   gHalfInvH = 0.5 / gPp.h;
-  gSupport = 2.0 * gPp.h;
   for (uint m = 0u; m < M; ++m) {
     gX[m] = texelFetch(positions, int(first + min(m, count - 1u))).xyz;
     gRho[m] = 0.0;
   }
   const uint counts = texelFetch(clusterCount, int(cluster)).x;
   const uint base = cluster * pc.capacity;
-  range(base, 0u, counts & 0xffffu);
-  range(base, pc.capacity - (counts >> 16u), pc.capacity);
+  range(base, 0u, counts & 0xffffu, first);
+  range(base, pc.capacity - (counts >> 16u), pc.capacity, first);
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   for (uint m = 0u; m < M; ++m) {
     if (m < count) {

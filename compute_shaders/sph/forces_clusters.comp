@@ -4,8 +4,8 @@
 // sph/forces.comp (pressure, laminar viscosity, the boundary's repulsion, gravity and body
 // force) and so are the outputs: accel (a, 1 / max(sum T, 1)), the time-step limit, the blow-up
 // diagnosis and the time step's first reduction level, here one (min, max) per invocation's
-// members. A member takes an entry only where the entry's mask names it; beyond the support
-// the kernel terms vanish and the repulsion's reach is shorter than the list radius. The
+// members. Every member takes every entry (the list names each neighbour of a member once);
+// beyond the support the kernel terms vanish and the repulsion's reach is shorter still. The
 // repulsion runs over the list's back section only, which holds every boundary neighbour that
 // may come within its reach before the next build; the front's boundary entries get the
 // pressure and viscous terms alone, the same as in the back. No SPS term: scenes with it use
@@ -57,37 +57,41 @@ float gHalfInvH, gGradNorm, gEtaSq, gTwoMu;
 HemoRepulsionParams gRp;
 
 // One entry (the front section, or the back with the repulsion: a constant at each call);
-// `valid` is false for the padding of the last texel.
-void pair(uint entry, vec4 pj, vec4 vj, vec3 nrm, bool valid, const bool boundary) {
-  const uint mask = valid ? entry >> HEMO_CLUSTER_MEMBER_SHIFT : 0u;
+// `live` is 0 for the padding of a texel (whose fetches read a member's data instead), 1
+// otherwise. Every member takes every entry: the list names each neighbour of a member once,
+// the kernel terms are 0 from the support on and the repulsion's reach is shorter still.
+void pair(vec4 pj, vec4 vj, vec3 nrm, float live, const bool boundary) {
   const float volumeJ = abs(vj.w);
   const float viscJ = gTwoMu * volumeJ;
   for (uint m = 0u; m < M; ++m) {
-    const bool take = (mask & (1u << m)) != 0u;
     const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
     const float r2 = dot(d, d);
     // grad W = F d, so x_ij . grad W = F r^2: both terms carry F (over gradNorm: the sum's
     // factor, applied once at the end)
-    const float f = take ? hemo_kernel_grad_shape(sqrt(r2), gHalfInvH) : 0.0;
+    const float f = hemo_kernel_grad_shape_live(sqrt(r2), gHalfInvH, live);
     gSum[m] += f * ((viscJ * r2 / (r2 + gEtaSq)) * (gV[m] - vj.xyz) - (volumeJ * gP[m] + pj.w) * d);
     if (boundary) {
       // boundary and wall particles; detached ones (V = 0) do not repel, nor does a
-      // coincident one (no direction)
+      // coincident one (no direction), nor the padding (a fluid member: V > 0)
       const float x = dot(d, nrm);
       float w;
       const float push = hemo_repulsion(x, length(d - x * nrm), gRp, w);
-      const bool repels = take && vj.w < 0.0 && r2 > 0.0 && w > 0.0;
+      const bool repels = vj.w < 0.0 && r2 > 0.0 && w > 0.0;
       gRepulsion[m] += repels ? vec4(nrm * push, w) : vec4(0.0);
     }
   }
 }
 
 // Entries [first, end) of the cluster's list: a texel's four entries fetched together, so that
-// the fetches (calls in llvmpipe, which spill the live registers) come in one run.
-void range(uint base, uint first, uint end, const bool boundary) {
+// the fetches (calls in llvmpipe, which spill the live registers) come in one run. The padding
+// of a texel fetches slot `own` (a member: finite data) and counts for nothing.
+void range(uint base, uint first, uint end, uint own, const bool boundary) {
   for (uint k = first & ~3u; k < end; k += 4u) {
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    const ivec4 j = ivec4(e & HEMO_CLUSTER_SLOT_MASK);
+    const uvec4 at = uvec4(k) + uvec4(0u, 1u, 2u, 3u);
+    const bvec4 valid = bvec4(uvec4(greaterThanEqual(at, uvec4(first))) & uvec4(lessThan(at, uvec4(end))));
+    const ivec4 j = ivec4(mix(uvec4(own), e & HEMO_CLUSTER_SLOT_MASK, valid));
+    const vec4 live = vec4(valid);
     // (x_j, V_j p_j) and (v_j, +-V_j)
     const vec4 p0 = texelFetch(pairPosition, j.x), p1 = texelFetch(pairPosition, j.y);
     const vec4 p2 = texelFetch(pairPosition, j.z), p3 = texelFetch(pairPosition, j.w);
@@ -100,10 +104,10 @@ void range(uint base, uint first, uint end, const bool boundary) {
       n2 = texelFetch(normals, j.z).xyz;
       n3 = texelFetch(normals, j.w).xyz;
     }
-    pair(e.x, p0, v0, n0, k >= first, boundary);
-    pair(e.y, p1, v1, n1, k + 1u >= first && k + 1u < end, boundary);
-    pair(e.z, p2, v2, n2, k + 2u >= first && k + 2u < end, boundary);
-    pair(e.w, p3, v3, n3, k + 3u >= first && k + 3u < end, boundary);
+    pair(p0, v0, n0, live.x, boundary);
+    pair(p1, v1, n1, live.y, boundary);
+    pair(p2, v2, n2, live.z, boundary);
+    pair(p3, v3, n3, live.w, boundary);
   }
 }
 
@@ -148,8 +152,8 @@ void main() {
     }
     const uint counts = texelFetch(clusterCount, int(cluster)).x;
     const uint base = cluster * pc.capacity;
-    range(base, 0u, counts & 0xffffu, false);
-    range(base, pc.capacity - (counts >> 16u), pc.capacity, true);
+    range(base, 0u, counts & 0xffffu, first, false);
+    range(base, pc.capacity - (counts >> 16u), pc.capacity, first, true);
     const float h = gPp.h;
     for (uint m = 0u; m < M; ++m) {
       if (m < count) {
