@@ -113,10 +113,11 @@ void main() {
   for (uint k = 0u; k < fluidEntries; k += 4u) {
     // a texel's four entries fetched together: the fetches (calls in llvmpipe, which spill the
     // live registers) come in one run
-    // (the padding fetches the first member's slot: finite data)
+    // (the padding of the last texel fetches its first entry, a fluid slot: finite data; a
+    // boundary slot's state is what this pass writes)
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
     const bvec4 valid = lessThan(uvec4(k) + uvec4(0u, 1u, 2u, 3u), uvec4(fluidEntries));
-    const ivec4 f = ivec4(mix(uvec4(first), e & HEMO_CLUSTER_SLOT_MASK, valid));
+    const ivec4 f = ivec4(mix(uvec4(e.x & HEMO_CLUSTER_SLOT_MASK), e & HEMO_CLUSTER_SLOT_MASK, valid));
     const vec4 live = vec4(valid);
     const vec3 x0 = texelFetch(positions, f.x).xyz, x1 = texelFetch(positions, f.y).xyz;
     const vec3 x2 = texelFetch(positions, f.z).xyz, x3 = texelFetch(positions, f.w).xyz;

@@ -21,7 +21,8 @@ layout(binding = HEMO_CBUILD_BINDING_POSITIONS) uniform samplerBuffer positions;
 layout(binding = HEMO_CBUILD_BINDING_CELL_START) uniform usamplerBuffer cellStart;
 HEMO_SPH_PARAMS_UNIFORM(HEMO_CBUILD_BINDING_PARAMS);
 layout(std430, binding = HEMO_CBUILD_BINDING_CCOUNT) writeonly buffer Counts { uint clusterCount[]; };
-layout(std430, binding = HEMO_CBUILD_BINDING_CLIST) writeonly buffer List { uint clusterList[]; };
+// (written a texel of four entries at a time)
+layout(std430, binding = HEMO_CBUILD_BINDING_CLIST) writeonly buffer List { uvec4 clusterList[]; };
 layout(std430, binding = HEMO_CBUILD_BINDING_STATUS) buffer Status { uint status[]; };
 layout(std430, binding = HEMO_CBUILD_BINDING_ACTIVE_ARGS) writeonly buffer ActiveArgs { uvec4 activeArgs; };
 layout(push_constant) uniform Push {
@@ -52,6 +53,7 @@ uint gNf, gNb; // entries kept: the front section (from entry 0 up) and the back
 #error "the packed member counts assume clusters of four"
 #endif
 uvec2 gNamed;
+uvec4 gPendingF, gPendingB;  // kept entries not yet stored (append())
 uint gMembers;  // the cluster's members (a missing member is in no mask)
 uint gEarlier;  // the members of the groups walked before this one
 // The squared distance within which a boundary neighbour may come into the repulsion's reach
@@ -59,14 +61,13 @@ uint gEarlier;  // the members of the groups walked before this one
 // closes in at most while the list lasts (the rebuild test).
 float gNear2;
 
-// Candidate slot j at xj, walked by the group of `members` (none: a padding candidate,
-// written where the next entry goes but not kept). It is written to the next free entry of
-// its end and kept (the end advances) only if this group is the first to reach it: some member
-// of the group is close enough and no member of an earlier group is (that group walked every
-// particle close to its members and kept it). Its mask names every member close enough, in
-// any group, so each pair of a member and a neighbour is listed exactly once.
-void candidate(uint base, uint j, vec3 xj, uint members, uint mark, HemoPairParams pp, float list2) {
-  const uint last = pc.capacity - 1u;
+// Candidate slot j at xj, walked by the group of `members` (none: a padding candidate, never
+// kept). It is kept only if this group is the first to reach it: some member of the group is
+// close enough and no member of an earlier group is (that group walked every particle close to
+// its members and kept it). Its entry's mask names every member close enough, in any group, so
+// each pair of a member and a neighbour is listed exactly once. `section`: 0 not kept, 1 the
+// front, 2 the back.
+uint candidate(uint j, vec3 xj, uint members, uint mark, HemoPairParams pp, float list2, out uint section) {
   uint mask = 0u;
   uint near = 0u;
   for (uint m = 0u; m < M; ++m) {
@@ -82,13 +83,38 @@ void candidate(uint base, uint j, vec3 xj, uint members, uint mark, HemoPairPara
   // A boundary entry that no member can come within the repulsion's reach of joins the
   // fluid's section, the force pass's loop without the repulsion (it keeps its mark).
   const bool boundary = mark != 0u && (near & mask) != 0u;
-  // With used == last one entry is free, at gNf = last - gNb; past that the cluster has
-  // overflowed (the run stops) and any entry of its own will do.
-  const uint used = gNf + gNb;
-  const uint at = used > last ? 0u : (boundary ? last - gNb : gNf);
-  clusterList[base + at] = j | mask << HEMO_CLUSTER_MEMBER_SHIFT | mark;
-  gNf += keep && !boundary ? 1u : 0u;
-  gNb += keep && boundary ? 1u : 0u;
+  section = keep ? (boundary ? 2u : 1u) : 0u;
+  return j | mask << HEMO_CLUSTER_MEMBER_SHIFT | mark;
+}
+
+// The kept entries go to the list a texel at a time. A store is a loop over the SIMD lanes in
+// llvmpipe, as costly as the rest of a candidate's work; one per candidate (a store of every
+// entry, kept or not, to the next free place) took about a third of the build. Each section
+// holds its entries not yet stored (fewer than four); four candidates' kept
+// entries are appended to it in order, and a texel that fills is stored. `count` is the
+// section's entries so far (gNf or gNb), `pending` its entries not yet stored in slots [0, count & 3).
+// Returns the full texel's entries in its slots [0, 4) when one filled (`full`), and leaves
+// the rest in `pending`.
+uvec4 append(inout uvec4 pending, inout uint count, uvec4 e, uvec4 section, uint which, out bool full) {
+  uvec4 lo = pending;
+  uvec3 hi = uvec3(0u);
+  uint at = count & 3u;
+  // candidate k lands in slot at + (the kept ones before it): at most 3 + k
+  for (uint k = 0u; k < 4u; ++k) {
+    const bool take = section[k] == which;
+    lo.x = take && at == 0u ? e[k] : lo.x;
+    lo.y = take && at == 1u ? e[k] : lo.y;
+    lo.z = take && at == 2u ? e[k] : lo.z;
+    lo.w = take && at == 3u ? e[k] : lo.w;
+    if (k >= 1u) hi.x = take && at == 4u ? e[k] : hi.x;
+    if (k >= 2u) hi.y = take && at == 5u ? e[k] : hi.y;
+    if (k >= 3u) hi.z = take && at == 6u ? e[k] : hi.z;
+    at += take ? 1u : 0u;
+  }
+  full = at >= 4u;
+  pending = full ? uvec4(hi, 0u) : lo;
+  count += at - (count & 3u);
+  return lo;
 }
 
 // The members [g0, g1) (one row of cells): walk their candidates and keep each one within the
@@ -107,7 +133,8 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
   // the rows around the group's box (common/list_ranges.glsl)
   const uint rangeCount = hemo_list_ranges(pc.grid, gC[g0], lo, hi, pc.boundary == 0u, params.listRadius);
   // The candidates as one flat loop (sph/build_list.comp).
-  const uint base = cluster * pc.capacity;
+  const uint base = cluster * (pc.capacity >> 2u);  // in texels
+  const uint lastTexel = (pc.capacity >> 2u) - 1u;
   uint next = 0u;
   uint j = 0u;
   uint jEnd = 0u;
@@ -131,11 +158,26 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
     const vec3 x1 = texelFetch(positions, int(min(j + 1u, j3))).xyz;
     const vec3 x2 = texelFetch(positions, int(min(j + 2u, j3))).xyz;
     const vec3 x3 = texelFetch(positions, int(j3)).xyz;
-    candidate(base, j, x0, members, mark, pp, list2);
-    candidate(base, j + 1u, x1, count > 1u ? members : 0u, mark, pp, list2);
-    candidate(base, j + 2u, x2, count > 2u ? members : 0u, mark, pp, list2);
-    candidate(base, j + 3u, x3, count > 3u ? members : 0u, mark, pp, list2);
+    uvec4 e, section;
+    e.x = candidate(j, x0, members, mark, pp, list2, section.x);
+    e.y = candidate(j + 1u, x1, count > 1u ? members : 0u, mark, pp, list2, section.y);
+    e.z = candidate(j + 2u, x2, count > 2u ? members : 0u, mark, pp, list2, section.z);
+    e.w = candidate(j + 3u, x3, count > 3u ? members : 0u, mark, pp, list2, section.w);
     j += count;
+    // The front fills texels from the list's start, the back from its end down (entry
+    // capacity - 1 - k holds its k-th entry). Past the capacity the cluster has overflowed
+    // (the run stops) and any texel of its own will do.
+    const uint texelF = min(gNf >> 2u, lastTexel);
+    const uint texelB = lastTexel - min(gNb >> 2u, lastTexel);
+    bool fullF, fullB;
+    const uvec4 front = append(gPendingF, gNf, e, section, 1u, fullF);
+    const uvec4 back = append(gPendingB, gNb, e, section, 2u, fullB);
+    if (fullF) {
+      clusterList[base + texelF] = front;
+    }
+    if (fullB) {
+      clusterList[base + texelB] = back.wzyx;
+    }
   }
 }
 
@@ -168,6 +210,8 @@ void main() {
   }
   gNf = 0u;
   gNb = 0u;
+  gPendingF = uvec4(0u);
+  gPendingB = uvec4(0u);
   gNamed = uvec2(0u);
   gMembers = (1u << count) - 1u;
   gEarlier = 0u;
@@ -192,8 +236,18 @@ void main() {
     const uint named = (gNamed[m >> 1u] >> (16u * (m & 1u))) & 0xffffu;
     most = max(most, max(named, self) - self);
   }
-  const uint used = gNf + gNb;
-  const bool overflow = used > pc.capacity - 1u || most > params.neighbourCapacity;
+  // The sections' last texels, partly filled (their other entries are never read).
+  const uint base = cluster * (pc.capacity >> 2u);
+  const uint lastTexel = (pc.capacity >> 2u) - 1u;
+  if ((gNf & 3u) != 0u) {
+    clusterList[base + min(gNf >> 2u, lastTexel)] = gPendingF;
+  }
+  if ((gNb & 3u) != 0u) {
+    clusterList[base + lastTexel - min(gNb >> 2u, lastTexel)] = gPendingB.wzyx;
+  }
+  // The sections' texels must not meet.
+  const uint used = ((gNf + 3u) & ~3u) + ((gNb + 3u) & ~3u);
+  const bool overflow = used > pc.capacity || most > params.neighbourCapacity;
   clusterCount[cluster] = overflow ? 0u : (gNf | gNb << 16u);
   if (overflow) {
     atomicAdd(status[HEMO_STATUS_NEIGHBOUR_OVERFLOW], 1u);

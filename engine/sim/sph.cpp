@@ -79,12 +79,14 @@ std::uint64_t perParticle(const ParticleStore& particles, std::uint64_t bytes) {
 // Clusters (interface/sph.h): as many as the slots could need (the fluid's and the boundary
 // particles', each part's last cluster perhaps not full), and the entries of each: every
 // member's neighbours and itself even when each member walks alone (all in different rows of
-// cells), plus the spare entry of the build's stores, in whole texels of four.
+// cells), plus the padding of the two sections' last texels (the build stores whole texels of
+// four, so the sections must not share one: up to three entries each).
 std::uint64_t clustersFor(const ParticleStore& particles) {
   return std::uint64_t(std::max(particles.capacity(), 1u)) / HEMO_CLUSTER_SIZE + 2;
 }
 std::uint32_t clusterEntries(std::uint32_t neighbourCapacity) {
-  return (HEMO_CLUSTER_SIZE * (neighbourCapacity + 1) + 1 + 3) & ~3u;
+  static_assert(HEMO_CLUSTER_SIZE % 4 == 0, "a cluster's own entries fill whole texels");
+  return (HEMO_CLUSTER_SIZE * (neighbourCapacity + 1) + 6 + 3) & ~3u;
 }
 // Whether the fluid walks clusters (ListLayout): on CPU devices, where a fetch costs per lane,
 // for summation density without the SPS term (the cluster passes have neither).
