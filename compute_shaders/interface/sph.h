@@ -100,7 +100,8 @@
 // repulsion's reach of before the next build (common/repulsion.glsl; that reach plus the skin)
 // fill the list from entry capacity - 1 down, all other entries (fluid, and boundary ones
 // marked as such) from entry 0 up: the force pass runs the repulsion over the back section
-// only. The count packs both (front | back << 16).
+// only. The count packs both (front | back << 16). The build stores whole texels of four, so
+// each section's last texel may hold up to three entries of padding, which no pass reads.
 // In a scene without wall particles the boundary particles' slots [fluid, n) are cut into
 // clusters too, numbered after the fluid's (the first is ceil(fluid / HEMO_CLUSTER_SIZE)):
 // their lists hold fluid entries only (all sph/boundary_clusters.comp needs), and no member
