@@ -11,6 +11,7 @@
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/kernel.glsl"
+#include "common/cluster_texel.glsl"
 #include "common/sph_params.glsl"
 #include "common/clock.glsl"
 #include "common/tait.glsl"
@@ -116,9 +117,8 @@ void main() {
     // (the padding of the last texel fetches its first entry, a fluid slot: finite data; a
     // boundary slot's state is what this pass writes)
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    const bvec4 valid = lessThan(uvec4(k) + uvec4(0u, 1u, 2u, 3u), uvec4(fluidEntries));
-    const ivec4 f = ivec4(mix(uvec4(e.x & HEMO_CLUSTER_SLOT_MASK), e & HEMO_CLUSTER_SLOT_MASK, valid));
-    const vec4 live = vec4(valid);
+    vec4 live;
+    const ivec4 f = hemo_cluster_slots(e, k, 0u, fluidEntries, e.x & HEMO_CLUSTER_SLOT_MASK, live);
     const vec3 x0 = texelFetch(positions, f.x).xyz, x1 = texelFetch(positions, f.y).xyz;
     const vec3 x2 = texelFetch(positions, f.z).xyz, x3 = texelFetch(positions, f.w).xyz;
     const vec2 s0 = texelFetch(fluidState, f.x).xy, s1 = texelFetch(fluidState, f.y).xy;

@@ -10,6 +10,7 @@
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/kernel.glsl"
+#include "common/cluster_texel.glsl"
 #include "common/sph_params.glsl"
 #include "common/clock.glsl"
 #include "common/tait.glsl"
@@ -53,10 +54,8 @@ void pair(vec4 pj, float live) {
 void range(uint base, uint first, uint end, uint own) {
   for (uint k = first & ~3u; k < end; k += 4u) {
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    const uvec4 at = uvec4(k) + uvec4(0u, 1u, 2u, 3u);
-    const bvec4 valid = bvec4(uvec4(greaterThanEqual(at, uvec4(first))) & uvec4(lessThan(at, uvec4(end))));
-    const ivec4 j = ivec4(mix(uvec4(own), e & HEMO_CLUSTER_SLOT_MASK, valid));
-    const vec4 live = vec4(valid);
+    vec4 live;
+    const ivec4 j = hemo_cluster_slots(e, k, first, end, own, live);
     const vec4 p0 = texelFetch(positions, j.x);
     const vec4 p1 = texelFetch(positions, j.y);
     const vec4 p2 = texelFetch(positions, j.z);

@@ -17,6 +17,7 @@
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/kernel.glsl"
+#include "common/cluster_texel.glsl"
 #include "common/sph_params.glsl"
 #include "common/repulsion.glsl"
 
@@ -88,10 +89,8 @@ void pair(vec4 pj, vec4 vj, vec3 nrm, float live, const bool boundary) {
 void range(uint base, uint first, uint end, uint own, const bool boundary) {
   for (uint k = first & ~3u; k < end; k += 4u) {
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
-    const uvec4 at = uvec4(k) + uvec4(0u, 1u, 2u, 3u);
-    const bvec4 valid = bvec4(uvec4(greaterThanEqual(at, uvec4(first))) & uvec4(lessThan(at, uvec4(end))));
-    const ivec4 j = ivec4(mix(uvec4(own), e & HEMO_CLUSTER_SLOT_MASK, valid));
-    const vec4 live = vec4(valid);
+    vec4 live;
+    const ivec4 j = hemo_cluster_slots(e, k, first, end, own, live);
     // (x_j, V_j p_j) and (v_j, +-V_j)
     const vec4 p0 = texelFetch(pairPosition, j.x), p1 = texelFetch(pairPosition, j.y);
     const vec4 p2 = texelFetch(pairPosition, j.z), p3 = texelFetch(pairPosition, j.w);
