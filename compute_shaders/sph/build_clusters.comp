@@ -90,11 +90,18 @@ uint candidate(uint j, vec3 xj, uint members, uint mark, HemoPairParams pp, floa
 // The kept entries go to the list a texel at a time. A store is a loop over the SIMD lanes in
 // llvmpipe, as costly as the rest of a candidate's work; one per candidate (a store of every
 // entry, kept or not, to the next free place) took about a third of the build. Each section
-// holds its entries not yet stored (fewer than four); four candidates' kept
-// entries are appended to it in order, and a texel that fills is stored. `count` is the
-// section's entries so far (gNf or gNb), `pending` its entries not yet stored in slots [0, count & 3).
+// holds its entries not yet stored (fewer than four); four candidates' kept entries are
+// appended to them in order, and a texel that fills is stored. `count` is the section's
+// entries so far (gNf or gNb), `pending` its entries not yet stored, in slots [0, count & 3).
 // Returns the full texel's entries in its slots [0, 4) when one filled (`full`), and leaves
 // the rest in `pending`.
+// The texel (of the cluster's, from its first) that holds a section's entry `count`: the
+// front fills texels from the list's start, the back from its end down (entry capacity - 1 - k
+// holds its k-th entry). Past the capacity the cluster has overflowed (the run stops) and any
+// texel of its own will do.
+uint frontTexel(uint count, uint lastTexel) { return min(count >> 2u, lastTexel); }
+uint backTexel(uint count, uint lastTexel) { return lastTexel - min(count >> 2u, lastTexel); }
+
 uvec4 append(inout uvec4 pending, inout uint count, uvec4 e, uvec4 section, uint which, out bool full) {
   uvec4 lo = pending;
   uvec3 hi = uvec3(0u);
@@ -164,11 +171,8 @@ void group(uint cluster, uint g0, uint g1, HemoPairParams pp, float list2) {
     e.z = candidate(j + 2u, x2, count > 2u ? members : 0u, mark, pp, list2, section.z);
     e.w = candidate(j + 3u, x3, count > 3u ? members : 0u, mark, pp, list2, section.w);
     j += count;
-    // The front fills texels from the list's start, the back from its end down (entry
-    // capacity - 1 - k holds its k-th entry). Past the capacity the cluster has overflowed
-    // (the run stops) and any texel of its own will do.
-    const uint texelF = min(gNf >> 2u, lastTexel);
-    const uint texelB = lastTexel - min(gNb >> 2u, lastTexel);
+    const uint texelF = frontTexel(gNf, lastTexel);
+    const uint texelB = backTexel(gNb, lastTexel);
     bool fullF, fullB;
     const uvec4 front = append(gPendingF, gNf, e, section, 1u, fullF);
     const uvec4 back = append(gPendingB, gNb, e, section, 2u, fullB);
@@ -240,10 +244,10 @@ void main() {
   const uint base = cluster * (pc.capacity >> 2u);
   const uint lastTexel = (pc.capacity >> 2u) - 1u;
   if ((gNf & 3u) != 0u) {
-    clusterList[base + min(gNf >> 2u, lastTexel)] = gPendingF;
+    clusterList[base + frontTexel(gNf, lastTexel)] = gPendingF;
   }
   if ((gNb & 3u) != 0u) {
-    clusterList[base + lastTexel - min(gNb >> 2u, lastTexel)] = gPendingB.wzyx;
+    clusterList[base + backTexel(gNb, lastTexel)] = gPendingB.wzyx;
   }
   // The sections' texels must not meet.
   const uint used = ((gNf + 3u) & ~3u) + ((gNb + 3u) & ~3u);

@@ -85,7 +85,6 @@ std::uint64_t clustersFor(const ParticleStore& particles) {
   return std::uint64_t(std::max(particles.capacity(), 1u)) / HEMO_CLUSTER_SIZE + 2;
 }
 std::uint32_t clusterEntries(std::uint32_t neighbourCapacity) {
-  static_assert(HEMO_CLUSTER_SIZE % 4 == 0, "a cluster's own entries fill whole texels");
   return (HEMO_CLUSTER_SIZE * (neighbourCapacity + 1) + 6 + 3) & ~3u;
 }
 // Whether the fluid walks clusters (ListLayout): on CPU devices, where a fetch costs per lane,
