@@ -5,13 +5,16 @@
 //   p_i   = B ((rho_i / rho0)^7 - 1) + p_bg   (common/tait.glsl)
 // and the pair data of interface/sph.h: pair position (x, V p) and viscous velocity (v, V).
 // Every member counts every entry: the build lists each neighbour of a member once, and W is 0
-// from the support on, so the entry's mask is not needed.
+// from the support on, so the entry's mask is not needed. A compact cluster walks its front
+// section taking each entry's periodic image once (common/cluster_frame.glsl); the back
+// section, and a wide cluster's front, take the minimum image per member and entry.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "common/index.glsl"
 #include "common/kernel.glsl"
 #include "common/cluster_texel.glsl"
 #include "common/sph_params.glsl"
+#include "common/cluster_frame.glsl"
 #include "common/clock.glsl"
 #include "common/tait.glsl"
 
@@ -32,7 +35,8 @@ layout(push_constant) uniform Push {
 
 const uint M = HEMO_CLUSTER_SIZE;
 
-vec3 gX[M];
+vec3 gX[M];  // in the cluster's frame (common/cluster_frame.glsl)
+vec3 gCentre;
 float gRho[M];
 HemoPairParams gPp;
 float gHalfInvH;
@@ -40,19 +44,25 @@ float gHalfInvH;
 // One entry whose data is fetched; `live` is 0 for the padding of a texel (whose fetch read a
 // member's data instead), 1 otherwise. Every member counts every entry: the list names each
 // neighbour once (the build's masks are not needed here), and W is 0 from the support on.
-void pair(vec4 pj, float live) {
+// `frame`: the entry's image nearest the centre serves every member (a compact cluster), or
+// each member takes the minimum image.
+void pair(vec4 pj, float live, const bool frame) {
+  const vec3 xj = frame ? hemo_image_near(pj.xyz, gCentre, gPp) : pj.xyz;
   for (uint m = 0u; m < M; ++m) {
-    const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
+    const vec3 d = frame ? gX[m] - xj : hemo_min_image(gX[m] - xj, gPp);
     const float w = hemo_kernel_w_shape_live(sqrt(dot(d, d)), gHalfInvH, live);  // the norm applied to the sum
     gRho[m] += pj.w * w;
   }
 }
 
-// Entries [first, end) of the cluster's list: a texel's four entries fetched together, so that
-// the fetches (calls in llvmpipe, which spill the live registers) come in one run. The padding
-// of a texel fetches slot `own` (a member: finite data) and counts for nothing.
-void range(uint base, uint first, uint end, uint own) {
-  for (uint k = first & ~3u; k < end; k += 4u) {
+// Texels [0, texels) of a walk of the cluster's list (common/cluster_texel.glsl): a texel's
+// four entries fetched together, so that the fetches (calls in llvmpipe, which spill the live
+// registers) come in one run. The padding of a texel fetches slot `own` (a member: finite
+// data) and counts for nothing.
+void walk(uint base, HemoClusterWalk w, uint own, const bool frame) {
+  for (uint t = 0u; t < w.texels; ++t) {
+    uint k, first, end;
+    hemo_cluster_walk_texel(w, t, k, first, end);
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
     vec4 live;
     const ivec4 j = hemo_cluster_slots(e, k, first, end, own, live);
@@ -60,10 +70,10 @@ void range(uint base, uint first, uint end, uint own) {
     const vec4 p1 = texelFetch(positions, j.y);
     const vec4 p2 = texelFetch(positions, j.z);
     const vec4 p3 = texelFetch(positions, j.w);
-    pair(p0, live.x);
-    pair(p1, live.y);
-    pair(p2, live.z);
-    pair(p3, live.w);
+    pair(p0, live.x, frame);
+    pair(p1, live.y, frame);
+    pair(p2, live.z, frame);
+    pair(p3, live.w, frame);
   }
 }
 
@@ -80,10 +90,12 @@ void main() {
     gX[m] = texelFetch(positions, int(first + min(m, count - 1u))).xyz;
     gRho[m] = 0.0;
   }
+  const bool compact = hemo_cluster_frame(gX, gPp, gCentre);
   const uint counts = texelFetch(clusterCount, int(cluster)).x;
   const uint base = cluster * pc.capacity;
-  range(base, 0u, counts & 0xffffu, first);
-  range(base, pc.capacity - (counts >> 16u), pc.capacity, first);
+  // a compact cluster's front in its frame; the back (and a wide cluster's front) per member
+  walk(base, hemo_cluster_front(counts, compact), first, true);
+  walk(base, hemo_cluster_rest(counts, compact, pc.capacity), first, false);
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   for (uint m = 0u; m < M; ++m) {
     if (m < count) {

@@ -8,7 +8,10 @@
 // beyond the support the kernel terms vanish and the repulsion's reach is shorter still. The
 // repulsion runs over the list's back section only, which holds every boundary neighbour that
 // may come within its reach before the next build; the front's boundary entries get the
-// pressure and viscous terms alone, the same as in the back. No SPS term: scenes with it use
+// pressure and viscous terms alone, the same as in the back. A compact cluster walks its front
+// taking each entry's periodic image once (common/cluster_frame.glsl); a wide one walks its
+// front with the back, with the minimum image per member and entry and the repulsion (which
+// the front's entries, all beyond its reach, leave unchanged). No SPS term: scenes with it use
 // the per-particle lists.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
@@ -19,6 +22,7 @@
 #include "common/kernel.glsl"
 #include "common/cluster_texel.glsl"
 #include "common/sph_params.glsl"
+#include "common/cluster_frame.glsl"
 #include "common/repulsion.glsl"
 
 layout(binding = HEMO_CFORCES_BINDING_POSITIONS) uniform samplerBuffer positions;
@@ -47,7 +51,8 @@ layout(push_constant) uniform Push {
 const uint M = HEMO_CLUSTER_SIZE;
 const float kNoLimit = 3.0e38;
 
-vec3 gX[M], gV[M];
+vec3 gX[M], gV[M];  // gX in the cluster's frame (common/cluster_frame.glsl)
+vec3 gCentre;
 float gP[M];
 // sum V_j [ -(p_i + p_j) gradW + 2 mu (x_ij . gradW) / (r^2 + eta^2) v_ij ] / gradNorm: one
 // sum for both terms, as the registers of eight members are scarce
@@ -57,15 +62,17 @@ HemoPairParams gPp;
 float gHalfInvH, gGradNorm, gEtaSq, gTwoMu;
 HemoRepulsionParams gRp;
 
-// One entry (the front section, or the back with the repulsion: a constant at each call);
-// `live` is 0 for the padding of a texel (whose fetches read a member's data instead), 1
-// otherwise. Every member takes every entry: the list names each neighbour of a member once,
-// the kernel terms are 0 from the support on and the repulsion's reach is shorter still.
-void pair(vec4 pj, vec4 vj, vec3 nrm, float live, const bool boundary) {
+// One entry (the front section in the cluster's frame, or with the repulsion and the minimum
+// image per member: constants at each call); `live` is 0 for the padding of a texel (whose
+// fetches read a member's data instead), 1 otherwise. Every member takes every entry: the list
+// names each neighbour of a member once, the kernel terms are 0 from the support on and the
+// repulsion's reach is shorter still.
+void pair(vec4 pj, vec4 vj, vec3 nrm, float live, const bool boundary, const bool frame) {
   const float volumeJ = abs(vj.w);
   const float viscJ = gTwoMu * volumeJ;
+  const vec3 xj = frame ? hemo_image_near(pj.xyz, gCentre, gPp) : pj.xyz;
   for (uint m = 0u; m < M; ++m) {
-    const vec3 d = hemo_min_image(gX[m] - pj.xyz, gPp);
+    const vec3 d = frame ? gX[m] - xj : hemo_min_image(gX[m] - xj, gPp);
     const float r2 = dot(d, d);
     // grad W = F d, so x_ij . grad W = F r^2: both terms carry F (over gradNorm: the sum's
     // factor, applied once at the end)
@@ -83,11 +90,14 @@ void pair(vec4 pj, vec4 vj, vec3 nrm, float live, const bool boundary) {
   }
 }
 
-// Entries [first, end) of the cluster's list: a texel's four entries fetched together, so that
-// the fetches (calls in llvmpipe, which spill the live registers) come in one run. The padding
-// of a texel fetches slot `own` (a member: finite data) and counts for nothing.
-void range(uint base, uint first, uint end, uint own, const bool boundary) {
-  for (uint k = first & ~3u; k < end; k += 4u) {
+// Texels [0, texels) of a walk of the cluster's list (common/cluster_texel.glsl): a texel's
+// four entries fetched together, so that the fetches (calls in llvmpipe, which spill the live
+// registers) come in one run. The padding of a texel fetches slot `own` (a member: finite
+// data) and counts for nothing.
+void walk(uint base, HemoClusterWalk w, uint own, const bool boundary, const bool frame) {
+  for (uint t = 0u; t < w.texels; ++t) {
+    uint k, first, end;
+    hemo_cluster_walk_texel(w, t, k, first, end);
     const uvec4 e = texelFetch(clusterList, int((base + k) >> 2u));
     vec4 live;
     const ivec4 j = hemo_cluster_slots(e, k, first, end, own, live);
@@ -103,10 +113,10 @@ void range(uint base, uint first, uint end, uint own, const bool boundary) {
       n2 = texelFetch(normals, j.z).xyz;
       n3 = texelFetch(normals, j.w).xyz;
     }
-    pair(p0, v0, n0, live.x, boundary);
-    pair(p1, v1, n1, live.y, boundary);
-    pair(p2, v2, n2, live.z, boundary);
-    pair(p3, v3, n3, live.w, boundary);
+    pair(p0, v0, n0, live.x, boundary, frame);
+    pair(p1, v1, n1, live.y, boundary, frame);
+    pair(p2, v2, n2, live.z, boundary, frame);
+    pair(p3, v3, n3, live.w, boundary, frame);
   }
 }
 
@@ -149,10 +159,12 @@ void main() {
       gSum[m] = vec3(0.0);
       gRepulsion[m] = vec4(0.0);
     }
+    const bool compact = hemo_cluster_frame(gX, gPp, gCentre);
     const uint counts = texelFetch(clusterCount, int(cluster)).x;
     const uint base = cluster * pc.capacity;
-    range(base, 0u, counts & 0xffffu, first, false);
-    range(base, pc.capacity - (counts >> 16u), pc.capacity, first, true);
+    // a compact cluster's front in its frame; the back (and a wide cluster's front) per member
+    walk(base, hemo_cluster_front(counts, compact), first, false, true);
+    walk(base, hemo_cluster_rest(counts, compact, pc.capacity), first, true, false);
     const float h = gPp.h;
     for (uint m = 0u; m < M; ++m) {
       if (m < count) {

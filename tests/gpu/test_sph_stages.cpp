@@ -343,7 +343,23 @@ TEST_F(SphStageTest, PeriodicAxesMatchReferenceAcrossTheSeams) {
                (layout == sim::ListLayout::Clusters ? "clusters" : "contiguous lists"));
   s.listLayout = layout;
   const int nx = 9;
-  const Case c = makeCase(rng, s, nx, ny, 6, 0.3f, true);
+  Case c = makeCase(rng, s, nx, ny, 6, 0.3f, true);
+  // A spray of 80 particles over the block (0.03 of its density): clusters of consecutive slots
+  // there span rows of cells far apart, and the cluster passes take those images per member.
+  std::uniform_real_distribution<float> sx(0.0f, float(nx) * s.spacing), sy(0.0f, float(ny) * s.spacing),
+      sz(7.0f * s.spacing, 14.0f * s.spacing);
+  std::normal_distribution<float> sprayV(0.0f, 0.3f);
+  for (int k = 0; k < 80; ++k) {
+    c.pos.emplace_back(sx(rng), sy(rng), sz(rng), s.particleMass());
+    c.vel.emplace_back(sprayV(rng), sprayV(rng), sprayV(rng), float(sim::ParticleKind::Fluid));
+    c.normals.emplace_back(0.0f);
+    reference::SphParticle p;
+    p.x = glm::dvec3(c.pos.back());
+    p.v = glm::dvec3(c.vel.back());
+    p.mass = c.pos.back().w;
+    p.kind = 0;
+    c.ref.push_back(p);
+  }
   const auto n = static_cast<std::uint32_t>(c.pos.size());
   const glm::vec3 lo(0.0f, 0.0f, -0.05f), hi(float(nx) * s.spacing, float(ny) * s.spacing, 0.15f);
   const Stages st = runStages(c, s, hi, lo);
@@ -363,6 +379,28 @@ TEST_F(SphStageTest, PeriodicAxesMatchReferenceAcrossTheSeams) {
   EXPECT_GT(seamPairs, 1000u);
 
   const auto slotIds = st.store->readIds();
+  if (layout == sim::ListLayout::Clusters) {
+    // The cluster passes take a compact cluster's images once per entry and a wide one's per
+    // member and entry (common/cluster_frame.glsl): the case must have both kinds.
+    std::uint32_t fluid = 0;
+    while (fluid < n && c.ref[slotIds[fluid]].kind == 0) ++fluid;
+    int compact = 0, wide = 0;
+    for (std::uint32_t first = 0; first < fluid; first += HEMO_CLUSTER_SIZE) {
+      const glm::dvec3 x0 = c.ref[slotIds[first]].x;
+      glm::dvec3 boxLo = x0, boxHi = x0;
+      for (std::uint32_t slot = first + 1; slot < std::min(first + HEMO_CLUSTER_SIZE, fluid); ++slot) {
+        const glm::dvec3 u = x0 + reference::separation(model, c.ref[slotIds[slot]].x, x0);
+        boxLo = glm::min(boxLo, u);
+        boxHi = glm::max(boxHi, u);
+      }
+      const glm::dvec3 extent = boxHi - boxLo;
+      const bool isCompact = extent.x < model.period.x - 4.0 * model.h && extent.y < model.period.y - 4.0 * model.h;
+      ++(isCompact ? compact : wide);
+    }
+    EXPECT_GT(compact, 50);
+    EXPECT_GT(wide, 5);
+    std::printf("  clusters: %d compact, %d wide\n", compact, wide);
+  }
   const auto state = st.solver->state().readback<glm::vec4>(n);
   const auto accel = st.solver->accel().readback<glm::vec4>(n);
   const auto rp = reference::densityPressure(c.ref, model);
