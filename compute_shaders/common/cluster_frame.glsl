@@ -34,12 +34,13 @@ bool hemo_cluster_frame(inout vec3 x[HEMO_CLUSTER_SIZE], HemoPairParams pp, out 
     hi = max(hi, x[m]);
   }
   centre = 0.5 * (lo + hi);
-  const vec3 extent = hi - lo;
-  const vec3 bound = 0.9999 * pp.period - 4.0 * pp.h;
+  // (an axis of period 0 is bounded: nothing moves there, whatever kPeriodicAxes says)
+  const bvec3 within = bvec3(uvec3(lessThan(hi - lo, 0.9999 * pp.period - 4.0 * pp.h)) |
+                             uvec3(equal(pp.period, vec3(0.0))));
   bool compact = true;
-  if ((kPeriodicAxes & 1u) != 0u) compact = compact && extent.x < bound.x;
-  if ((kPeriodicAxes & 2u) != 0u) compact = compact && extent.y < bound.y;
-  if ((kPeriodicAxes & 4u) != 0u) compact = compact && extent.z < bound.z;
+  if ((kPeriodicAxes & 1u) != 0u) compact = compact && within.x;
+  if ((kPeriodicAxes & 2u) != 0u) compact = compact && within.y;
+  if ((kPeriodicAxes & 4u) != 0u) compact = compact && within.z;
   // min/max drop a NaN; a member's NaN makes the cluster wide
   for (uint m = 0u; m < HEMO_CLUSTER_SIZE; ++m) {
     compact = compact && !any(isnan(x[m])) && !any(isinf(x[m]));
