@@ -14,7 +14,8 @@
 // the minimum image per member and entry, as before. On bounded axes nothing moves: a scene
 // without periodic axes gets exactly its positions and every cluster is compact.
 
-// p moved by whole periods to the image nearest c (unchanged on bounded axes).
+// p moved by whole periods to the image nearest c (unchanged on bounded axes; written out
+// rather than as c - hemo_min_image(c - p), which would round p on every axis).
 vec3 hemo_image_near(vec3 p, vec3 c, HemoPairParams pp) {
   vec3 r = p;
   if ((kPeriodicAxes & 1u) != 0u) r.x = p.x + pp.period.x * round((c.x - p.x) * pp.invPeriod.x);
