@@ -87,6 +87,13 @@ uint candidate(uint j, vec3 xj, uint members, uint mark, HemoPairParams pp, floa
   return j | mask << HEMO_CLUSTER_MEMBER_SHIFT | mark;
 }
 
+// The texel (of the cluster's, from its first) that holds a section's entry `count`: the
+// front fills texels from the list's start, the back from its end down (entry capacity - 1 - k
+// holds its k-th entry). Past the capacity the cluster has overflowed (the run stops) and any
+// texel of its own will do.
+uint frontTexel(uint count, uint lastTexel) { return min(count >> 2u, lastTexel); }
+uint backTexel(uint count, uint lastTexel) { return lastTexel - min(count >> 2u, lastTexel); }
+
 // The kept entries go to the list a texel at a time. A store is a loop over the SIMD lanes in
 // llvmpipe, as costly as the rest of a candidate's work; one per candidate (a store of every
 // entry, kept or not, to the next free place) took about a third of the build. Each section
@@ -95,13 +102,6 @@ uint candidate(uint j, vec3 xj, uint members, uint mark, HemoPairParams pp, floa
 // entries so far (gNf or gNb), `pending` its entries not yet stored, in slots [0, count & 3).
 // Returns the full texel's entries in its slots [0, 4) when one filled (`full`), and leaves
 // the rest in `pending`.
-// The texel (of the cluster's, from its first) that holds a section's entry `count`: the
-// front fills texels from the list's start, the back from its end down (entry capacity - 1 - k
-// holds its k-th entry). Past the capacity the cluster has overflowed (the run stops) and any
-// texel of its own will do.
-uint frontTexel(uint count, uint lastTexel) { return min(count >> 2u, lastTexel); }
-uint backTexel(uint count, uint lastTexel) { return lastTexel - min(count >> 2u, lastTexel); }
-
 uvec4 append(inout uvec4 pending, inout uint count, uvec4 e, uvec4 section, uint which, out bool full) {
   uvec4 lo = pending;
   uvec3 hi = uvec3(0u);
