@@ -123,6 +123,20 @@
 #define HEMO_CBUILD_BINDING_ACTIVE_ARGS 6
 #define HEMO_CBUILD_BINDING_COUNT 7
 
+// sph/cluster_order.comp: the order in which the cluster pair passes walk the fluid's clusters.
+// A SIMD group runs a pair loop as long as its longest lane, and neighbouring clusters' lists
+// differ in length (the free surface, the walls), so in grid order a group ran 12-16% more
+// texel iterations than its lanes needed (the dam break). Each window of
+// HEMO_CLUSTER_ORDER_WINDOW consecutive clusters (the last may hold fewer) is sorted by its
+// clusters' front texels, then back texels, then cluster number (a stable sort, so the order
+// follows from the counts alone): invocation g of a pair pass walks cluster order[g], which
+// lies in g's own window, so the groups stay within a small region of the grid. The results
+// are the same bit for bit: each cluster's sums do not depend on which invocation makes them.
+#define HEMO_CLUSTER_ORDER_WINDOW 64u
+#define HEMO_CORDER_BINDING_CCOUNT 0  // the build's counts (front | back << 16)
+#define HEMO_CORDER_BINDING_ORDER 1   // uint per fluid cluster
+#define HEMO_CORDER_BINDING_COUNT 2
+
 // sph/density_clusters.comp: sph/density.comp over the clusters' lists (summation density).
 #define HEMO_CDENSITY_BINDING_POSITIONS 0
 #define HEMO_CDENSITY_BINDING_VELOCITIES 1
@@ -133,7 +147,8 @@
 #define HEMO_CDENSITY_BINDING_CLOCK 6
 #define HEMO_CDENSITY_BINDING_VISCOUS_VEL 7
 #define HEMO_CDENSITY_BINDING_PAIR_POSITION 8
-#define HEMO_CDENSITY_BINDING_COUNT 9
+#define HEMO_CDENSITY_BINDING_ORDER 9  // sph/cluster_order.comp's walk order
+#define HEMO_CDENSITY_BINDING_COUNT 10
 
 // sph/forces_clusters.comp: sph/forces.comp over the clusters' lists (no SPS term).
 #define HEMO_CFORCES_BINDING_POSITIONS 0
@@ -151,7 +166,8 @@
 #define HEMO_CFORCES_BINDING_PAIR_POSITION 12
 #define HEMO_CFORCES_BINDING_DT_PARTIALS 13
 #define HEMO_CFORCES_BINDING_DT_COUNTS 14
-#define HEMO_CFORCES_BINDING_COUNT 15
+#define HEMO_CFORCES_BINDING_ORDER 15  // sph/cluster_order.comp's walk order
+#define HEMO_CFORCES_BINDING_COUNT 16
 
 // sph/density.comp: summation density and Tait pressure of fluid particles from the list.
 #define HEMO_DENSITY_BINDING_POSITIONS 0

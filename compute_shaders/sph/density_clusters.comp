@@ -27,6 +27,7 @@ layout(binding = HEMO_CDENSITY_BINDING_CLIST) uniform usamplerBuffer clusterList
 layout(std140, binding = HEMO_CDENSITY_BINDING_CLOCK) uniform Clock { ClockRecord clocks[2]; };
 layout(std430, binding = HEMO_CDENSITY_BINDING_VISCOUS_VEL) writeonly buffer ViscousVel { vec4 viscousVel[]; };
 layout(std430, binding = HEMO_CDENSITY_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
+layout(binding = HEMO_CDENSITY_BINDING_ORDER) uniform usamplerBuffer clusterOrder;
 layout(push_constant) uniform Push {
   uint fluid;     // fluid slots: [0, fluid)
   uint capacity;  // entries per cluster (a multiple of 4)
@@ -78,11 +79,13 @@ void walk(uint base, HemoClusterWalk w, uint own, const bool frame) {
 }
 
 void main() {
-  const uint cluster = hemo_global_index();
-  const uint first = cluster * M;
-  if (first >= pc.fluid) {
+  // (in the walk order of sph/cluster_order.comp: lanes with lists of about the same length)
+  const uint g = hemo_global_index();
+  if (g * M >= pc.fluid) {
     return;
   }
+  const uint cluster = texelFetch(clusterOrder, int(g)).x;
+  const uint first = cluster * M;
   const uint count = min(M, pc.fluid - first);
   gPp = hemo_pair_params();
   gHalfInvH = 0.5 / gPp.h;

@@ -40,6 +40,7 @@ layout(binding = HEMO_CFORCES_BINDING_VISCOUS_VEL) uniform samplerBuffer viscous
 layout(binding = HEMO_CFORCES_BINDING_PAIR_POSITION) uniform samplerBuffer pairPosition;
 layout(std430, binding = HEMO_CFORCES_BINDING_DT_PARTIALS) writeonly buffer DtPartials { vec2 dtPartials[]; };
 layout(std430, binding = HEMO_CFORCES_BINDING_DT_COUNTS) writeonly buffer DtCounts { uint dtCounts[2]; };
+layout(binding = HEMO_CFORCES_BINDING_ORDER) uniform usamplerBuffer clusterOrder;
 layout(push_constant) uniform Push {
   uint fluid;     // fluid slots: [0, fluid)
   uint capacity;  // entries per cluster (a multiple of 4)
@@ -122,8 +123,11 @@ void walk(uint base, HemoClusterWalk w, uint own, const bool boundary, const boo
 
 void main() {
   // Invocations past the clusters: one per slot of [fluid, n), no acceleration and no limit.
-  const uint cluster = hemo_global_index();
+  // (clusters in the walk order of sph/cluster_order.comp: lanes with lists of about the same
+  // length)
+  const uint g = hemo_global_index();
   const uint clusters = (pc.fluid + M - 1u) / M;
+  const uint cluster = g < clusters ? texelFetch(clusterOrder, int(g)).x : g;
   const uint first = cluster * M;
   const float inf = uintBitsToFloat(0x7f800000u);
   vec2 limits = vec2(inf, -inf);

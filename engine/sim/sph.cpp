@@ -314,6 +314,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
               gpu::MemoryUse::Device, "cluster list counts"),
       clist_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 * clusterCapacity_ : 16,
              gpu::MemoryUse::Device, "cluster lists"),
+      corder_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 : 16,
+              gpu::MemoryUse::Device, "cluster walk order"),
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
       activeArgs_(context, 16, gpu::MemoryUse::Device, "boundary-pressure indirect arguments"),
@@ -436,16 +438,20 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   buildClusters_ = &cache.get({"sph/build_clusters", HEMO_CBUILD_BINDING_COUNT, sizeof(ClusterBuildPush), kWorkgroup,
                                pairSpecialization({}), 1u << HEMO_CBUILD_BINDING_PARAMS,
                                1u << HEMO_CBUILD_BINDING_POSITIONS | 1u << HEMO_CBUILD_BINDING_CELL_START});
+  clusterOrder_ = &cache.get({"sph/cluster_order", HEMO_CORDER_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 0u,
+                              1u << HEMO_CORDER_BINDING_CCOUNT});
   densityClusters_ = &cache.get({"sph/density_clusters", HEMO_CDENSITY_BINDING_COUNT, sizeof(ClusterPush), kWorkgroup,
                                  pairSpecialization({}), 1u << HEMO_CDENSITY_BINDING_PARAMS | 1u << HEMO_CDENSITY_BINDING_CLOCK,
                                  1u << HEMO_CDENSITY_BINDING_POSITIONS | 1u << HEMO_CDENSITY_BINDING_VELOCITIES |
-                                     1u << HEMO_CDENSITY_BINDING_CCOUNT | 1u << HEMO_CDENSITY_BINDING_CLIST});
+                                     1u << HEMO_CDENSITY_BINDING_CCOUNT | 1u << HEMO_CDENSITY_BINDING_CLIST |
+                                     1u << HEMO_CDENSITY_BINDING_ORDER});
   forcesClusters_ = &cache.get({"sph/forces_clusters", HEMO_CFORCES_BINDING_COUNT, sizeof(ClusterPush), kWorkgroup,
                                 pairSpecialization({}), 1u << HEMO_CFORCES_BINDING_PARAMS,
                                 1u << HEMO_CFORCES_BINDING_POSITIONS | 1u << HEMO_CFORCES_BINDING_VELOCITIES |
                                     1u << HEMO_CFORCES_BINDING_NORMALS | 1u << HEMO_CFORCES_BINDING_STATE |
                                     1u << HEMO_CFORCES_BINDING_CCOUNT | 1u << HEMO_CFORCES_BINDING_CLIST |
-                                    1u << HEMO_CFORCES_BINDING_VISCOUS_VEL | 1u << HEMO_CFORCES_BINDING_PAIR_POSITION});
+                                    1u << HEMO_CFORCES_BINDING_VISCOUS_VEL | 1u << HEMO_CFORCES_BINDING_PAIR_POSITION |
+                                    1u << HEMO_CFORCES_BINDING_ORDER});
   forcesClustersSet_ = forcesClusters_->makeSet({gpu::texelBinding(HEMO_CFORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_CFORCES_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_CFORCES_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
@@ -460,7 +466,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  {HEMO_CFORCES_BINDING_IDS, &a.ids},
                                  {HEMO_CFORCES_BINDING_STATUS, &status_},
                                  gpu::texelBinding(HEMO_CFORCES_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_CFORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)});
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4),
+                                 gpu::texelBinding(HEMO_CFORCES_BINDING_ORDER, &corder_, gpu::texel::kUint)});
   buildClustersSet_ = buildClusters_->makeSet({gpu::texelBinding(HEMO_CBUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
                                                gpu::texelBinding(HEMO_CBUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
                                                {HEMO_CBUILD_BINDING_PARAMS, &paramsBuffer_},
@@ -476,7 +483,10 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    gpu::texelBinding(HEMO_CDENSITY_BINDING_CLIST, &clist_, gpu::texel::kUvec4),
                                    {HEMO_CDENSITY_BINDING_CLOCK, &clock_},
                                    {HEMO_CDENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
-                                   {HEMO_CDENSITY_BINDING_PAIR_POSITION, &pairPosition_}});
+                                   {HEMO_CDENSITY_BINDING_PAIR_POSITION, &pairPosition_},
+                                   gpu::texelBinding(HEMO_CDENSITY_BINDING_ORDER, &corder_, gpu::texel::kUint)});
+  clusterOrderSet_ = clusterOrder_->makeSet({gpu::texelBinding(HEMO_CORDER_BINDING_CCOUNT, &ccount_, gpu::texel::kUint),
+                                             {HEMO_CORDER_BINDING_ORDER, &corder_}});
   densitySet_ = density_->makeSet({gpu::texelBinding(HEMO_DENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                    gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                    {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
@@ -679,6 +689,9 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
       rec.dispatch(*buildClusters_, buildClustersSet_, ClusterBuildPush{grid_.push(n), fluid, n, clusterCapacity_, clusters, 1u},
                    buildClusters_->groupsFor(boundaryClusterCount()));
     }
+    rec.computeToCompute();
+    // the pair passes' walk order, from the fluid clusters' counts
+    rec.dispatch(*clusterOrder_, clusterOrderSet_, CountPush{clusters}, clusterOrder_->groupsFor(std::max(clusters, 1u)));
     rec.computeToCompute();
     if (timestamps) timestamps->mark(rec, "cluster list");
   }

@@ -8,6 +8,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <numeric>
 #include <map>
 #include <cmath>
 #include <cstdio>
@@ -1170,6 +1171,7 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
   std::size_t spanning = 0;  // clusters whose members sit in more than one row of cells
   std::size_t boundaryPairs = 0;
   std::size_t farBoundary = 0, nearBoundary = 0;  // fluid clusters' boundary entries by section
+  std::size_t windows = 0, partialWindows = 0, moved = 0;  // the walk order's windows; clusters not in place
   for (Setup& setup : setups) {
     SCOPED_TRACE(setup.name);
     setup.s.listLayout = sim::ListLayout::Clusters;
@@ -1201,6 +1203,25 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     };
     const auto counts = solver.clusterCounts().readback<std::uint32_t>(all);
     const auto list = solver.clusterLists().readback<std::uint32_t>(std::size_t(all) * cap);
+    // The pair passes' walk order (sph/cluster_order.comp): each window of
+    // HEMO_CLUSTER_ORDER_WINDOW fluid clusters (the last one shorter), sorted stably by the
+    // sections' texels, front first.
+    const auto order = solver.clusterOrder().readback<std::uint32_t>(clusters);
+    for (std::uint32_t w = 0; w < clusters; w += HEMO_CLUSTER_ORDER_WINDOW) {
+      const std::uint32_t end = std::min(clusters, w + HEMO_CLUSTER_ORDER_WINDOW);
+      std::vector<std::uint32_t> expect(end - w);
+      std::iota(expect.begin(), expect.end(), w);
+      auto key = [&](std::uint32_t c) {
+        return std::pair(((counts[c] & 0xffffu) + 3u) / 4u, ((counts[c] >> 16u) + 3u) / 4u);
+      };
+      std::stable_sort(expect.begin(), expect.end(), [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
+      for (std::uint32_t g = w; g < end; ++g) {
+        EXPECT_EQ(order[g], expect[g - w]) << "walk order, invocation " << g;
+        moved += order[g] != g;
+      }
+      windows += 1;
+      partialWindows += end - w < HEMO_CLUSTER_ORDER_WINDOW;
+    }
     const auto status = solver.readStatus();
     EXPECT_EQ(status.neighbourOverflow, 0u);
     for (std::uint32_t slot = 0; slot < n; ++slot) {
@@ -1293,6 +1314,9 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
   EXPECT_GT(boundaryPairs, 1000u) << "the boundary clusters' lists were tested";
   EXPECT_GT(nearBoundary, 100u) << "boundary entries within the repulsion's reach were tested";
   EXPECT_GT(farBoundary, 100u) << "boundary entries beyond the repulsion's reach were tested";
+  EXPECT_GT(windows, 4u) << "the walk order's windows";
+  EXPECT_GT(partialWindows, 0u) << "a last window shorter than the others";
+  EXPECT_GT(moved, 50u) << "the walk order moved clusters";
 }
 
 }  // namespace

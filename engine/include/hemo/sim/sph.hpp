@@ -228,12 +228,14 @@ class SphSolver {
   // (then numbered after the fluid's, without per-particle lists), the entries per cluster,
   // and the lists as the last build left them: a count per cluster (front | back << 16: the
   // back holds the boundary entries within the repulsion's reach, interface/sph.h) and
-  // clusterCapacity() entries per cluster.
+  // clusterCapacity() entries per cluster; and the fluid clusters' walk order (a uint per
+  // cluster, sph/cluster_order.comp).
   bool usesClusters() const { return clusterPath(); }
   bool usesBoundaryClusters() const { return boundaryClusterPath(); }
   std::uint32_t clusterCapacity() const { return clusterCapacity_; }
   const gpu::Buffer& clusterCounts() const { return ccount_; }
   const gpu::Buffer& clusterLists() const { return clist_; }
+  const gpu::Buffer& clusterOrder() const { return corder_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
   // The last step's rebuild test: vec4 (min, max of the x displacements since the list
   // build, the half-sum of the two largest reaches, the middle of the range a step before), m
@@ -287,12 +289,13 @@ class SphSolver {
   gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, viscousVel_;
   // Clusters (interface/sph.h): their lists' capacity, counts and entries.
   std::uint32_t clusterCapacity_ = 0;
-  gpu::Buffer ccount_, clist_;
+  gpu::Buffer ccount_, clist_, corder_;
   const gpu::ComputePipeline* buildClusters_ = nullptr;
+  const gpu::ComputePipeline* clusterOrder_ = nullptr;
   const gpu::ComputePipeline* densityClusters_ = nullptr;
   const gpu::ComputePipeline* forcesClusters_ = nullptr;
   const gpu::ComputePipeline* boundaryClusters_ = nullptr;
-  gpu::DescriptorSet buildClustersSet_, densityClustersSet_, forcesClustersSet_, boundaryClustersSet_;
+  gpu::DescriptorSet buildClustersSet_, clusterOrderSet_, densityClustersSet_, forcesClustersSet_, boundaryClustersSet_;
   bool clusters_ = false;  // the layout asks for clusters (they run while clusterPath())
   // The fluid passes walk the clusters' lists in this step: the layout asks for them and the
   // slots are in grid order (the fluid's first).
