@@ -132,10 +132,17 @@
 // follows from the counts alone): invocation g of a pair pass walks cluster order[g], which
 // lies in g's own window, so the groups stay within a small region of the grid. The results
 // are the same bit for bit: each cluster's sums do not depend on which invocation makes them.
+// The boundary particles' clusters (sph/boundary_clusters.comp) get the same treatment: the
+// active list as the sorting mode appended it (ITEMS, its length in ACTIVE_ARGS.w) is sorted
+// window by window into the list that the evaluations walk (push constant `list` 1). Its
+// windows hold whichever clusters the appends put there, which varies from run to run, as the
+// active list's order always did; the results do not.
 #define HEMO_CLUSTER_ORDER_WINDOW 64u
 #define HEMO_CORDER_BINDING_CCOUNT 0  // the build's counts (front | back << 16)
-#define HEMO_CORDER_BINDING_ORDER 1   // uint per fluid cluster
-#define HEMO_CORDER_BINDING_COUNT 2
+#define HEMO_CORDER_BINDING_ORDER 1   // uint per cluster: the walk order
+#define HEMO_CORDER_BINDING_ITEMS 2   // list 1: the active list as appended (clusters from `base`)
+#define HEMO_CORDER_BINDING_ACTIVE_ARGS 3  // list 1: uvec4 whose w is the active list's length
+#define HEMO_CORDER_BINDING_COUNT 4
 
 // sph/density_clusters.comp: sph/density.comp over the clusters' lists (summation density).
 #define HEMO_CDENSITY_BINDING_POSITIONS 0
@@ -231,6 +238,8 @@
 // particle without fluid neighbours and lists the others, the active ones; every force
 // evaluation then runs over the active list alone (HEMO_BPRESSURE_ACTIVE), dispatched
 // indirectly with the group count the sorting pass counted.
+// (boundary clusters: in the walk order of sph/cluster_order.comp, sorted from a list appended
+// in no particular order)
 #define HEMO_BPRESSURE_BINDING_ACTIVE 10       // uint per slot: the active slots, in no particular order
 #define HEMO_BPRESSURE_BINDING_ACTIVE_ARGS 11  // uvec4 (workgroups, 1, 1, active count): indirect arguments
 #define HEMO_BPRESSURE_BINDING_COUNT 12

@@ -34,6 +34,9 @@ struct ClusterBuildPush {  // sph/build_clusters.comp
   std::uint32_t base;      // the cluster of slot `first`
   std::uint32_t boundary;  // 1: boundary members
 };
+struct ClusterOrderPush {  // sph/cluster_order.comp
+  std::uint32_t count, list, base;
+};
 struct ClusterPush {  // the cluster pair passes
   std::uint32_t fluid, capacity;
   std::uint32_t third;  // density: the clock record it reads; forces: n (slots past the fluid's to set)
@@ -319,6 +322,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
       activeArgs_(context, 16, gpu::MemoryUse::Device, "boundary-pressure indirect arguments"),
+      activeAppended_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 : 16,
+                      gpu::MemoryUse::Device, "boundary clusters' active list as appended"),
       integrateArgs_(context, 32, gpu::MemoryUse::Device, "integrator indirect arguments"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
@@ -438,8 +443,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   buildClusters_ = &cache.get({"sph/build_clusters", HEMO_CBUILD_BINDING_COUNT, sizeof(ClusterBuildPush), kWorkgroup,
                                pairSpecialization({}), 1u << HEMO_CBUILD_BINDING_PARAMS,
                                1u << HEMO_CBUILD_BINDING_POSITIONS | 1u << HEMO_CBUILD_BINDING_CELL_START});
-  clusterOrder_ = &cache.get({"sph/cluster_order", HEMO_CORDER_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {}, 0u,
-                              1u << HEMO_CORDER_BINDING_CCOUNT});
+  clusterOrder_ = &cache.get({"sph/cluster_order", HEMO_CORDER_BINDING_COUNT, sizeof(ClusterOrderPush), kWorkgroup, {}, 0u,
+                              1u << HEMO_CORDER_BINDING_CCOUNT | 1u << HEMO_CORDER_BINDING_ITEMS});
   densityClusters_ = &cache.get({"sph/density_clusters", HEMO_CDENSITY_BINDING_COUNT, sizeof(ClusterPush), kWorkgroup,
                                  pairSpecialization({}), 1u << HEMO_CDENSITY_BINDING_PARAMS | 1u << HEMO_CDENSITY_BINDING_CLOCK,
                                  1u << HEMO_CDENSITY_BINDING_POSITIONS | 1u << HEMO_CDENSITY_BINDING_VELOCITIES |
@@ -485,8 +490,16 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_CDENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
                                    {HEMO_CDENSITY_BINDING_PAIR_POSITION, &pairPosition_},
                                    gpu::texelBinding(HEMO_CDENSITY_BINDING_ORDER, &corder_, gpu::texel::kUint)});
-  clusterOrderSet_ = clusterOrder_->makeSet({gpu::texelBinding(HEMO_CORDER_BINDING_CCOUNT, &ccount_, gpu::texel::kUint),
-                                             {HEMO_CORDER_BINDING_ORDER, &corder_}});
+  // the fluid clusters' walk order, and the boundary clusters' active list sorted into the one
+  // the evaluations walk
+  auto orderSetFor = [&](const gpu::Buffer* order) {
+    return clusterOrder_->makeSet({gpu::texelBinding(HEMO_CORDER_BINDING_CCOUNT, &ccount_, gpu::texel::kUint),
+                                   {HEMO_CORDER_BINDING_ORDER, order},
+                                   gpu::texelBinding(HEMO_CORDER_BINDING_ITEMS, &activeAppended_, gpu::texel::kUint),
+                                   {HEMO_CORDER_BINDING_ACTIVE_ARGS, &activeArgs_}});
+  };
+  clusterOrderSet_ = orderSetFor(&corder_);
+  boundaryOrderSet_ = orderSetFor(&activeSlots_);
   densitySet_ = density_->makeSet({gpu::texelBinding(HEMO_DENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                    gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                    {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
@@ -501,7 +514,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    {HEMO_DENSITY_BINDING_PAIR_LIST, &pairList_}});
   // The boundary-pressure pass and its cluster form share their bindings but for the lists.
   auto boundarySetFor = [&](const gpu::ComputePipeline& pipeline, const gpu::Buffer* counts, const gpu::Buffer* list,
-                            VkFormat format) {
+                            VkFormat format, const gpu::Buffer* active) {
     return pipeline.makeSet({gpu::texelBinding(HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                              gpu::texelBinding(HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                              gpu::texelBinding(HEMO_BPRESSURE_BINDING_FLUID_STATE, &state_, gpu::texel::kVec4),
@@ -512,11 +525,13 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                              {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
                              {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
                              {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_},
-                             {HEMO_BPRESSURE_BINDING_ACTIVE, &activeSlots_},
+                             {HEMO_BPRESSURE_BINDING_ACTIVE, active},
                              {HEMO_BPRESSURE_BINDING_ACTIVE_ARGS, &activeArgs_}});
   };
-  boundarySet_ = boundarySetFor(*boundaryPressure_, &ncount_, &nlist_, listFormat);
-  boundaryClustersSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4);
+  boundarySet_ = boundarySetFor(*boundaryPressure_, &ncount_, &nlist_, listFormat, &activeSlots_);
+  boundaryClustersSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4, &activeSlots_);
+  // (the sorting mode appends to a list of its own, which sph/cluster_order.comp sorts)
+  boundaryClustersSortSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4, &activeAppended_);
   spsSet_ = spsStress_->makeSet({gpu::texelBinding(HEMO_SPS_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_SPS_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                  {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
@@ -691,7 +706,8 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
     }
     rec.computeToCompute();
     // the pair passes' walk order, from the fluid clusters' counts
-    rec.dispatch(*clusterOrder_, clusterOrderSet_, CountPush{clusters}, clusterOrder_->groupsFor(std::max(clusters, 1u)));
+    rec.dispatch(*clusterOrder_, clusterOrderSet_, ClusterOrderPush{clusters, 0u, 0u},
+                 clusterOrder_->groupsFor(std::max(clusters, 1u)));
     rec.computeToCompute();
     if (timestamps) timestamps->mark(rec, "cluster list");
   }
@@ -706,9 +722,15 @@ void SphSolver::recordBoundaryRange(gpu::CommandRecorder& rec, std::uint32_t mod
   const std::uint32_t n = particles_->count();
   const std::uint32_t first = nonFluidStart();
   if (boundaryClusterPath()) {
-    rec.dispatch(*boundaryClusters_, boundaryClustersSet_,
+    const bool sorting = mode == HEMO_BPRESSURE_SORT;
+    rec.dispatch(*boundaryClusters_, sorting ? boundaryClustersSortSet_ : boundaryClustersSet_,
                  BoundaryClusterPush{{first, n, clockIn, mode}, clusterCapacity_, clusterCount()},
                  boundaryClusters_->groupsFor(boundaryClusterCount()));
+    if (sorting) {  // the active list as appended, in the walk order (sph/cluster_order.comp)
+      rec.computeToCompute();
+      rec.dispatch(*clusterOrder_, boundaryOrderSet_, ClusterOrderPush{boundaryClusterCount(), 1u, clusterCount()},
+                   clusterOrder_->groupsFor(boundaryClusterCount()));
+    }
     return;
   }
   rec.dispatch(*boundaryPressure_, boundarySet_, BoundaryPush{first, n, clockIn, mode},

@@ -1172,6 +1172,7 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
   std::size_t boundaryPairs = 0;
   std::size_t farBoundary = 0, nearBoundary = 0;  // fluid clusters' boundary entries by section
   std::size_t windows = 0, partialWindows = 0, moved = 0;  // the walk order's windows; clusters not in place
+  std::size_t boundaryWindows = 0, movedBoundary = 0;      // the same for the boundary clusters' active list
   for (Setup& setup : setups) {
     SCOPED_TRACE(setup.name);
     setup.s.listLayout = sim::ListLayout::Clusters;
@@ -1221,6 +1222,30 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
       }
       windows += 1;
       partialWindows += end - w < HEMO_CLUSTER_ORDER_WINDOW;
+    }
+    // The boundary clusters' active list: each cluster with a fluid entry once, and each window
+    // of the list as appended sorted stably by its texels.
+    const std::uint32_t active = solver.activeArgs().readback<glm::uvec4>(1)[0].w;
+    const auto appended = solver.activeAppended().readback<std::uint32_t>(std::max(active, 1u));
+    const auto walked = solver.activeList().readback<std::uint32_t>(std::max(active, 1u));
+    std::vector<std::uint32_t> expectActive;
+    for (std::uint32_t c = 0; c < boundaryClusters; ++c) {
+      if ((counts[clusters + c] & 0xffffu) > 0) expectActive.push_back(c);
+    }
+    std::vector<std::uint32_t> gotActive(appended.begin(), appended.begin() + active);
+    std::sort(gotActive.begin(), gotActive.end());
+    EXPECT_EQ(gotActive, expectActive) << "the active list holds each cluster with fluid once";
+    for (std::uint32_t w = 0; w < active; w += HEMO_CLUSTER_ORDER_WINDOW) {
+      const std::uint32_t end = std::min(active, w + HEMO_CLUSTER_ORDER_WINDOW);
+      std::vector<std::uint32_t> expect(appended.begin() + w, appended.begin() + end);
+      std::stable_sort(expect.begin(), expect.end(), [&](std::uint32_t a, std::uint32_t b) {
+        return ((counts[clusters + a] & 0xffffu) + 3u) / 4u < ((counts[clusters + b] & 0xffffu) + 3u) / 4u;
+      });
+      for (std::uint32_t k = w; k < end; ++k) {
+        EXPECT_EQ(walked[k], expect[k - w]) << "boundary walk order, place " << k;
+        movedBoundary += walked[k] != appended[k];
+      }
+      boundaryWindows += 1;
     }
     const auto status = solver.readStatus();
     EXPECT_EQ(status.neighbourOverflow, 0u);
@@ -1317,6 +1342,8 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
   EXPECT_GT(windows, 4u) << "the walk order's windows";
   EXPECT_GT(partialWindows, 0u) << "a last window shorter than the others";
   EXPECT_GT(moved, 50u) << "the walk order moved clusters";
+  EXPECT_GT(boundaryWindows, 2u) << "the boundary walk order's windows";
+  EXPECT_GT(movedBoundary, 20u) << "the boundary walk order moved clusters";
 }
 
 }  // namespace

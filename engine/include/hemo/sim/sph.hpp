@@ -236,6 +236,12 @@ class SphSolver {
   const gpu::Buffer& clusterCounts() const { return ccount_; }
   const gpu::Buffer& clusterLists() const { return clist_; }
   const gpu::Buffer& clusterOrder() const { return corder_; }
+  // The boundary clusters' active list (uint per cluster, numbered from the first boundary
+  // cluster): as the sorting mode appended it, and in the walk order the evaluations take;
+  // its length is the w of the indirect arguments (uvec4).
+  const gpu::Buffer& activeAppended() const { return activeAppended_; }
+  const gpu::Buffer& activeList() const { return activeSlots_; }
+  const gpu::Buffer& activeArgs() const { return activeArgs_; }
   const gpu::Buffer& stepLog() const { return log_; }     // vec2 (t, dt) per batch step
   // The last step's rebuild test: vec4 (min, max of the x displacements since the list
   // build, the half-sum of the two largest reaches, the middle of the range a step before), m
@@ -296,6 +302,7 @@ class SphSolver {
   const gpu::ComputePipeline* forcesClusters_ = nullptr;
   const gpu::ComputePipeline* boundaryClusters_ = nullptr;
   gpu::DescriptorSet buildClustersSet_, clusterOrderSet_, densityClustersSet_, forcesClustersSet_, boundaryClustersSet_;
+  gpu::DescriptorSet boundaryOrderSet_, boundaryClustersSortSet_;
   bool clusters_ = false;  // the layout asks for clusters (they run while clusterPath())
   // The fluid passes walk the clusters' lists in this step: the layout asks for them and the
   // slots are in grid order (the fluid's first).
@@ -307,8 +314,10 @@ class SphSolver {
   std::uint32_t boundaryClusterCount() const;  // clusters of the slots past the fluid's
   gpu::Buffer pairPosition_;  // (x, V p) per particle: what the force pass gathers with viscousVel_ (interface/sph.h)
   // The boundary and wall slots with fluid in their list, and the indirect arguments of the
-  // boundary-pressure pass over them (interface/sph.h, HEMO_BPRESSURE_SORT).
-  gpu::Buffer activeSlots_, activeArgs_;
+  // boundary-pressure pass over them (interface/sph.h, HEMO_BPRESSURE_SORT); with boundary
+  // clusters, the active clusters as appended, before sph/cluster_order.comp sorts them into
+  // activeSlots_.
+  gpu::Buffer activeSlots_, activeArgs_, activeAppended_;
   gpu::Buffer integrateArgs_;  // the integrator's two variants' indirect arguments
   std::uint32_t boundaryClockIn_ = ~0u;  // the clock record of the last boundary-pressure pass (~0: none since the reset)
   gpu::Buffer clock_, status_, log_;
