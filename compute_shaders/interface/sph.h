@@ -238,9 +238,10 @@
 // particle without fluid neighbours and lists the others, the active ones; every force
 // evaluation then runs over the active list alone (HEMO_BPRESSURE_ACTIVE), dispatched
 // indirectly with the group count the sorting pass counted.
-// (boundary clusters: in the walk order of sph/cluster_order.comp, sorted from a list appended
-// in no particular order)
-#define HEMO_BPRESSURE_BINDING_ACTIVE 10       // uint per slot: the active slots, in no particular order
+// With boundary clusters the sorting mode appends the active clusters, in no particular order,
+// to a list of its own (its set binds that one here), and sph/cluster_order.comp sorts it into
+// the walk order of the list the evaluations read.
+#define HEMO_BPRESSURE_BINDING_ACTIVE 10       // uint per slot: the active slots (per particle: in no particular order)
 #define HEMO_BPRESSURE_BINDING_ACTIVE_ARGS 11  // uvec4 (workgroups, 1, 1, active count): indirect arguments
 #define HEMO_BPRESSURE_BINDING_COUNT 12
 // The pass's modes (push constant `mode`):

@@ -84,7 +84,8 @@ void main() {
     if (fluidEntries > 0u) {
       if (pc.mode == HEMO_BPRESSURE_SORT) {
         // (in whatever order the invocations run: each cluster's result does not depend on
-        // its place; the invocation that opens a workgroup's worth adds the workgroup)
+        // its place; the invocation that opens a workgroup's worth adds the workgroup. This
+        // list is the one sph/cluster_order.comp then sorts into the evaluations' walk order.)
         const uint k = atomicAdd(activeArgs.w, 1u);
         activeClusters[k] = c;
         if (k % gl_WorkGroupSize.x == 0u) {
