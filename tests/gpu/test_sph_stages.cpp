@@ -1204,27 +1204,37 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     };
     const auto counts = solver.clusterCounts().readback<std::uint32_t>(all);
     const auto list = solver.clusterLists().readback<std::uint32_t>(std::size_t(all) * cap);
-    // The pair passes' walk order (sph/cluster_order.comp): each window of
-    // HEMO_CLUSTER_ORDER_WINDOW fluid clusters (the last one shorter), sorted stably by the
-    // sections' texels, front first.
-    const auto order = solver.clusterOrder().readback<std::uint32_t>(clusters);
-    for (std::uint32_t w = 0; w < clusters; w += HEMO_CLUSTER_ORDER_WINDOW) {
-      const std::uint32_t end = std::min(clusters, w + HEMO_CLUSTER_ORDER_WINDOW);
-      std::vector<std::uint32_t> expect(end - w);
-      std::iota(expect.begin(), expect.end(), w);
+    // The walk orders (sph/cluster_order.comp): each window of HEMO_CLUSTER_ORDER_WINDOW items
+    // (the last one shorter) sorted stably by the clusters' texels, front section first.
+    // `items`: the clusters in their places before the sort; `cluster0`: the first cluster's
+    // count. Returns the windows checked and adds the places whose cluster moved to `movedOut`.
+    auto checkWindows = [&](const std::vector<std::uint32_t>& items, const std::vector<std::uint32_t>& got,
+                            std::uint32_t cluster0, const char* what, std::size_t& movedOut) {
       auto key = [&](std::uint32_t c) {
-        return std::pair(((counts[c] & 0xffffu) + 3u) / 4u, ((counts[c] >> 16u) + 3u) / 4u);
+        const std::uint32_t k = counts[cluster0 + c];
+        return std::pair(((k & 0xffffu) + 3u) / 4u, ((k >> 16u) + 3u) / 4u);
       };
-      std::stable_sort(expect.begin(), expect.end(), [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
-      for (std::uint32_t g = w; g < end; ++g) {
-        EXPECT_EQ(order[g], expect[g - w]) << "walk order, invocation " << g;
-        moved += order[g] != g;
+      std::size_t checked = 0;
+      const auto count = static_cast<std::uint32_t>(items.size());
+      for (std::uint32_t w = 0; w < count; w += HEMO_CLUSTER_ORDER_WINDOW) {
+        const std::uint32_t end = std::min(count, w + HEMO_CLUSTER_ORDER_WINDOW);
+        std::vector<std::uint32_t> expect(items.begin() + w, items.begin() + end);
+        std::stable_sort(expect.begin(), expect.end(), [&](std::uint32_t a, std::uint32_t b) { return key(a) < key(b); });
+        for (std::uint32_t k = w; k < end; ++k) {
+          EXPECT_EQ(got[k], expect[k - w]) << what << ", place " << k;
+          movedOut += got[k] != items[k];
+        }
+        ++checked;
       }
-      windows += 1;
-      partialWindows += end - w < HEMO_CLUSTER_ORDER_WINDOW;
-    }
-    // The boundary clusters' active list: each cluster with a fluid entry once, and each window
-    // of the list as appended sorted stably by its texels.
+      return checked;
+    };
+    // the fluid's clusters, from grid order
+    std::vector<std::uint32_t> fluidClusters(clusters);
+    std::iota(fluidClusters.begin(), fluidClusters.end(), 0u);
+    windows += checkWindows(fluidClusters, solver.clusterOrder().readback<std::uint32_t>(clusters), 0u, "walk order", moved);
+    partialWindows += clusters % HEMO_CLUSTER_ORDER_WINDOW != 0u;
+    // The boundary clusters' active list: each cluster with a fluid entry once, each window of
+    // the list as appended sorted.
     const std::uint32_t active = solver.activeArgs().readback<glm::uvec4>(1)[0].w;
     const auto appended = solver.activeAppended().readback<std::uint32_t>(std::max(active, 1u));
     const auto walked = solver.activeList().readback<std::uint32_t>(std::max(active, 1u));
@@ -1232,21 +1242,11 @@ TEST_F(SphStageTest, ClusterListsHoldEachPairOnce) {
     for (std::uint32_t c = 0; c < boundaryClusters; ++c) {
       if ((counts[clusters + c] & 0xffffu) > 0) expectActive.push_back(c);
     }
-    std::vector<std::uint32_t> gotActive(appended.begin(), appended.begin() + active);
+    const std::vector<std::uint32_t> appendedActive(appended.begin(), appended.begin() + active);
+    std::vector<std::uint32_t> gotActive = appendedActive;
     std::sort(gotActive.begin(), gotActive.end());
     EXPECT_EQ(gotActive, expectActive) << "the active list holds each cluster with fluid once";
-    for (std::uint32_t w = 0; w < active; w += HEMO_CLUSTER_ORDER_WINDOW) {
-      const std::uint32_t end = std::min(active, w + HEMO_CLUSTER_ORDER_WINDOW);
-      std::vector<std::uint32_t> expect(appended.begin() + w, appended.begin() + end);
-      std::stable_sort(expect.begin(), expect.end(), [&](std::uint32_t a, std::uint32_t b) {
-        return ((counts[clusters + a] & 0xffffu) + 3u) / 4u < ((counts[clusters + b] & 0xffffu) + 3u) / 4u;
-      });
-      for (std::uint32_t k = w; k < end; ++k) {
-        EXPECT_EQ(walked[k], expect[k - w]) << "boundary walk order, place " << k;
-        movedBoundary += walked[k] != appended[k];
-      }
-      boundaryWindows += 1;
-    }
+    boundaryWindows += checkWindows(appendedActive, walked, clusters, "boundary walk order", movedBoundary);
     const auto status = solver.readStatus();
     EXPECT_EQ(status.neighbourOverflow, 0u);
     for (std::uint32_t slot = 0; slot < n; ++slot) {
