@@ -1,8 +1,10 @@
 #pragma once
 // Minimal command-line parsing shared by the hemo apps: positional arguments and
 // "--name value" options, with errors that name the argument.
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <fstream>
 #include <map>
 #include <utility>
 #include <set>
@@ -45,6 +47,23 @@ struct Args {
     }
     return x;
   }
+  // A non-negative, finite number of seconds, or `fallback` when the option is absent.
+  double seconds(const std::string& name, double fallback) const {
+    auto it = options.find(name);
+    if (it == options.end()) return fallback;
+    const std::string& v = it->second;
+    std::size_t used = 0;
+    double t = 0;
+    try {
+      t = std::stod(v, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != v.size() || !std::isfinite(t) || t < 0) {
+      throw UsageError(name + " expects a non-negative time in seconds, got '" + v + "'");
+    }
+    return t;
+  }
   // An image size "WxH" (16 <= W, H <= 8192), or `fallback` when the option is absent.
   std::pair<std::uint32_t, std::uint32_t> size(const std::string& name,
                                                std::pair<std::uint32_t, std::uint32_t> fallback) const {
@@ -72,6 +91,32 @@ inline bool printUsageIfAsked(int argc, char** argv, const char* usage) {
     if (s.rfind("--", 0) == 0) ++i;  // skip the option's value
   }
   return false;
+}
+
+// The host's processor as /proc/cpuinfo names it ("unknown" elsewhere). Recorded with every
+// timing: on a CPU device (lavapipe) the host decides the speed, and the same work has taken
+// twice the time on one host as on another.
+inline std::string hostCpu() {
+  std::ifstream info("/proc/cpuinfo");
+  std::map<std::string, std::string> fields;
+  std::string line;
+  // The first processor's block: "key<tabs>: value" lines up to the first empty one.
+  while (std::getline(info, line) && !line.empty()) {
+    const std::size_t colon = line.find(':');
+    if (colon == std::string::npos) continue;
+    const std::size_t keyEnd = line.find_last_not_of(" \t", colon == 0 ? 0 : colon - 1);
+    const std::size_t start = line.find_first_not_of(" \t", colon + 1);
+    if (keyEnd == std::string::npos || colon == 0) continue;
+    fields[line.substr(0, keyEnd + 1)] = start == std::string::npos ? "" : line.substr(start);
+  }
+  std::string name = fields["model name"];
+  if (name.empty()) return "unknown";
+  // Virtual machines often give only a family name ("AMD EPYC"); the family and model
+  // numbers say which generation it is.
+  if (!fields["cpu family"].empty() && !fields["model"].empty()) {
+    name += " (family " + fields["cpu family"] + ", model " + fields["model"] + ")";
+  }
+  return name;
 }
 
 // Parses argv; every option takes exactly one value and must be in `known`.

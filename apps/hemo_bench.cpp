@@ -1,6 +1,7 @@
-// hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N]
+// hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME] [--scene FILE] [--until S]
 // Benchmarks (not tests): GPU times from timestamp queries, medians over repeated runs after a
-// warm-up. Suites: primitives, accuracy, table1, render (surface field, extraction and draw).
+// warm-up. Suites: primitives, accuracy, table1, render (surface field, extraction and draw),
+// speed (a whole scene, the dam break by default, run from start to end).
 #include "cli.hpp"
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/gpu/primitives.hpp"
@@ -33,6 +34,8 @@
 #include <map>
 #include <numbers>
 #include <random>
+
+#include <sys/resource.h>
 
 namespace {
 
@@ -613,6 +616,78 @@ Json table1(Context& ctx, int repeat) {
   return rows;
 }
 
+// CPU seconds (user + system) this process has used so far, lavapipe's threads included.
+double processCpuSeconds() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_utime.tv_sec + u.ru_stime.tv_sec) + 1e-6 * double(u.ru_utime.tv_usec + u.ru_stime.tv_usec);
+}
+
+// A whole scene, start to end (`until` seconds of simulated time; <= 0: the scene's end time),
+// `runs` times, each from a fresh Simulation whose pipelines are built before the clock
+// starts. Per run: steps, neighbour-list rebuilds, wall seconds, steps/s, fluid particle-steps
+// per second and the CPU seconds the process spent (on lavapipe the host's speed decides the
+// rate: the same work has taken 34 s of CPU on one host and 114 s on another); then the GPU
+// milliseconds of each stage, median of 20 steps after the run, both as the steps come (most
+// reuse the neighbour list) and forced to rebuild it. The median run is printed last.
+Json speed(Context& ctx, const hemo::scene::Scene& scene, const std::string& scenePath, double until, int runs) {
+  Json rows = Json::array();
+  std::vector<double> rates;
+  std::vector<std::pair<std::string, double>> calm, rebuild;  // the last run's stage times
+  for (int r = 0; r < runs; ++r) {
+    hemo::sim::Simulation sim(ctx, scene);
+    if (r == 0) {
+      std::printf("scene %s (%s): %u fluid, %u boundary, %u wall particles, %u springs\n", scene.name.c_str(),
+                  scenePath.c_str(), sim.fluidParticles(), sim.boundaryParticles(), sim.wallParticles(), sim.springs());
+      std::printf("%4s %8s %9s %10s %8s %9s %18s %8s\n", "run", "steps", "sim s", "rebuilds", "wall s", "steps/s",
+                  "fluid part-steps/s", "CPU s");
+    }
+    hemo::sim::RunOptions opt;
+    if (until > 0) opt.until = until;
+    const double cpuBefore = processCpuSeconds();
+    const hemo::sim::RunResult result = sim.run(opt);
+    const double cpu = processCpuSeconds() - cpuBefore;
+    const std::uint32_t rebuilds = sim.solver().readRebuilds();
+    const double rate = result.wallSeconds > 0 ? double(result.steps) / result.wallSeconds : 0.0;
+    rates.push_back(rate);
+    calm = sim.profileStep(20);
+    rebuild = sim.profileStep(20, true);
+    Json stageMs = Json::object(), rebuildMs = Json::object();
+    for (const auto& [stage, ms] : calm) stageMs[stage] = ms;
+    for (const auto& [stage, ms] : rebuild) rebuildMs[stage] = ms;
+    std::printf("%4d %8llu %9.4f %10u %8.2f %9.1f %18.3e %8.2f\n", r + 1, static_cast<unsigned long long>(result.steps),
+                result.simTime, rebuilds, result.wallSeconds, rate, rate * sim.fluidParticles(), cpu);
+    std::fflush(stdout);
+    rows.push_back({{"scene", scene.name},
+                    {"run", r + 1},
+                    {"fluid_particles", sim.fluidParticles()},
+                    {"boundary_particles", sim.boundaryParticles()},
+                    {"wall_particles", sim.wallParticles()},
+                    {"steps", result.steps},
+                    {"sim_time_s", result.simTime},
+                    {"neighbour_rebuilds", rebuilds},
+                    {"wall_time_s", result.wallSeconds},
+                    {"steps_per_s", rate},
+                    {"fluid_particle_steps_per_s", rate * sim.fluidParticles()},
+                    {"cpu_s", cpu},
+                    {"stage_ms", stageMs},
+                    {"rebuild_stage_ms", rebuildMs}});
+  }
+  const double mid = median(rates);
+  std::printf("median %.1f steps/s over %d run%s\n", mid, runs, runs == 1 ? "" : "s");
+  for (const auto* stages : {&calm, &rebuild}) {
+    std::printf("%s (run %d, GPU ms, median of 20 steps%s):", stages == &calm ? "stage_ms" : "rebuild_stage_ms", runs,
+                stages == &calm ? "" : " forced to rebuild");
+    double total = 0.0;
+    for (const auto& [stage, ms] : *stages) {
+      std::printf("  %s %.3f", stage.c_str(), ms);
+      total += ms;
+    }
+    std::printf("  (sum %.3f)\n", total);
+  }
+  return rows;
+}
+
 // Marching-cubes rendering benchmark: for the dam break and the aneurysm (after a few hundred
 // steps, so the surface has moved), the GPU field (bounds + splat) and extraction (classify,
 // scans, compact, generate) at grids of 64^3, 128^3 and 256^3 voxels over the fluid's box, the
@@ -743,14 +818,18 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
 
 int main(int argc, char** argv) {
   const char* usage =
-      "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME]\n"
-      "  SUITE: primitives | accuracy | table1 | render\n"
-      "  --case NAME  accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
-      "  --help       prints this text\n";
+      "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME] [--scene FILE] [--until S]\n"
+      "  SUITE: primitives | accuracy | table1 | render | speed\n"
+      "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
+      "                speed: whole runs, default 3)\n"
+      "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
+      "  --scene FILE  speed: the scene to run (default scenes/dam_break.json)\n"
+      "  --until S     speed: simulated seconds per run (default: the scene's time.end_time_s)\n"
+      "  --help        prints this text\n";
   if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
   hemo::cli::Args args;
   try {
-    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case"});
+    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case", "--scene", "--until"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SUITE");
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
@@ -758,19 +837,32 @@ int main(int argc, char** argv) {
   }
   const std::string suite = args.positional[0];
   try {
-    const int repeat = static_cast<int>(args.count("--repeat", 9, 1, 1000));
-    const std::string only = args.text("--case");
-    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break") {
-      throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille or dam_break)");
-    }
-    if (suite != "primitives" && suite != "accuracy" && suite != "table1" && suite != "render") {
+    if (suite != "primitives" && suite != "accuracy" && suite != "table1" && suite != "render" && suite != "speed") {
       std::cerr << "hemo-bench: unknown suite '" << suite << "'\n" << usage;
       return 1;
     }
+    const int repeat = static_cast<int>(args.count("--repeat", suite == "speed" ? 3 : 9, 1, 1000));
+    const std::string only = args.text("--case");
+    if (args.has("--case") && suite != "accuracy") throw hemo::cli::UsageError("--case applies to the accuracy suite only");
+    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break") {
+      throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille or dam_break)");
+    }
+    for (const char* option : {"--scene", "--until"}) {
+      if (args.has(option) && suite != "speed") {
+        throw hemo::cli::UsageError(std::string(option) + " applies to the speed suite only");
+      }
+    }
+    const double until = args.seconds("--until", 0.0);
+    if (args.has("--until") && until <= 0) throw hemo::cli::UsageError("--until must be above 0 s");
+    // The scene is read before any device is opened: a bad file fails at once.
+    const std::string scenePath = args.text("--scene", std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+    hemo::scene::Scene scene;
+    if (suite == "speed") scene = hemo::scene::loadScene(scenePath);
     hemo::gpu::ContextOptions options;
     options.device = args.text("--device");
     Context ctx(options);
-    std::printf("device: %s (%s)\n", ctx.info().name.c_str(), ctx.info().typeName().c_str());
+    const std::string host = hemo::cli::hostCpu();
+    std::printf("device: %s (%s), host: %s\n", ctx.info().name.c_str(), ctx.info().typeName().c_str(), host.c_str());
     if (!ctx.timestampsSupported()) {
       std::cerr << "hemo-bench: the device has no timestamp queries; GPU times are unavailable\n";
       return 3;
@@ -778,6 +870,7 @@ int main(int argc, char** argv) {
     const Json rows = suite == "primitives" ? primitives(ctx, repeat)
                       : suite == "table1"   ? table1(ctx, std::max(1, repeat / 3))
                       : suite == "render"   ? render(ctx, repeat, std::filesystem::path(HEMO_SOURCE_DIR) / "scenes")
+                      : suite == "speed"    ? speed(ctx, scene, scenePath, until, repeat)
                                             : accuracy(ctx, only);
     if (args.has("--json")) {
       const std::string path = args.text("--json");
@@ -786,7 +879,7 @@ int main(int argc, char** argv) {
         std::cerr << "hemo-bench: cannot write --json file '" << path << "'\n";
         return 1;
       }
-      out << Json{{"suite", suite}, {"device", ctx.info().name}, {"rows", rows}}.dump(2) << "\n";
+      out << Json{{"suite", suite}, {"device", ctx.info().name}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
     }
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
@@ -794,6 +887,9 @@ int main(int argc, char** argv) {
   } catch (const hemo::gpu::GpuError& e) {
     std::cerr << "hemo-bench: GPU error: " << e.what() << "\n";
     return 3;
+  } catch (const hemo::sim::SimulationError& e) {
+    std::cerr << "hemo-bench: " << e.what() << "\n";
+    return 2;
   } catch (const std::exception& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n";
     return 1;

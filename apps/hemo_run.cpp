@@ -90,20 +90,7 @@ int main(int argc, char** argv) {
   hemo::scene::Scene scene;
   try {
     if (args.has("--steps")) options.steps = args.count("--steps", 0, 1, 4000000000ull);
-    if (args.has("--until")) {
-      const std::string v = args.text("--until");
-      std::size_t used = 0;
-      double t = 0;
-      try {
-        t = std::stod(v, &used);
-      } catch (const std::exception&) {
-        used = 0;
-      }
-      if (used != v.size() || !std::isfinite(t) || t < 0) {
-        throw hemo::cli::UsageError("--until expects a non-negative time in seconds, got '" + v + "'");
-      }
-      options.until = t;
-    }
+    if (args.has("--until")) options.until = args.seconds("--until", 0.0);
     vtkEvery = static_cast<std::uint32_t>(args.count("--vtk-every", 0, 1, 1000000000));
     surfaceEvery = static_cast<std::uint32_t>(args.count("--surface-every", 0, 1, 1000000000));
     pngEvery = static_cast<std::uint32_t>(args.count("--png-every", 0, 1, 1000000000));
@@ -271,6 +258,7 @@ int main(int argc, char** argv) {
     }
     summary = {{"scene", scene.name},
                {"device", ctx.info().name},
+               {"host_cpu", hemo::cli::hostCpu()},
                {"fluid_particles", sim.fluidParticles()},
                {"boundary_particles", sim.boundaryParticles()},
                {"wall_particles", sim.wallParticles()},
