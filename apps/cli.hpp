@@ -103,10 +103,10 @@ inline std::string hostCpu() {
   // The first processor's block: "key<tabs>: value" lines up to the first empty one.
   while (std::getline(info, line) && !line.empty()) {
     const std::size_t colon = line.find(':');
-    if (colon == std::string::npos) continue;
-    const std::size_t keyEnd = line.find_last_not_of(" \t", colon == 0 ? 0 : colon - 1);
+    if (colon == std::string::npos || colon == 0) continue;
+    const std::size_t keyEnd = line.find_last_not_of(" \t", colon - 1);
+    if (keyEnd == std::string::npos) continue;
     const std::size_t start = line.find_first_not_of(" \t", colon + 1);
-    if (keyEnd == std::string::npos || colon == 0) continue;
     fields[line.substr(0, keyEnd + 1)] = start == std::string::npos ? "" : line.substr(start);
   }
   std::string name = fields["model name"];

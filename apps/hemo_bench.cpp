@@ -629,7 +629,8 @@ double processCpuSeconds() {
 // per second and the CPU seconds the process spent (on lavapipe the host's speed decides the
 // rate: the same work has taken 34 s of CPU on one host and 114 s on another); then the GPU
 // milliseconds of each stage, median of 20 steps after the run, both as the steps come (most
-// reuse the neighbour list) and forced to rebuild it. The median run is printed last.
+// reuse the neighbour list) and forced to rebuild it. Printed last: the runs' median steps/s
+// and the last run's stage times.
 Json speed(Context& ctx, const hemo::scene::Scene& scene, const std::string& scenePath, double until, int runs) {
   Json rows = Json::array();
   std::vector<double> rates;
@@ -858,6 +859,13 @@ int main(int argc, char** argv) {
     const std::string scenePath = args.text("--scene", std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
     hemo::scene::Scene scene;
     if (suite == "speed") scene = hemo::scene::loadScene(scenePath);
+    // The JSON file is opened before the benchmark runs (a suite takes minutes): a path that
+    // cannot be written fails at once.
+    std::ofstream json;
+    if (args.has("--json")) {
+      json.open(args.text("--json"));
+      if (!json) throw std::runtime_error("cannot write --json file '" + args.text("--json") + "'");
+    }
     hemo::gpu::ContextOptions options;
     options.device = args.text("--device");
     Context ctx(options);
@@ -872,14 +880,9 @@ int main(int argc, char** argv) {
                       : suite == "render"   ? render(ctx, repeat, std::filesystem::path(HEMO_SOURCE_DIR) / "scenes")
                       : suite == "speed"    ? speed(ctx, scene, scenePath, until, repeat)
                                             : accuracy(ctx, only);
-    if (args.has("--json")) {
-      const std::string path = args.text("--json");
-      std::ofstream out(path);
-      if (!out) {
-        std::cerr << "hemo-bench: cannot write --json file '" << path << "'\n";
-        return 1;
-      }
-      out << Json{{"suite", suite}, {"device", ctx.info().name}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
+    if (json.is_open()) {
+      json << Json{{"suite", suite}, {"device", ctx.info().name}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
+      if (!json) throw std::runtime_error("failed while writing --json file '" + args.text("--json") + "'");
     }
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
