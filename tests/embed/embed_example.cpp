@@ -22,8 +22,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: embed_example SCENE.json STEPS\n");
     return 1;
   }
-  const long steps = std::strtol(argv[2], nullptr, 10);
-  if (steps <= 0) {
+  char* end = nullptr;
+  const long steps = std::strtol(argv[2], &end, 10);
+  if (end == argv[2] || *end != '\0' || steps <= 0) {
     std::fprintf(stderr, "embed_example: STEPS must be a positive whole number, got '%s'\n", argv[2]);
     return 1;
   }
