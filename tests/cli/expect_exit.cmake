@@ -1,5 +1,6 @@
 # Runs a command and checks its exit code and output.
 #   cmake -DCMD=<;-list> -DCODE=<int> -DREGEX=<regex> [-DWORKDIR=dir] -P expect_exit.cmake
+# (or include()d with CMD, CODE and REGEX set, as tests/embed/check.cmake does)
 execute_process(COMMAND ${CMD} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 set(all "${out}${err}")
 if(NOT rc STREQUAL "${CODE}")
