@@ -100,21 +100,17 @@ Json primitives(Context& ctx, int repeat) {
     row("empty_submit", 0, median(ms), {{"clock", "host"}});
   }
   // The fixed cost of one dispatch plus a barrier: 1000 one-workgroup dispatches of a shader
-  // without workgroup barriers (scan/scan_add on 64 elements) in one command buffer.
+  // that reads 64 values and writes nothing (bench/dispatch_probe.comp) in one command buffer.
   {
     hemo::gpu::Buffer data(ctx, 64 * 4, hemo::gpu::MemoryUse::Device, "dispatch probe");
-    // Push constants of scan/scan_add (interface/scan.h): n, no GPU length, 0, level 0.
-    struct Push {
-      std::uint32_t n, lengthIndex, lengthPlus, level;
-    };
-    const auto& probe = ctx.pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, sizeof(Push), 256, {}});
-    const auto set = probe.makeSet({{HEMO_SCAN_BINDING_DATA, &data}, {HEMO_SCAN_BINDING_SUMS, &data},
-                                    {HEMO_SCAN_BINDING_LENGTH, &data}});
+    data.upload(std::vector<std::uint32_t>(64, 0u));
+    const std::uint32_t n = 64;
+    const auto& probe = ctx.pipelines().get({"bench/dispatch_probe", HEMO_BENCH_PROBE_BINDING_COUNT, sizeof(n), 64, {}});
+    const auto set = probe.makeSet({{HEMO_BENCH_PROBE_BINDING_IN, &data}});
     const int k = 1000;
-    const Push n{64, HEMO_SCAN_NO_LENGTH, 0, 0};
     const double ms = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
       for (int i = 0; i < k; ++i) {
-        rec.dispatch(probe, set, n, probe.groupsFor(n.n, HEMO_SCAN_ITEMS));
+        rec.dispatch(probe, set, n, probe.groupsFor(n));
         rec.computeToCompute();
       }
     });
@@ -123,7 +119,7 @@ Json primitives(Context& ctx, int repeat) {
     // workgroups (a closed dispatch gate, engine/gpu/gate.cpp) with their barriers: what a
     // step pays for each dispatch it records, and for each one a gate skips.
     const double loose = timeGpu(ctx, repeat, [] {}, [&](CommandRecorder& rec) {
-      for (int i = 0; i < k; ++i) rec.dispatch(probe, set, n, probe.groupsFor(n.n, HEMO_SCAN_ITEMS));
+      for (int i = 0; i < k; ++i) rec.dispatch(probe, set, n, probe.groupsFor(n));
       rec.computeToCompute();
     });
     row("dispatch_nobar", 1, loose / k, {{"clock", "gpu"}, {"dispatches_timed", k}});
@@ -823,12 +819,82 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
   return rows;
 }
 
+// With HEMO_VALIDATION set, prints what the validation layer reported; true when it did.
+bool validationProblems(Context& ctx) {
+  if (!ctx.validationEnabled() || ctx.validationMessageCount() == 0) return false;
+  for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";
+  std::cerr << "hemo-bench: the Vulkan validation layer reported problems\n";
+  return true;
+}
+
+// What the engine reads from the device instead of assuming it (a GPU check's first record):
+// the sizes and limits the shaders and buffers are sized by, timestamps, and the memory types
+// (a discrete GPU's large device-local heap is not host-visible: buffers there go through
+// staging copies).
+Json deviceFacts(Context& ctx) {
+  const VkPhysicalDeviceLimits& l = ctx.limits();
+  const VkPhysicalDeviceMemoryProperties& m = ctx.memoryProperties();
+  Json heaps = Json::array(), types = Json::array();
+  for (std::uint32_t i = 0; i < m.memoryHeapCount; ++i) {
+    heaps.push_back({{"bytes", m.memoryHeaps[i].size},
+                     {"device_local", (m.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) != 0}});
+  }
+  for (std::uint32_t i = 0; i < m.memoryTypeCount; ++i) {
+    const VkMemoryPropertyFlags f = m.memoryTypes[i].propertyFlags;
+    types.push_back({{"heap", m.memoryTypes[i].heapIndex},
+                     {"device_local", (f & VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT) != 0},
+                     {"host_visible", (f & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT) != 0},
+                     {"host_coherent", (f & VK_MEMORY_PROPERTY_HOST_COHERENT_BIT) != 0},
+                     {"host_cached", (f & VK_MEMORY_PROPERTY_HOST_CACHED_BIT) != 0}});
+  }
+  hemo::gpu::Buffer probe(ctx, 16, hemo::gpu::MemoryUse::Device, "device memory probe");
+  const std::uint32_t api = ctx.info().apiVersion;
+  Json row = {{"device", ctx.info().name},
+              {"type", ctx.info().typeName()},
+              {"api_version", std::to_string(VK_API_VERSION_MAJOR(api)) + "." + std::to_string(VK_API_VERSION_MINOR(api)) +
+                                  "." + std::to_string(VK_API_VERSION_PATCH(api))},
+              {"driver", ctx.driver()},
+              {"vendor_id", ctx.vendorId()},
+              {"subgroup_size", ctx.subgroupSize()},
+              {"max_compute_workgroup_invocations", l.maxComputeWorkGroupInvocations},
+              {"max_compute_workgroup_size_x", l.maxComputeWorkGroupSize[0]},
+              {"max_compute_workgroup_count", {l.maxComputeWorkGroupCount[0], l.maxComputeWorkGroupCount[1],
+                                               l.maxComputeWorkGroupCount[2]}},
+              {"max_compute_shared_memory_bytes", l.maxComputeSharedMemorySize},
+              {"max_texel_buffer_elements", l.maxTexelBufferElements},
+              {"max_storage_buffer_range_bytes", l.maxStorageBufferRange},
+              {"max_uniform_buffer_range_bytes", l.maxUniformBufferRange},
+              {"max_allocation_bytes", ctx.maxAllocationSize()},
+              {"timestamps", ctx.timestampsSupported()},
+              {"timestamp_period_ns", ctx.timestampPeriodNs()},
+              {"device_buffers_mapped", probe.hostMapped()},
+              {"memory_heaps", heaps},
+              {"memory_types", types}};
+  for (const auto& [key, value] : row.items()) {
+    if (key == "memory_heaps" || key == "memory_types") continue;
+    std::printf("%-36s %s\n", key.c_str(), value.is_string() ? value.get<std::string>().c_str() : value.dump().c_str());
+  }
+  for (std::size_t i = 0; i < heaps.size(); ++i) {
+    std::printf("memory heap %zu: %.2f GiB%s\n", i, heaps[i]["bytes"].get<double>() / (1024.0 * 1024 * 1024),
+                heaps[i]["device_local"].get<bool>() ? ", device-local" : "");
+  }
+  for (std::size_t i = 0; i < types.size(); ++i) {
+    std::printf("memory type %zu: heap %u%s%s%s%s\n", i, types[i]["heap"].get<unsigned>(),
+                types[i]["device_local"].get<bool>() ? " device-local" : "",
+                types[i]["host_visible"].get<bool>() ? " host-visible" : "",
+                types[i]["host_coherent"].get<bool>() ? " host-coherent" : "",
+                types[i]["host_cached"].get<bool>() ? " host-cached" : "");
+  }
+  return Json::array({row});
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   const char* usage =
       "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME] [--scene FILE] [--until S]\n"
-      "  SUITE: primitives | accuracy | table1 | render | speed\n"
+      "  SUITE: primitives | accuracy | table1 | render | speed | device\n"
+      "         (device: what hemo reads from the device: sizes, limits, timestamps, memory types)\n"
       "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
       "                speed: whole runs, default 3)\n"
       "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
@@ -846,7 +912,8 @@ int main(int argc, char** argv) {
   }
   const std::string suite = args.positional[0];
   try {
-    if (suite != "primitives" && suite != "accuracy" && suite != "table1" && suite != "render" && suite != "speed") {
+    if (suite != "primitives" && suite != "accuracy" && suite != "table1" && suite != "render" && suite != "speed" &&
+        suite != "device") {
       std::cerr << "hemo-bench: unknown suite '" << suite << "'\n" << usage;
       return 1;
     }
@@ -879,6 +946,14 @@ int main(int argc, char** argv) {
     Context ctx(options);
     const std::string host = hemo::cli::hostCpu();
     std::printf("device: %s (%s), host: %s\n", ctx.info().name.c_str(), ctx.info().typeName().c_str(), host.c_str());
+    if (suite == "device") {
+      const Json rows = deviceFacts(ctx);
+      if (json.is_open()) {
+        json << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
+        if (!json) throw std::runtime_error("failed while writing --json file '" + args.text("--json") + "'");
+      }
+      return validationProblems(ctx) ? 3 : 0;
+    }
     if (!ctx.timestampsSupported()) {
       std::cerr << "hemo-bench: the device has no timestamp queries; GPU times are unavailable\n";
       return 3;
@@ -889,9 +964,10 @@ int main(int argc, char** argv) {
                       : suite == "speed"    ? speed(ctx, scene, scenePath, until, repeat)
                                             : accuracy(ctx, only);
     if (json.is_open()) {
-      json << Json{{"suite", suite}, {"device", ctx.info().name}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
+      json << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
       if (!json) throw std::runtime_error("failed while writing --json file '" + args.text("--json") + "'");
     }
+    if (validationProblems(ctx)) return 3;
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
     return 1;

@@ -258,6 +258,7 @@ int main(int argc, char** argv) {
     }
     summary = {{"scene", scene.name},
                {"device", ctx.info().name},
+               {"driver", ctx.driver()},
                {"host_cpu", hemo::cli::hostCpu()},
                {"fluid_particles", sim.fluidParticles()},
                {"boundary_particles", sim.boundaryParticles()},

@@ -25,7 +25,8 @@ gpu::Context* sharedContext() {
     options.validation = true;
     slot() = std::make_unique<gpu::Context>(options);  // throws (fails the test) if unusable
     std::cerr << "[hemo] device: " << slot()->info().name << " (" << slot()->info().typeName()
-              << "), subgroup size " << slot()->subgroupSize() << ", validation on\n";
+              << "), subgroup size " << slot()->subgroupSize() << ", "
+              << gpu::validationName(slot()->validation()) << " validation\n";
   }
   return slot().get();
 }

@@ -37,4 +37,10 @@
 #define HEMO_BENCH_STORE_BINDING_COUNT 2
 // push constants: uint n; uint entries  (8 bytes)
 
+// bench/dispatch_probe.comp: invocation i of n reads IN[i] and writes nothing to memory
+// others see, so dispatches of it need no barrier between them.
+#define HEMO_BENCH_PROBE_BINDING_IN 0
+#define HEMO_BENCH_PROBE_BINDING_COUNT 1
+// push constants: uint n  (4 bytes)
+
 #endif

@@ -1,5 +1,7 @@
 #include "hemo/gpu/buffer.hpp"
 
+#include "hemo/gpu/commands.hpp"
+
 #include <algorithm>
 #include <utility>
 
@@ -63,7 +65,8 @@ Buffer::Buffer(Context& context, VkDeviceSize bytes, MemoryUse use, std::string 
     }
     check(r, ("vkAllocateMemory for '" + name_ + "'").c_str());
     check(vkBindBufferMemory(device, buffer_, memory_, 0), "vkBindBufferMemory");
-    if (context.memoryFlags(alloc.memoryTypeIndex) & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT) {
+    const bool mappable = use != MemoryUse::Device || !context.stagingOnly();
+    if (mappable && (context.memoryFlags(alloc.memoryTypeIndex) & VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT)) {
       check(vkMapMemory(device, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
       // Coherence is only guaranteed for coherent memory; device buffers that happen to be
       // host-visible but not coherent go through staging instead.
@@ -121,9 +124,10 @@ void Buffer::uploadBytes(const void* src, VkDeviceSize bytes, VkDeviceSize offse
   Buffer staging(*context_, bytes, MemoryUse::Upload, name_ + " (staging)");
   staging.uploadBytes(src, bytes);
   context_->runOnce([&](VkCommandBuffer cmd) {
+    recordBeforeStagingCopy(*context_, cmd);  // earlier work that reads or writes these bytes
     VkBufferCopy region{0, offset, bytes};
     vkCmdCopyBuffer(cmd, staging.handle(), buffer_, 1, &region);
-  });
+  });  // (the next CommandRecorder::begin orders the copy before its work)
 }
 
 void Buffer::readbackBytes(void* dst, VkDeviceSize bytes, VkDeviceSize offset) const {
@@ -139,8 +143,10 @@ void Buffer::readbackBytes(void* dst, VkDeviceSize bytes, VkDeviceSize offset) c
   }
   Buffer staging(*context_, bytes, MemoryUse::Readback, name_ + " (readback)");
   context_->runOnce([&](VkCommandBuffer cmd) {
+    recordBeforeStagingCopy(*context_, cmd);  // the writes of earlier submissions
     VkBufferCopy region{offset, 0, bytes};
     vkCmdCopyBuffer(cmd, buffer_, staging.handle(), 1, &region);
+    recordStagingCopyToHost(cmd);
   });
   staging.readbackBytes(dst, bytes);
 }

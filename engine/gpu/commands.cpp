@@ -2,7 +2,61 @@
 
 #include "hemo/gpu/gate.hpp"
 
+#include <algorithm>
+#include <stdexcept>
+
 namespace hemo::gpu {
+
+// One side of a barrier: the pipeline stages and the accesses it covers.
+struct detail::BarrierScope {
+  VkPipelineStageFlags stages;
+  VkAccessFlags access;
+};
+
+namespace {
+using Scope = detail::BarrierScope;
+
+// Producers: what was written before the barrier. A source stage covers the logically earlier
+// stages too (an indirect dispatch's argument read comes before its shader), so the reads a
+// later write must wait for are ordered with them.
+constexpr VkPipelineStageFlags kComputeStages = VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT;
+constexpr Scope kComputeWrites{kComputeStages, VK_ACCESS_SHADER_WRITE_BIT};
+constexpr Scope kTransferWrites{VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT};
+constexpr Scope kComputeAndTransferWrites{kComputeStages | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                                          VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT};
+
+// Consumers. A dispatch may read any buffer it binds as storage, uniform or texel data
+// (SHADER_READ covers storage and texel reads, UNIFORM_READ the uniform blocks), write it,
+// and read its workgroup counts from a buffer at the indirect stage (dispatchIndirect, and
+// every dispatch of a gate region).
+constexpr Scope kDispatch{kComputeStages, VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_SHADER_READ_BIT |
+                                              VK_ACCESS_UNIFORM_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT};
+constexpr Scope kTransfer{VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT};
+constexpr Scope kDraw{VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_INPUT_BIT |
+                          VK_PIPELINE_STAGE_VERTEX_SHADER_BIT | VK_PIPELINE_STAGE_FRAGMENT_SHADER_BIT,
+                      VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT |
+                          VK_ACCESS_INDEX_READ_BIT | VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT};
+constexpr Scope kDispatchOrTransfer{kDispatch.stages | kTransfer.stages, kDispatch.access | kTransfer.access};
+constexpr Scope kHost{VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT};
+
+// Everything the engine does with a buffer on the queue: the producer side of the barrier
+// that opens a recording (earlier submissions, Buffer's staging copies). Draws only where the
+// queue draws (a barrier may name only stages its queue supports).
+Scope anyAccess(const Context& context) {
+  const VkPipelineStageFlags draw = context.queueDraws() ? VK_PIPELINE_STAGE_ALL_GRAPHICS_BIT : 0;
+  return {kComputeStages | VK_PIPELINE_STAGE_TRANSFER_BIT | draw,
+          VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT};
+}
+
+void recordBarrier(VkCommandBuffer cmd, const Scope& producer, const Scope& consumer) {
+  VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+  b.srcAccessMask = producer.access;
+  b.dstAccessMask = consumer.access;
+  vkCmdPipelineBarrier(cmd, producer.stages, consumer.stages, 0, 1, &b, 0, nullptr, 0, nullptr);
+}
+
+bool overlaps(VkDeviceSize b0, VkDeviceSize e0, VkDeviceSize b1, VkDeviceSize e1) { return b0 < e1 && b1 < e0; }
+}  // namespace
 
 CommandRecorder::CommandRecorder(Context& context) : context_(&context) {
   VkDevice device = context.device();
@@ -39,8 +93,12 @@ void CommandRecorder::begin() {
   check(vkBeginCommandBuffer(cmd_, &info), "vkBeginCommandBuffer");
   dispatches_ = 0;
   gate_ = nullptr;
+  pendingTransfer_.clear();
   boundPipeline_ = VK_NULL_HANDLE;
   boundSet_ = VK_NULL_HANDLE;
+  // Submission order alone orders no memory: what earlier submissions and staging copies
+  // wrote (and read) is ordered before this recording's dispatches and transfers here.
+  barrier(anyAccess(*context_), kDispatchOrTransfer);
 }
 
 void CommandRecorder::end() {
@@ -101,8 +159,11 @@ void CommandRecorder::dispatch(const ComputePipeline& pipeline, const Descriptor
   }
   bind(pipeline, set, push, pushBytes);
   if (gate_) {
-    vkCmdDispatchIndirect(cmd_, gate_->args_.handle(), gate_->claim(groups));
+    const VkDeviceSize slot = gate_->claim(groups);
+    checkDispatchReads(pipeline, set, gate_->args_.handle(), slot);
+    vkCmdDispatchIndirect(cmd_, gate_->args_.handle(), slot);
   } else {
+    checkDispatchReads(pipeline, set, VK_NULL_HANDLE, 0);
     vkCmdDispatch(cmd_, groups.x, groups.y, 1);
   }
   ++dispatches_;
@@ -118,6 +179,7 @@ void CommandRecorder::dispatchIndirect(const ComputePipeline& pipeline, const De
     throw std::invalid_argument("indirect arguments of '" + pipeline.name() + "' at byte " + std::to_string(offset) +
                                 " do not fit buffer '" + args.name() + "'");
   }
+  checkDispatchReads(pipeline, set, args.handle(), offset);
   bind(pipeline, set, push, pushBytes);
   vkCmdDispatchIndirect(cmd_, args.handle(), offset);
   ++dispatches_;
@@ -135,69 +197,65 @@ void CommandRecorder::endGate() {
   gate_ = nullptr;
 }
 
-void CommandRecorder::barrier(VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst,
-                              VkAccessFlags dstAccess) {
-  VkMemoryBarrier b{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
-  b.srcAccessMask = srcAccess;
-  b.dstAccessMask = dstAccess;
-  vkCmdPipelineBarrier(cmd_, src, dst, 0, 1, &b, 0, nullptr, 0, nullptr);
+
+void recordBeforeStagingCopy(const Context& context, VkCommandBuffer cmd) {
+  recordBarrier(cmd, anyAccess(context), kTransfer);
+}
+void recordStagingCopyToHost(VkCommandBuffer cmd) { recordBarrier(cmd, kTransferWrites, kHost); }
+
+void CommandRecorder::barrier(const Scope& producer, const Scope& consumer) {
+  recordBarrier(cmd_, producer, consumer);
+  if (producer.access & VK_ACCESS_TRANSFER_WRITE_BIT) pendingTransfer_.clear();
 }
 
-// Reads after a barrier include uniform-buffer reads: parameter blocks written by one pass
-// (as storage) are read by the next as uniform buffers.
-void CommandRecorder::computeToCompute() {
-  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-          VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
+void CommandRecorder::computeToCompute() { barrier(kComputeWrites, kDispatch); }
+void CommandRecorder::computeToTransfer() { barrier(kComputeWrites, kTransfer); }
+void CommandRecorder::transferToCompute() { barrier(kTransferWrites, kDispatch); }
+void CommandRecorder::transferToTransfer() { barrier(kTransferWrites, kTransfer); }
+void CommandRecorder::computeToGraphics() { barrier(kComputeAndTransferWrites, kDraw); }
+void CommandRecorder::computeToHost() { barrier(kComputeAndTransferWrites, kHost); }
+
+void CommandRecorder::checkNotPending(VkBuffer buffer, VkDeviceSize begin, VkDeviceSize end, const std::string& user,
+                                      const char* barrierName) const {
+  for (const Range& r : pendingTransfer_) {
+    if (r.buffer == buffer && overlaps(r.begin, r.end, begin, end)) {
+      throw std::logic_error(user + " touches bytes " + std::to_string(std::max(r.begin, begin)) + " to " +
+                             std::to_string(std::min(r.end, end)) + " of buffer '" + r.name +
+                             "' that a fill or copy wrote with no barrier since (" + barrierName + ")");
+    }
+  }
 }
 
-void CommandRecorder::computeToTransfer() {
-  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-          VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT,
-          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+void CommandRecorder::checkDispatchReads(const ComputePipeline& pipeline, const DescriptorSet& set, VkBuffer args,
+                                         VkDeviceSize argsOffset) const {
+  if (pendingTransfer_.empty()) return;
+  for (const DescriptorSet::Bound& b : set.bound()) {
+    checkNotPending(b.buffer, b.begin, b.end, "dispatch of '" + pipeline.name() + "'", "transferToCompute");
+  }
+  if (args != VK_NULL_HANDLE) {
+    checkNotPending(args, argsOffset, argsOffset + 12, "the indirect arguments of '" + pipeline.name() + "'",
+                    "transferToCompute");
+  }
 }
 
-void CommandRecorder::transferToCompute() {
-  barrier(VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT,
-          VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_UNIFORM_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT);
-}
-
-void CommandRecorder::transferToTransfer() {
-  barrier(VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_WRITE_BIT,
-          VK_PIPELINE_STAGE_TRANSFER_BIT, VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
-}
-
-void CommandRecorder::computeToGraphics() {
-  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
-          VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT,
-          VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT | VK_PIPELINE_STAGE_VERTEX_INPUT_BIT | VK_PIPELINE_STAGE_VERTEX_SHADER_BIT,
-          VK_ACCESS_INDIRECT_COMMAND_READ_BIT | VK_ACCESS_VERTEX_ATTRIBUTE_READ_BIT | VK_ACCESS_SHADER_READ_BIT);
-}
-
-void CommandRecorder::computeToIndirect() {
-  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-          VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT, VK_ACCESS_INDIRECT_COMMAND_READ_BIT);
-}
-
-void CommandRecorder::computeToComputeAndIndirect() {
-  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_ACCESS_SHADER_WRITE_BIT,
-          VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_DRAW_INDIRECT_BIT,
-          VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_INDIRECT_COMMAND_READ_BIT);
-}
-
-void CommandRecorder::computeToHost() {
-  barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
-          VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_TRANSFER_WRITE_BIT, VK_PIPELINE_STAGE_HOST_BIT,
-          VK_ACCESS_HOST_READ_BIT);
+void CommandRecorder::transferWrote(const Buffer& buffer, VkDeviceSize offset, VkDeviceSize bytes, const char* what) {
+  const VkDeviceSize end = bytes == VK_WHOLE_SIZE ? buffer.allocatedSize() : offset + bytes;
+  checkNotPending(buffer.handle(), offset, end, what, "transferToTransfer");
+  pendingTransfer_.push_back({buffer.handle(), offset, end, buffer.name()});
 }
 
 void CommandRecorder::fill(const Buffer& buffer, std::uint32_t value, VkDeviceSize offset, VkDeviceSize bytes) {
   if (bytes == 0) return;
+  transferWrote(buffer, offset, bytes, "a fill");
   vkCmdFillBuffer(cmd_, buffer.handle(), offset, bytes, value);
 }
 
 void CommandRecorder::copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, VkDeviceSize srcOffset,
                            VkDeviceSize dstOffset) {
   if (bytes == 0) return;
+  checkNotPending(src.handle(), srcOffset, srcOffset + bytes, "a copy from buffer '" + src.name() + "'",
+                  "transferToTransfer");
+  transferWrote(dst, dstOffset, bytes, "a copy to it");
   VkBufferCopy region{srcOffset, dstOffset, bytes};
   vkCmdCopyBuffer(cmd_, src.handle(), dst.handle(), 1, &region);
 }

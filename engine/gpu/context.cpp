@@ -62,13 +62,22 @@ bool hasLayer(const char* name) {
                      [&](const VkLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
 }
 
+bool layerHasExtension(const char* layer, const char* extension) {
+  std::uint32_t count = 0;
+  vkEnumerateInstanceExtensionProperties(layer, &count, nullptr);
+  std::vector<VkExtensionProperties> extensions(count);
+  vkEnumerateInstanceExtensionProperties(layer, &count, extensions.data());
+  return std::any_of(extensions.begin(), extensions.end(),
+                     [&](const VkExtensionProperties& e) { return std::strcmp(e.extensionName, extension) == 0; });
+}
+
 // lavapipe reads LP_NUM_THREADS when an instance enumerates its device (cpuDriverThreads).
 void tuneCpuDriver() {
   const std::string threads = cpuDriverThreads(std::getenv("LP_NUM_THREADS"), std::thread::hardware_concurrency());
   if (!threads.empty()) setenv("LP_NUM_THREADS", threads.c_str(), 0);
 }
 
-VkInstance createInstance(bool validation, const std::vector<std::string>& extra = {}) {
+VkInstance createInstance(Validation validation, const std::vector<std::string>& extra = {}) {
   tuneCpuDriver();
   std::uint32_t loaderVersion = VK_API_VERSION_1_0;
   vkEnumerateInstanceVersion(&loaderVersion);
@@ -83,16 +92,42 @@ VkInstance createInstance(bool validation, const std::vector<std::string>& extra
   app.apiVersion = VK_API_VERSION_1_2;
   std::vector<const char*> layers;
   std::vector<const char*> extensions;
-  if (validation) {
+  // The layer's optional checks, enabled through VK_EXT_validation_features (the layer
+  // provides the extension). Environment settings such as VK_LAYER_ENABLES add to these.
+  std::vector<VkValidationFeatureEnableEXT> enables;
+  switch (validation) {
+    case Validation::Standard:
+      enables.push_back(VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT);
+      break;
+    case Validation::GpuAssisted:
+      enables.push_back(VK_VALIDATION_FEATURE_ENABLE_GPU_ASSISTED_EXT);
+      enables.push_back(VK_VALIDATION_FEATURE_ENABLE_GPU_ASSISTED_RESERVE_BINDING_SLOT_EXT);
+      break;
+    case Validation::Core:
+    case Validation::Off:
+      break;
+  }
+  VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT};
+  features.enabledValidationFeatureCount = static_cast<std::uint32_t>(enables.size());
+  features.pEnabledValidationFeatures = enables.data();
+  if (validation != Validation::Off) {
     if (!hasLayer(kValidationLayer)) {
       throw GpuError(std::string("validation was requested but ") + kValidationLayer +
                      " is not installed (Debian package vulkan-validationlayers)");
     }
     layers.push_back(kValidationLayer);
     extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    if (!enables.empty()) {
+      if (!layerHasExtension(kValidationLayer, VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME)) {
+        throw GpuError(std::string(kValidationLayer) + " lacks " + VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME +
+                       ", needed for " + validationName(validation) + " validation");
+      }
+      extensions.push_back(VK_EXT_VALIDATION_FEATURES_EXTENSION_NAME);
+    }
   }
   for (const std::string& e : extra) extensions.push_back(e.c_str());
   VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+  if (!enables.empty()) info.pNext = &features;
   info.pApplicationInfo = &app;
   info.enabledLayerCount = static_cast<std::uint32_t>(layers.size());
   info.ppEnabledLayerNames = layers.data();
@@ -177,7 +212,7 @@ int computeFamily(VkPhysicalDevice device, VkSurfaceKHR surface = VK_NULL_HANDLE
 }  // namespace
 
 std::vector<DeviceInfo> listDevices() {
-  VkInstance instance = createInstance(false);
+  VkInstance instance = createInstance(Validation::Off);
   std::vector<DeviceInfo> infos;
   try {
     const auto devices = physicalDevices(instance);
@@ -213,17 +248,46 @@ std::string cpuDriverThreads(const char* current, unsigned cores) {
   return std::to_string(3u * std::max(cores, 1u));
 }
 
+Validation validationFromText(const char* text) {
+  const std::string v = text ? text : "";
+  if (v.empty() || v == "0") return Validation::Off;
+  if (v == "1" || v == "sync") return Validation::Standard;
+  if (v == "core") return Validation::Core;
+  if (v == "gpu") return Validation::GpuAssisted;
+  throw std::invalid_argument("HEMO_VALIDATION is '" + v + "'; expected 0, 1, sync, core or gpu");
+}
+
+const char* validationName(Validation level) {
+  switch (level) {
+    case Validation::Off: return "no";
+    case Validation::Standard: return "core and synchronization";
+    case Validation::Core: return "core";
+    case Validation::GpuAssisted: return "core and GPU-assisted";
+  }
+  return "unknown";
+}
+
 namespace {
-bool validationFromEnvironment() {
-  const char* v = std::getenv("HEMO_VALIDATION");
-  return v && std::string(v) != "0" && std::string(v) != "";
+bool flagFromEnvironment(const char* name) {
+  const char* v = std::getenv(name);
+  return v && std::string(v) != "" && std::string(v) != "0";
+}
+
+// The options' level, unless HEMO_VALIDATION names one: the environment wins over the
+// default (tests and apps ask for Standard; HEMO_VALIDATION=gpu switches them to GPU-assisted).
+Validation chooseValidation(const ContextOptions& options) {
+  const Validation fromEnvironment = validationFromText(std::getenv("HEMO_VALIDATION"));
+  if (fromEnvironment != Validation::Off) return fromEnvironment;
+  return options.validation ? options.level : Validation::Off;
 }
 }  // namespace
 
-Context::Context(const ContextOptions& options) : validation_(options.validation || validationFromEnvironment()) {
+Context::Context(const ContextOptions& options)
+    : stagingOnly_(options.stagingOnly || flagFromEnvironment("HEMO_FORCE_STAGING")),
+      validation_(chooseValidation(options)) {
   instance_ = createInstance(validation_, options.instanceExtensions);
   try {
-    if (validation_) {
+    if (validation_ != Validation::Off) {
       VkDebugUtilsMessengerCreateInfoEXT info{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
       info.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
                              VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
@@ -354,12 +418,16 @@ void Context::pickDevice(const std::string& selector) {
 
   VkPhysicalDeviceSubgroupProperties subgroup{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
   VkPhysicalDeviceMaintenance3Properties maintenance3{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_MAINTENANCE_3_PROPERTIES};
+  VkPhysicalDeviceDriverProperties driver{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES};
   subgroup.pNext = &maintenance3;
+  maintenance3.pNext = &driver;
   VkPhysicalDeviceProperties2 props{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
   props.pNext = &subgroup;
   vkGetPhysicalDeviceProperties2(physical_, &props);
   properties_ = props.properties;
   subgroupSize_ = subgroup.subgroupSize;
+  driver_ = driver.driverName;
+  if (driver.driverInfo[0] != '\0') driver_.append(1, ' ').append(driver.driverInfo);
   maxAllocationSize_ = maintenance3.maxMemoryAllocationSize;
   vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
 
@@ -368,6 +436,7 @@ void Context::pickDevice(const std::string& selector) {
   std::vector<VkQueueFamilyProperties> families(familyCount);
   vkGetPhysicalDeviceQueueFamilyProperties(physical_, &familyCount, families.data());
   timestampValidBits_ = families[queueFamily_].timestampValidBits;
+  queueDraws_ = (families[queueFamily_].queueFlags & VK_QUEUE_GRAPHICS_BIT) != 0;
 }
 
 Context::~Context() {

@@ -41,7 +41,7 @@ DispatchGate::DispatchGate(Context& context, const Buffer& values, std::uint32_t
 
 void DispatchGate::recordArm(CommandRecorder& rec, std::uint32_t index, float threshold) {
   rec.dispatch(*arm_, set_, ArmPush{maxSlots_, index, threshold}, arm_->groupsFor(maxSlots_));
-  rec.computeToIndirect();
+  rec.computeToCompute();
 }
 
 void DispatchGate::recordReset(CommandRecorder& rec) {

@@ -20,6 +20,7 @@ DescriptorSet& DescriptorSet::operator=(DescriptorSet&& other) noexcept {
     pool_ = std::exchange(other.pool_, VK_NULL_HANDLE);
     set_ = std::exchange(other.set_, VK_NULL_HANDLE);
     views_ = std::exchange(other.views_, {});
+    bound_ = std::exchange(other.bound_, {});
   }
   return *this;
 }
@@ -28,6 +29,7 @@ void DescriptorSet::release() {
   if (pool_) vkDestroyDescriptorPool(device_, pool_, nullptr);  // frees the set too
   for (VkBufferView view : views_) vkDestroyBufferView(device_, view, nullptr);
   views_.clear();
+  bound_.clear();
   pool_ = VK_NULL_HANDLE;
   set_ = VK_NULL_HANDLE;
 }
@@ -319,6 +321,8 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
   std::vector<VkWriteDescriptorSet> writes(bindingCount_);
   for (std::uint32_t i = 0; i < bindingCount_; ++i) {
     const Binding& b = *bySlot[i];
+    const VkDeviceSize end = b.range == VK_WHOLE_SIZE ? b.buffer->allocatedSize() : b.offset + b.range;
+    set.bound_.push_back({b.buffer->handle(), b.offset, end});
     writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
     writes[i].dstSet = set.set_;
     writes[i].dstBinding = i;

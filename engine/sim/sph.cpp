@@ -654,6 +654,7 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   // No list yet: the active list is empty until the first build.
   rec.fill(activeArgs_, 0u);
   rec.fill(status_, 0);
+  rec.transferToTransfer();  // the fills below overwrite some of these words
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_BAD_INPUT_ID * 4, 8);  // and BAD_FORCE_ID
   // the first step builds the list
@@ -714,7 +715,7 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
   // The boundary and wall particles: those with fluid in the new list to the active list,
   // the others set to a state without fluid neighbours until the next build.
   recordBoundaryRange(rec, HEMO_BPRESSURE_SORT, clockParity_);
-  rec.computeToComputeAndIndirect();
+  rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "boundary sort");
 }
 
@@ -833,6 +834,9 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   } else if (integrateArgsValid_ && integrateArgsGroups_.x == groups.x && integrateArgsGroups_.y == groups.y) {
     // the variant the last step's decision chose; the other gets no workgroups
     rec.dispatchIndirect(*integrate_[inflow][3], integrateSet_, push, integrateArgs_, 0);
+    // Only one of the two gets workgroups, but the GPU decides which: the barrier orders the
+    // pair whatever the counts (the second reads what the first writes when both run).
+    rec.computeToCompute();
     rec.dispatchIndirect(integrate, integrateSet_, push, integrateArgs_, 16);
   } else {
     // after a reset of the rebuild test (the reach is +inf, so the test collects), or with
@@ -854,7 +858,7 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   }
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone
-    rec.computeToComputeAndIndirect();  // the gate's arguments; the test's result for the next step
+    rec.computeToCompute();  // the gate's arguments; the test's result for the next step
   } else {
     rec.computeToCompute();
   }

@@ -136,7 +136,7 @@ void MarchingCubes::record(gpu::CommandRecorder& rec, gpu::TimestampQueries* tim
   rec.transferToCompute();
   rec.dispatch(*prepare_, prepareSet_, PreparePush{classify_->workgroupSize(), std::uint32_t(maxRuns_)},
                prepare_->groupsFor(1));
-  rec.computeToIndirect();
+  rec.computeToCompute();
   rec.dispatchIndirect(*classify_, classifySet_, args_, HEMO_MC_ARGS_CLASSIFY * 4);
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "classify");
@@ -148,7 +148,7 @@ void MarchingCubes::record(gpu::CommandRecorder& rec, gpu::TimestampQueries* tim
   if (timestamps) timestamps->mark(rec, "scan");
   rec.dispatchIndirect(*compact_, compactSet_, CompactPush{maxTriangles_, generate_->workgroupSize()}, args_,
                        HEMO_MC_ARGS_CLASSIFY * 4);
-  rec.computeToIndirect();
+  rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "compact");
   rec.dispatchIndirect(*generate_, generateSet_, GeneratePush{maxTriangles_}, args_, HEMO_MC_ARGS_GENERATE * 4);
   rec.computeToCompute();
@@ -283,8 +283,7 @@ void ParticleField::record(gpu::CommandRecorder& rec, std::uint32_t n, gpu::Time
     push.clipHi[a] = settings_.clipHi[a];
   }
   rec.dispatch(*bounds_, boundsSet_, push, gpu::Groups{1, 1});
-  rec.computeToCompute();
-  rec.computeToIndirect();
+  rec.computeToCompute();  // the bounds and the splat's arguments
   rec.dispatchIndirect(*splat_, splatSet_, SplatPush{n, h, kernelNorm, settings_.restDensity}, splatArgs_, 0);
   rec.computeToCompute();
   if (coarse) {

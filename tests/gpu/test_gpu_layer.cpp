@@ -87,6 +87,48 @@ TEST_F(GpuLayerTest, FillAndCopyThroughTheRecorder) {
   EXPECT_EQ(got[47], 0xdeadbeefu);
 }
 
+// The recorder refuses a fill, copy or dispatch that touches bytes an earlier fill or copy
+// wrote with no barrier since, on any device (synchronization validation reports the same
+// hazards, but only where the layer runs).
+TEST_F(GpuLayerTest, TransferWritesNeedABarrierBeforeTheirNextUse) {
+  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
+  gpu::Buffer a(ctx(), 256, gpu::MemoryUse::Device, "a");
+  gpu::Buffer b(ctx(), 256, gpu::MemoryUse::Device, "b");
+  gpu::Buffer sums(ctx(), 64, gpu::MemoryUse::Device, "sums");
+  const auto set = p.makeSet({{HEMO_SCAN_BINDING_DATA, &b}, {HEMO_SCAN_BINDING_SUMS, &sums}, {HEMO_SCAN_BINDING_LENGTH, &sums}});
+  const std::uint32_t push[4] = {64, HEMO_SCAN_NO_LENGTH, 0, 0};
+  auto message = [](auto&& f) -> std::string {
+    try {
+      f();
+    } catch (const std::logic_error& e) {
+      return e.what();
+    }
+    return "(no error)";
+  };
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  rec.fill(a, 1u, 0, 64);
+  EXPECT_NO_THROW(rec.fill(a, 2u, 64, 64));  // other bytes
+  const std::string overFill = message([&] { rec.fill(a, 3u, 32, 64); });
+  EXPECT_NE(overFill.find("a fill touches bytes 32 to 64 of buffer 'a'"), std::string::npos) << overFill;
+  EXPECT_NE(overFill.find("transferToTransfer"), std::string::npos) << overFill;
+  const std::string readFill = message([&] { rec.copy(a, b, 16); });
+  EXPECT_NE(readFill.find("copy from buffer 'a'"), std::string::npos) << readFill;
+  rec.transferToTransfer();
+  EXPECT_NO_THROW(rec.copy(a, b, 256));
+  EXPECT_NO_THROW(rec.fill(sums, 0u));
+  const std::string dispatch = message([&] { rec.dispatch(p, set, push, sizeof(push), p.groupsFor(16)); });
+  EXPECT_NE(dispatch.find("dispatch of 'scan/scan_add'"), std::string::npos) << dispatch;
+  EXPECT_NE(dispatch.find("transferToCompute"), std::string::npos) << dispatch;
+  rec.transferToCompute();
+  EXPECT_NO_THROW(rec.dispatch(p, set, push, sizeof(push), p.groupsFor(16)));
+  rec.end();
+  rec.submitAndWait();
+  const auto got = b.readback<std::uint32_t>(64);
+  EXPECT_EQ(got[0], 1u);   // block 0 of the scan is left as it is
+  EXPECT_EQ(got[16], 2u);
+}
+
 TEST_F(GpuLayerTest, BindingsAreCheckedBySlot) {
   const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
   gpu::Buffer a(ctx(), 64, gpu::MemoryUse::Device, "a");
@@ -400,6 +442,60 @@ TEST_F(GpuLayerTest, ValidationLayerReportsMisuse) {
   const auto messages = ctx().takeValidationMessages();  // expected here; not a failure
   ASSERT_FALSE(messages.empty());
   EXPECT_NE(messages[0].find("00912"), std::string::npos) << messages[0];
+}
+
+// Synchronization validation is on in the test suite (a missing barrier fails the test that
+// records it): a fill over what a dispatch wrote, with no barrier between, is reported.
+TEST_F(GpuLayerTest, SynchronizationValidationReportsAMissingBarrier) {
+  if (ctx().validation() != gpu::Validation::Standard) {
+    GTEST_SKIP() << "synchronization validation is off (" << gpu::validationName(ctx().validation()) << " validation)";
+  }
+  const auto& p = ctx().pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
+  gpu::Buffer data(ctx(), 4096, gpu::MemoryUse::Device, "data");
+  gpu::Buffer sums(ctx(), 64, gpu::MemoryUse::Device, "sums");
+  const auto set = p.makeSet({{HEMO_SCAN_BINDING_DATA, &data}, {HEMO_SCAN_BINDING_SUMS, &sums}, {HEMO_SCAN_BINDING_LENGTH, &sums}});
+  const std::uint32_t push[4] = {1024, HEMO_SCAN_NO_LENGTH, 0, 0};
+  const std::uint64_t before = ctx().validationMessageCount();
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  rec.dispatch(p, set, push, sizeof(push), p.groupsFor(1024));
+  vkCmdFillBuffer(rec.handle(), data.handle(), 0, 64, 0);  // no computeToTransfer before
+  rec.end();
+  rec.submitAndWait();
+  EXPECT_GT(ctx().validationMessageCount(), before);
+  const auto messages = ctx().takeValidationMessages();  // expected here; not a failure
+  ASSERT_FALSE(messages.empty());
+  EXPECT_NE(messages[0].find("SYNC-HAZARD-WRITE-AFTER-WRITE"), std::string::npos) << messages[0];
+}
+
+// The staging path of a discrete GPU, whose large memory the host cannot map, forced on
+// lavapipe: device buffers are not mapped, and uploads, recorded work and readbacks still
+// meet (with the staging copies' barriers checked by synchronization validation).
+TEST_F(GpuLayerTest, StagingPathWhereDeviceMemoryIsNotMapped) {
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.stagingOnly = true;
+  gpu::Context staged(options);
+  gpu::Buffer device(staged, 1024 * 4, gpu::MemoryUse::Device, "device");
+  gpu::Buffer upload(staged, 64, gpu::MemoryUse::Upload, "upload");
+  EXPECT_FALSE(device.hostMapped());
+  EXPECT_TRUE(upload.hostMapped());
+  std::vector<std::uint32_t> v(1024);
+  for (std::uint32_t i = 0; i < v.size(); ++i) v[i] = i * 2654435761u;
+  device.upload(v);
+  EXPECT_EQ(device.readback<std::uint32_t>(1024), v);
+  gpu::CommandRecorder rec(staged);
+  rec.begin();
+  rec.fill(device, 7u, 64, 64);
+  rec.end();
+  rec.submitAndWait();
+  const auto got = device.readback<std::uint32_t>(48);
+  EXPECT_EQ(got[15], v[15]);
+  EXPECT_EQ(got[16], 7u);
+  EXPECT_EQ(got[31], 7u);
+  EXPECT_EQ(got[32], v[32]);
+  const auto messages = staged.takeValidationMessages();
+  for (const auto& m : messages) ADD_FAILURE() << m;
 }
 
 }  // namespace

@@ -34,6 +34,8 @@ class Buffer {
   const std::string& name() const { return name_; }
   MemoryUse use() const { return use_; }
   bool valid() const { return buffer_ != VK_NULL_HANDLE; }
+  // The host reads and writes it directly (else upload/readback copy through staging).
+  bool hostMapped() const { return mapped_ != nullptr; }
 
   // Copies `bytes` from `src` into the buffer at `offset` (staging copy if not host-visible).
   void uploadBytes(const void* src, VkDeviceSize bytes, VkDeviceSize offset = 0);

@@ -11,6 +11,9 @@ namespace hemo::gpu {
 
 class TimestampQueries;
 class DispatchGate;
+namespace detail {
+struct BarrierScope;  // stages and accesses of one side of a barrier (commands.cpp)
+}
 
 class CommandRecorder {
  public:
@@ -60,19 +63,33 @@ class CommandRecorder {
   void beginGate(DispatchGate& gate, std::uint32_t variant = 0);
   void endGate();
 
-  // Named barriers (global memory barriers; the only raw masks live in commands.cpp).
-  void computeToCompute();   // shader writes -> shader reads/writes
-  void computeToTransfer();  // shader writes -> copy/fill
-  void transferToCompute();  // copy/fill -> shader reads/writes
-  void transferToTransfer();
-  void computeToIndirect();  // shader writes -> indirect dispatch/draw arguments
-  // Compute writes read both as indirect arguments and by later compute shaders.
-  void computeToComputeAndIndirect();
-  // Compute/transfer writes -> what a draw reads: indirect arguments, vertex attributes,
-  // storage buffers in vertex shaders (the renderer's one hand-off from the simulation).
+  // Named barriers: global memory barriers, each between a producer and a consumer (the raw
+  // stage and access masks live only in commands.cpp). A barrier makes what its producer
+  // wrote visible to everything its consumer does, and orders the consumer's writes after
+  // the producer's reads:
+  //   compute   a dispatch's shader writes (and reads)
+  //   transfer  fills and copies
+  //   dispatch  everything a later dispatch may do with a buffer: read it as indirect
+  //             arguments (an indirect or gated dispatch), read it as storage, uniform or
+  //             texel data, and write it
+  //   graphics  what a draw reads: indirect arguments, vertex attributes, shader reads
+  //   host      host reads after the fence
+  // A barrier always covers every consumer of its kind: there is no barrier to indirect
+  // arguments alone, because a buffer a shader writes may be read by the next dispatch both
+  // as arguments and as data (marching cubes' and the gate's arguments are), and a barrier
+  // that covers one of two readers leaves the other unordered.
+  void computeToCompute();   // compute -> dispatch
+  void computeToTransfer();  // compute -> transfer
+  void transferToCompute();  // transfer -> dispatch
+  void transferToTransfer(); // transfer -> transfer
+  // compute and transfer -> graphics (the renderer's one hand-off from the simulation)
   void computeToGraphics();
-  void computeToHost();      // shader/copy writes -> host reads after a fence
+  void computeToHost();      // compute and transfer -> host
 
+  // Transfer commands. The recorder remembers what fills and copies wrote since the last
+  // barrier out of transfer, and throws std::logic_error when a later command touches those
+  // bytes without one: a fill or copy over them (transferToTransfer), a copy reading them,
+  // or a dispatch that binds them or reads its arguments there (transferToCompute).
   void fill(const Buffer& buffer, std::uint32_t value, VkDeviceSize offset = 0, VkDeviceSize bytes = VK_WHOLE_SIZE);
   void copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, VkDeviceSize srcOffset = 0,
             VkDeviceSize dstOffset = 0);
@@ -81,7 +98,18 @@ class CommandRecorder {
 
  private:
   void bind(const ComputePipeline& pipeline, const DescriptorSet& set, const void* push, std::uint32_t pushBytes);
-  void barrier(VkPipelineStageFlags src, VkAccessFlags srcAccess, VkPipelineStageFlags dst, VkAccessFlags dstAccess);
+  void barrier(const detail::BarrierScope& producer, const detail::BarrierScope& consumer);
+  // The pending transfer writes (see fill/copy).
+  struct Range {
+    VkBuffer buffer;
+    VkDeviceSize begin, end;
+    std::string name;  // the buffer's, for the error
+  };
+  void transferWrote(const Buffer& buffer, VkDeviceSize offset, VkDeviceSize bytes, const char* what);
+  void checkNotPending(VkBuffer buffer, VkDeviceSize begin, VkDeviceSize end, const std::string& user,
+                       const char* barrierName) const;
+  void checkDispatchReads(const ComputePipeline& pipeline, const DescriptorSet& set, VkBuffer args,
+                          VkDeviceSize argsOffset) const;
 
   Context* context_;
   VkCommandPool pool_ = VK_NULL_HANDLE;
@@ -92,7 +120,14 @@ class CommandRecorder {
   VkDescriptorSet boundSet_ = VK_NULL_HANDLE;
   std::uint64_t dispatches_ = 0;
   DispatchGate* gate_ = nullptr;
+  std::vector<Range> pendingTransfer_;
 };
+
+// Barriers for the one-time copies of Buffer's staging path (Context::runOnce), which run
+// outside a CommandRecorder: every earlier compute, transfer and draw access on the queue
+// before a copy, and a copy's writes before the host reads them.
+void recordBeforeStagingCopy(const Context& context, VkCommandBuffer cmd);
+void recordStagingCopyToHost(VkCommandBuffer cmd);
 
 // GPU timestamps around named stages. reset() before use in each recording; stage times are
 // read after the submission completed.

@@ -32,10 +32,30 @@ struct DeviceInfo {
   std::string typeName() const;
 };
 
+// What the validation layer checks.
+enum class Validation {
+  Off,
+  // The core checks and synchronization validation (hazards between commands: a missing or
+  // too-narrow barrier, which lavapipe's in-order execution would hide).
+  Standard,
+  // The core checks only (a quick check of an application that records many frames).
+  Core,
+  // The core checks and GPU-assisted validation (out-of-bounds descriptor accesses, checked
+  // by instrumented shaders). The layer cannot run it together with synchronization validation.
+  GpuAssisted,
+};
+
+// The level that HEMO_VALIDATION asks for: unset, "" or "0": Off; "1" or "sync": Standard;
+// "core": Core; "gpu": GpuAssisted. Throws std::invalid_argument for any other value.
+Validation validationFromText(const char* text);
+const char* validationName(Validation level);
+
 struct ContextOptions {
   // Enable VK_LAYER_KHRONOS_validation and count its messages. Fails if the layer is missing.
-  // The environment variable HEMO_VALIDATION=1 turns it on as well.
+  // The environment variable HEMO_VALIDATION (validationFromText) turns it on as well, and
+  // picks the level when this is left at Off or Standard.
   bool validation = false;
+  Validation level = Validation::Standard;  // what `validation` turns on
   // Device selector: an index into the device list or a case-insensitive substring of the
   // device name. Empty: the HEMO_DEVICE environment variable, else the default choice
   // (discrete > integrated > virtual > CPU).
@@ -45,6 +65,10 @@ struct ContextOptions {
   // creates the presentation surface once the instance exists. With a surface, the queue
   // family must also draw and present to it, and VK_KHR_swapchain is enabled.
   std::vector<std::string> instanceExtensions;
+  // Device buffers are never mapped, even where the device's memory is host-visible (lavapipe,
+  // integrated GPUs): uploads and readbacks go through staging copies, as they must on a
+  // discrete GPU whose large memory the host cannot see. HEMO_FORCE_STAGING=1 sets it too.
+  bool stagingOnly = false;
   std::function<VkSurfaceKHR(VkInstance)> createSurface;
 };
 
@@ -74,13 +98,21 @@ class Context {
   VkQueue queue() const { return queue_; }
   VkSurfaceKHR surface() const { return surface_; }  // VK_NULL_HANDLE when headless
   std::uint32_t queueFamily() const { return queueFamily_; }
+  bool queueDraws() const { return queueDraws_; }  // the queue family has graphics
   const DeviceInfo& info() const { return info_; }
   const VkPhysicalDeviceLimits& limits() const { return properties_.limits; }
+  // The driver as it names itself (VkPhysicalDeviceDriverProperties: name and version text,
+  // e.g. "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)" or "NVIDIA 580.159").
+  const std::string& driver() const { return driver_; }
+  std::uint32_t vendorId() const { return properties_.vendorID; }
+  const VkPhysicalDeviceMemoryProperties& memoryProperties() const { return memory_; }
   std::uint32_t subgroupSize() const { return subgroupSize_; }
   VkDeviceSize maxAllocationSize() const { return maxAllocationSize_; }
   bool timestampsSupported() const { return timestampValidBits_ != 0; }
   double timestampPeriodNs() const { return properties_.limits.timestampPeriod; }
-  bool validationEnabled() const { return validation_; }
+  bool validationEnabled() const { return validation_ != Validation::Off; }
+  Validation validation() const { return validation_; }
+  bool stagingOnly() const { return stagingOnly_; }
 
   // Validation-layer messages (warnings and errors) seen so far.
   std::uint64_t validationMessageCount() const;
@@ -114,12 +146,15 @@ class Context {
   VkCommandPool oneShotPool_ = VK_NULL_HANDLE;
   std::uint32_t queueFamily_ = 0;
   std::uint32_t timestampValidBits_ = 0;
+  bool queueDraws_ = false;
+  bool stagingOnly_ = false;
   std::uint32_t subgroupSize_ = 0;
   VkDeviceSize maxAllocationSize_ = 0;
   VkPhysicalDeviceProperties properties_{};
   VkPhysicalDeviceMemoryProperties memory_{};
   DeviceInfo info_;
-  bool validation_ = false;
+  std::string driver_;
+  Validation validation_ = Validation::Off;
 
   mutable std::mutex messageMutex_;
   std::uint64_t messageCount_ = 0;

@@ -26,8 +26,8 @@ class DispatchGate {
                std::uint32_t variants = 1);
 
   // Records the decision for the next gated region. Needs the writes of `values` visible to
-  // compute (a computeToCompute barrier before), and leaves the arguments ready for indirect
-  // reads.
+  // compute (a computeToCompute barrier before), and ends with computeToCompute, which orders
+  // the arguments before the region's indirect reads.
   void recordArm(CommandRecorder& rec, std::uint32_t index, float threshold);
   // Zeroes the counter of openings (transfer command).
   void recordReset(CommandRecorder& rec);
@@ -39,9 +39,8 @@ class DispatchGate {
 
   // For a shader that arms the gate itself, at the end of the pass that computes the decision
   // (common/gate.glsl: one dispatch less per region than recordArm). Such a shader binds
-  // these three buffers and must be followed by a barrier to indirect reads
-  // (CommandRecorder::computeToIndirect, or computeToComputeAndIndirect when later compute
-  // passes also read what it wrote).
+  // these three buffers and must be followed by CommandRecorder::computeToCompute, which
+  // orders the arguments before the region's indirect reads.
   const Buffer& armedCounts() const { return armed_; }
   const Buffer& arguments() const { return args_; }
   const Buffer& openings() const { return opened_; }

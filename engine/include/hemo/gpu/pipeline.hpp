@@ -59,6 +59,13 @@ class DescriptorSet {
   DescriptorSet& operator=(const DescriptorSet&) = delete;
   VkDescriptorSet handle() const { return set_; }
 
+  // The byte ranges the set binds (for the recorder's check of pending transfer writes).
+  struct Bound {
+    VkBuffer buffer;
+    VkDeviceSize begin, end;
+  };
+  const std::vector<Bound>& bound() const { return bound_; }
+
  private:
   friend class ComputePipeline;
   void release();
@@ -66,6 +73,7 @@ class DescriptorSet {
   VkDescriptorPool pool_ = VK_NULL_HANDLE;
   VkDescriptorSet set_ = VK_NULL_HANDLE;
   std::vector<VkBufferView> views_;  // of the texel slots
+  std::vector<Bound> bound_;
 };
 
 struct PipelineDesc {

@@ -72,8 +72,9 @@ class MarchingCubes {
   MarchingCubes(gpu::Context& context, std::uint32_t maxVoxelsPerAxis, std::uint32_t maxTriangles = 0);
 
   // Extracts the surface of field() on grid() (both written before: by ParticleField, or by
-  // uploadField). Records transfer and compute commands; the caller adds computeToIndirect /
-  // computeToVertex barriers as its consumers need (readback: CommandRecorder::end does it).
+  // uploadField). Records transfer and compute commands and ends with a computeToCompute
+  // barrier; a renderer adds computeToGraphics before it draws (readback: CommandRecorder::end
+  // adds the barrier to the host).
   void record(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr) const;
 
   // Set-up/test path: a field given at the points of a grid (x fastest). Throws
