@@ -13,15 +13,10 @@ uint hemo_mc_point(uvec3 p, McGrid g) {
   return p.x + g.points.w * (p.y + g.points.y * p.z);
 }
 
-// Workgroup counts covering `items` invocations: (x, y, 1), folded into y when x would pass
-// 65535 (the smallest maxComputeWorkGroupCount[0] Vulkan allows); shaders index with
-// hemo_group_index() and skip the tail.
+// Workgroup counts covering `items` invocations: (x, y, 1), folded into y past the device's
+// limit (common/index.glsl); shaders index with hemo_group_index() and skip the tail.
 uvec3 hemo_mc_groups(uint items, uint workgroup) {
-  const uint groups = (items + workgroup - 1u) / workgroup;
-  if (groups <= 65535u) {
-    return uvec3(groups, 1u, 1u);
-  }
-  return uvec3(65535u, (groups + 65534u) / 65535u, 1u);
+  return uvec3(hemo_fold_groups((items + workgroup - 1u) / workgroup), 1u);
 }
 
 // Corner c of a voxel: offset (c & 1, (c >> 1) & 1, (c >> 2) & 1).

@@ -89,7 +89,9 @@ void main() {
         const uint k = atomicAdd(activeArgs.w, 1u);
         activeClusters[k] = c;
         if (k % gl_WorkGroupSize.x == 0u) {
-          atomicAdd(activeArgs.x, 1u);
+          const uvec2 groups = hemo_fold_groups(k / gl_WorkGroupSize.x + 1u);  // (atomicMax: any order)
+        atomicMax(activeArgs.x, groups.x);
+        atomicMax(activeArgs.y, groups.y);
         }
       }
       return;

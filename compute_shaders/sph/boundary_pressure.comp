@@ -55,7 +55,9 @@ float gInvH;
 float gSumW, gSumP;
 vec3 gSumRhoR, gSumV;
 
-// One fluid neighbour f; `valid` is false for the padding of the list's last texel.
+// One fluid neighbour f; `valid` is false for the padding of the list's last texel, which
+// nobody wrote: the caller then passes the particle's own slot, so every fetch stays within
+// the buffers (GPU-assisted validation checks that), and drops the pair here.
 void pair(uint f, bool valid) {
   const vec3 d = hemo_min_image(gXb - texelFetch(positions, int(f)).xyz, gPp);
   const float r2 = dot(d, d);
@@ -97,7 +99,9 @@ void main() {
       const uint k = atomicAdd(activeArgs.w, 1u);
       activeSlots[k] = b;
       if (k % gl_WorkGroupSize.x == 0u) {
-        atomicAdd(activeArgs.x, 1u);
+        const uvec2 groups = hemo_fold_groups(k / gl_WorkGroupSize.x + 1u);  // (atomicMax: any order)
+        atomicMax(activeArgs.x, groups.x);
+        atomicMax(activeArgs.y, groups.y);
       }
     }
     return;
@@ -115,9 +119,9 @@ void main() {
     if (kListWidth == 4u) {
       const uvec4 fs = texelFetch(neighbourList, int(hemo_list_texel(b, k, gPp)));
       pair(fs.x, true);
-      pair(fs.y, k + 1u < count);
-      pair(fs.z, k + 2u < count);
-      pair(fs.w, k + 3u < count);
+      pair(k + 1u < count ? fs.y : b, k + 1u < count);
+      pair(k + 2u < count ? fs.z : b, k + 2u < count);
+      pair(k + 3u < count ? fs.w : b, k + 3u < count);
     } else {
       pair(texelFetch(neighbourList, int(hemo_list_slot(b, k, gPp))).x, true);
     }

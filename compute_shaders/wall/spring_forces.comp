@@ -82,7 +82,8 @@ vec3 gSum;        // sum of V_f [ ... ] above, times V_w at the end
 vec3 gRepulsion;  // sum of m_f a_repulsion
 
 // One fluid neighbour f of the wall particle; `valid` is false for the padding of the list's
-// last texel.
+// last texel, which nobody wrote: the caller then passes the wall particle's own slot, so
+// every fetch stays within the buffers, and the pair is dropped here.
 void reactionPair(uint f, bool valid) {
   const vec4 pf = pairPosition(f);  // (x_f, V_f p_f)
   const vec3 d = hemo_min_image(pf.xyz - gXw, gPp);  // from w to f, as f sees it
@@ -125,9 +126,9 @@ vec3 hemo_fluid_reaction(uint w) {
     if (kListWidth == 4u) {
       const uvec4 fs = texelFetch(neighbourListT, int(hemo_list_texel(w, k, gPp)));
       reactionPair(fs.x, true);
-      reactionPair(fs.y, k + 1u < count);
-      reactionPair(fs.z, k + 2u < count);
-      reactionPair(fs.w, k + 3u < count);
+      reactionPair(k + 1u < count ? fs.y : w, k + 1u < count);
+      reactionPair(k + 2u < count ? fs.z : w, k + 2u < count);
+      reactionPair(k + 3u < count ? fs.w : w, k + 3u < count);
     } else {
       reactionPair(texelFetch(neighbourListT, int(hemo_list_slot(w, k, gPp))).x, true);
     }

@@ -310,6 +310,7 @@ Context::Context(const ContextOptions& options)
       if (!surface_) throw GpuError("the window system could not create a Vulkan surface");
     }
     pickDevice(selector);
+    lowerLimits(options.limits);
 
     const float priority = 1.0f;
     VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
@@ -437,6 +438,17 @@ void Context::pickDevice(const std::string& selector) {
   vkGetPhysicalDeviceQueueFamilyProperties(physical_, &familyCount, families.data());
   timestampValidBits_ = families[queueFamily_].timestampValidBits;
   queueDraws_ = (families[queueFamily_].queueFlags & VK_QUEUE_GRAPHICS_BIT) != 0;
+}
+
+void Context::lowerLimits(const LimitOverrides& o) {
+  VkPhysicalDeviceLimits& l = properties_.limits;
+  auto lower = [](std::uint32_t& limit, std::uint32_t to) {
+    if (to != 0) limit = std::min(limit, to);
+  };
+  lower(l.maxComputeWorkGroupCount[0], o.maxComputeWorkGroupCountX);
+  lower(l.maxTexelBufferElements, o.maxTexelBufferElements);
+  lower(l.maxStorageBufferRange, o.maxStorageBufferRange);
+  if (!o.timestamps) timestampValidBits_ = 0;
 }
 
 Context::~Context() {

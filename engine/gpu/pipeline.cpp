@@ -1,6 +1,7 @@
 #include "hemo/gpu/pipeline.hpp"
 
 #include "hemo/shaders.hpp"
+#include "interface/spec.h"
 
 #include <algorithm>
 #include <bit>
@@ -93,10 +94,16 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
     std::vector<std::uint32_t> constants;
     constants.push_back(workgroupSize_);
     constants.insert(constants.end(), desc.specialization.begin(), desc.specialization.end());
+    if (constants.size() > HEMO_SPEC_MAX_GROUPS_X) {
+      throw GpuError("'" + name_ + "' has more specialization constants than interface/spec.h leaves room for");
+    }
     std::vector<VkSpecializationMapEntry> entries(constants.size());
     for (std::uint32_t i = 0; i < constants.size(); ++i) {
       entries[i] = {i, i * 4u, 4u};
     }
+    // The shared constants (interface/spec.h); an id a shader does not use is ignored.
+    entries.push_back({HEMO_SPEC_MAX_GROUPS_X, std::uint32_t(constants.size() * 4), 4u});
+    constants.push_back(std::min({limits.maxComputeWorkGroupCount[0], limits.maxComputeWorkGroupCount[1], 65535u}));
     VkSpecializationInfo spec{};
     spec.mapEntryCount = static_cast<std::uint32_t>(entries.size());
     spec.pMapEntries = entries.data();

@@ -400,6 +400,31 @@ TEST_F(GpuLayerTest, GroupsFoldIntoTwoDimensionsPastTheLimit) {
   EXPECT_EQ(p.groupsFor(0).total(), 0u);
 }
 
+// A queue without timestamps (forced): stages are recorded untimed, and the times are empty
+// rather than made up.
+TEST_F(GpuLayerTest, StagesRunUntimedWithoutTimestamps) {
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.timestamps = false;
+  gpu::Context untimed(options);
+  ASSERT_FALSE(untimed.timestampsSupported());
+  gpu::Buffer a(untimed, 1 << 16, gpu::MemoryUse::Device, "a");
+  gpu::TimestampQueries ts(untimed, 4);
+  EXPECT_FALSE(ts.supported());
+  gpu::CommandRecorder rec(untimed);
+  rec.begin();
+  ts.reset(rec);
+  ts.mark(rec, "start");
+  rec.fill(a, 7);
+  ts.mark(rec, "fill");
+  rec.end();
+  rec.submitAndWait();
+  EXPECT_TRUE(ts.stageMs().empty());
+  EXPECT_EQ(ts.totalMs(), 0.0);
+  EXPECT_EQ(a.readback<std::uint32_t>(1)[0], 7u);
+  for (const auto& m : untimed.takeValidationMessages()) ADD_FAILURE() << m;
+}
+
 TEST_F(GpuLayerTest, UnknownShaderNameThrows) {
   EXPECT_THROW(ctx().pipelines().get({"scan/nope", 1, 0, 64, {}}), std::invalid_argument);
 }

@@ -5,9 +5,11 @@
 #include "hemo/io/output.hpp"
 #include "hemo/reference/marching_cubes.hpp"
 #include "hemo/surface/marching_cubes.hpp"
+#include "interface/mc.h"
 
 #include <glm/geometric.hpp>
 
+#include <cstring>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -353,6 +355,36 @@ TEST_F(MarchingCubesTest, ParticleFieldMatchesTheReferenceAndWrapsTheBlock) {
 // A grid much finer than the kernel: each particle's support covers ~64^3 points, more loop
 // iterations than llvmpipe lets one shader invocation run (65,535), so the splat must split a
 // particle's work (mc/bounds.comp).
+// A device that allows only a few workgroups along x (forced low): every dispatch, those whose
+// counts the host computes and those whose counts the GPU writes (the splat, the upsample,
+// classify and generate), folds into y, and the field and the surface come out bit-identical.
+TEST_F(MarchingCubesTest, FoldedDispatchesGiveTheSameSurface) {
+  const float dp = 1.0e-3f, h = 1.3f * dp, rho0 = 1000.0f;
+  const Block block = fluidBlock(dp, glm::uvec3(12, 8, 6), rho0);
+  surface::FieldSettings settings = fieldSettings(48, h, rho0);
+  BlockField wide(ctx(), block, 64, settings);
+  wide.run(ctx());
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.maxComputeWorkGroupCountX = 5;
+  gpu::Context narrow(options);
+  ASSERT_EQ(narrow.limits().maxComputeWorkGroupCount[0], 5u);
+  BlockField folded(narrow, block, 64, settings);
+  folded.run(narrow);
+  const auto a = wide.mc.readMesh(), b = folded.mc.readMesh();
+  EXPECT_EQ(wide.mc.readField(), folded.mc.readField());
+  ASSERT_EQ(a.totals.written, b.totals.written);
+  ASSERT_GT(a.totals.written, 1000u);
+  EXPECT_EQ(0, std::memcmp(a.vertices.data(), b.vertices.data(), a.vertices.size() * sizeof(a.vertices[0])));
+  // The counts the GPU wrote for classify and generate fold at the context's limit.
+  const auto args = folded.mc.args().readback<std::uint32_t>(16);
+  for (const std::uint32_t at : {std::uint32_t(HEMO_MC_ARGS_CLASSIFY), std::uint32_t(HEMO_MC_ARGS_GENERATE)}) {
+    EXPECT_LE(args[at], 5u) << "arguments at " << at;
+    EXPECT_GT(args[at + 1], 1u) << "arguments at " << at;
+  }
+  for (const auto& m : narrow.takeValidationMessages()) ADD_FAILURE() << m;
+}
+
 TEST_F(MarchingCubesTest, ParticleFieldOnAGridFarFinerThanTheKernel) {
   const float dp = 1.0e-3f, h = 1.3f * dp, rho0 = 1000.0f;
   const Block block = fluidBlock(dp, glm::uvec3(4, 4, 3), rho0);

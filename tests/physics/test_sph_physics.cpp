@@ -400,6 +400,42 @@ TEST_F(SphPhysicsTest, TwoRunsAreBitIdentical) {
   }
 }
 
+// A device that allows only one workgroup along x (forced low): every dispatch folds into
+// y, the boundary's active list (whose counts the GPU appends) included, and the run is
+// bit-identical to the one on the device's own limits.
+TEST_F(SphPhysicsTest, FoldedDispatchesGiveBitIdenticalRuns) {
+  // The dam break: its active boundary list spans several workgroups.
+  const scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  auto run = [&](gpu::Context& context) {
+    sim::Simulation sim(context, scene);
+    sim::RunOptions opt;
+    opt.steps = 100;
+    sim.run(opt);
+    // The active list's counts, which the GPU appends, fold at the context's limit too.
+    const auto args = sim.solver().boundaryActiveArgs().readback<std::uint32_t>(4);
+    const std::uint32_t maxX = context.limits().maxComputeWorkGroupCount[0];
+    EXPECT_LE(args[0], maxX);
+    EXPECT_GE(std::uint64_t(args[0]) * args[1] * 256, args[3]) << "the groups cover the list";
+    if (maxX == 1) {
+      EXPECT_GT(args[1], 1u) << "a list long enough to fold: " << args[3] << " entries";
+    }
+    const auto s = sim.snapshot();
+    std::vector<glm::vec4> state = s.positions;
+    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
+    return state;
+  };
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.maxComputeWorkGroupCountX = 1;
+  gpu::Context narrow(options);
+  const auto wide = run(ctx());
+  const auto folded = run(narrow);
+  ASSERT_EQ(wide.size(), folded.size());
+  EXPECT_EQ(0, std::memcmp(wide.data(), folded.data(), wide.size() * sizeof(glm::vec4)))
+      << "the run with folded dispatches differs";
+  for (const auto& m : narrow.takeValidationMessages()) ADD_FAILURE() << m;
+}
+
 TEST_F(SphPhysicsTest, EndTimeIsHitExactlyAndStepsAfterItDoNothing) {
   const scene::Scene scene = scene::parseScene(kColumn, "column_test");
   sim::Simulation sim(ctx(), scene);

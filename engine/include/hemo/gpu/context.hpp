@@ -50,6 +50,17 @@ enum class Validation {
 Validation validationFromText(const char* text);
 const char* validationName(Validation level);
 
+// Device limits lowered for tests (0, or true for timestamps: the device's own): the engine
+// then takes the paths that a device with such limits needs (dispatches folded into y,
+// buffers refused with the figure they need, stages untimed) on whatever device runs the test.
+// A value above the device's own changes nothing.
+struct LimitOverrides {
+  std::uint32_t maxComputeWorkGroupCountX = 0;  // along x
+  std::uint32_t maxTexelBufferElements = 0;
+  std::uint32_t maxStorageBufferRange = 0;
+  bool timestamps = true;
+};
+
 struct ContextOptions {
   // Enable VK_LAYER_KHRONOS_validation and count its messages. Fails if the layer is missing.
   // The environment variable HEMO_VALIDATION (validationFromText) turns it on as well, and
@@ -69,6 +80,7 @@ struct ContextOptions {
   // integrated GPUs): uploads and readbacks go through staging copies, as they must on a
   // discrete GPU whose large memory the host cannot see. HEMO_FORCE_STAGING=1 sets it too.
   bool stagingOnly = false;
+  LimitOverrides limits;
   std::function<VkSurfaceKHR(VkInstance)> createSurface;
 };
 
@@ -136,6 +148,7 @@ class Context {
                                                   const VkDebugUtilsMessengerCallbackDataEXT* data,
                                                   void* user);
   void pickDevice(const std::string& selector);
+  void lowerLimits(const LimitOverrides& overrides);
 
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;

@@ -233,6 +233,8 @@ class SphSolver {
   bool usesClusters() const { return clusterPath(); }
   bool usesBoundaryClusters() const { return boundaryClusterPath(); }
   std::uint32_t clusterCapacity() const { return clusterCapacity_; }
+  // The boundary pass's active list's indirect arguments: uvec4 (groups x, y, z, entries).
+  const gpu::Buffer& boundaryActiveArgs() const { return activeArgs_; }
   const gpu::Buffer& clusterCounts() const { return ccount_; }
   const gpu::Buffer& clusterLists() const { return clist_; }
   const gpu::Buffer& clusterOrder() const { return corder_; }
