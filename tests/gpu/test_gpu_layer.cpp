@@ -400,6 +400,18 @@ TEST_F(GpuLayerTest, GroupsFoldIntoTwoDimensionsPastTheLimit) {
   EXPECT_EQ(p.groupsFor(0).total(), 0u);
 }
 
+// Fills `a` with 7 as the stage "fill", timed by `ts`, and waits.
+void timeAFill(gpu::Context& context, gpu::Buffer& a, gpu::TimestampQueries& ts) {
+  gpu::CommandRecorder rec(context);
+  rec.begin();
+  ts.reset(rec);
+  ts.mark(rec, "start");
+  rec.fill(a, 7);
+  ts.mark(rec, "fill");
+  rec.end();
+  rec.submitAndWait();
+}
+
 // A queue without timestamps (forced): stages are recorded untimed, and the times are empty
 // rather than made up.
 TEST_F(GpuLayerTest, StagesRunUntimedWithoutTimestamps) {
@@ -411,14 +423,7 @@ TEST_F(GpuLayerTest, StagesRunUntimedWithoutTimestamps) {
   gpu::Buffer a(untimed, 1 << 16, gpu::MemoryUse::Device, "a");
   gpu::TimestampQueries ts(untimed, 4);
   EXPECT_FALSE(ts.supported());
-  gpu::CommandRecorder rec(untimed);
-  rec.begin();
-  ts.reset(rec);
-  ts.mark(rec, "start");
-  rec.fill(a, 7);
-  ts.mark(rec, "fill");
-  rec.end();
-  rec.submitAndWait();
+  timeAFill(untimed, a, ts);
   EXPECT_TRUE(ts.stageMs().empty());
   EXPECT_EQ(ts.totalMs(), 0.0);
   EXPECT_EQ(a.readback<std::uint32_t>(1)[0], 7u);
@@ -433,14 +438,7 @@ TEST_F(GpuLayerTest, TimestampsMeasureStages) {
   if (!ctx().timestampsSupported()) GTEST_SKIP() << "device has no timestamps";
   gpu::Buffer a(ctx(), 1 << 20, gpu::MemoryUse::Device, "a");
   gpu::TimestampQueries ts(ctx(), 8);
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  ts.reset(rec);
-  ts.mark(rec, "start");
-  rec.fill(a, 7);
-  ts.mark(rec, "fill");
-  rec.end();
-  rec.submitAndWait();
+  timeAFill(ctx(), a, ts);
   const auto stages = ts.stageMs();
   ASSERT_EQ(stages.size(), 1u);
   EXPECT_EQ(stages[0].first, "fill");
