@@ -867,6 +867,7 @@ Json deviceFacts(Context& ctx) {
               {"max_allocation_bytes", ctx.maxAllocationSize()},
               {"timestamps", ctx.timestampsSupported()},
               {"timestamp_period_ns", ctx.timestampPeriodNs()},
+              {"timestamp_valid_bits", ctx.timestampValidBits()},
               {"device_buffers_mapped", probe.hostMapped()},
               {"memory_heaps", heaps},
               {"memory_types", types}};

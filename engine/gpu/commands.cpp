@@ -298,8 +298,12 @@ std::vector<std::pair<std::string, double>> TimestampQueries::stageMs() const {
                               VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
         "vkGetQueryPoolResults");
   const double msPerTick = context_->timestampPeriodNs() * 1e-6;
+  // Only the low timestampValidBits bits count (36 on some GPUs): a difference is taken
+  // modulo 2^bits, so a counter that wrapped between two marks still gives the elapsed ticks.
+  const std::uint32_t bits = context_->timestampValidBits();
+  const std::uint64_t mask = bits >= 64 ? ~std::uint64_t(0) : (std::uint64_t(1) << bits) - 1;
   for (std::size_t i = 1; i < ticks.size(); ++i) {
-    out.emplace_back(labels_[i], double(ticks[i] - ticks[i - 1]) * msPerTick);
+    out.emplace_back(labels_[i], double((ticks[i] - ticks[i - 1]) & mask) * msPerTick);
   }
   return out;
 }

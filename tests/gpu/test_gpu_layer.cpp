@@ -430,6 +430,27 @@ TEST_F(GpuLayerTest, StagesRunUntimedWithoutTimestamps) {
   for (const auto& m : untimed.takeValidationMessages()) ADD_FAILURE() << m;
 }
 
+// A timestamp counter with few valid bits (forced to 12): stage times are differences modulo
+// 2^12 ticks, never the garbage a wrapped counter gives when the high bits are kept.
+TEST_F(GpuLayerTest, TimestampDifferencesWrapAtTheValidBits) {
+  if (!ctx().timestampsSupported()) GTEST_SKIP() << "device has no timestamps";
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.timestampValidBits = 12;
+  gpu::Context narrow(options);
+  ASSERT_EQ(narrow.timestampValidBits(), 12u);
+  gpu::Buffer a(narrow, 1 << 20, gpu::MemoryUse::Device, "a");
+  gpu::TimestampQueries ts(narrow, 4);
+  for (int round = 0; round < 4; ++round) {
+    timeAFill(narrow, a, ts);
+    const auto stages = ts.stageMs();
+    ASSERT_EQ(stages.size(), 1u);
+    EXPECT_GE(stages[0].second, 0.0);
+    EXPECT_LT(stages[0].second, 4096 * narrow.timestampPeriodNs() * 1e-6);
+  }
+  for (const auto& m : narrow.takeValidationMessages()) ADD_FAILURE() << m;
+}
+
 TEST_F(GpuLayerTest, UnknownShaderNameThrows) {
   EXPECT_THROW(ctx().pipelines().get({"scan/nope", 1, 0, 64, {}}), std::invalid_argument);
 }

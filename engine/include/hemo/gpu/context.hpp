@@ -59,6 +59,7 @@ struct LimitOverrides {
   std::uint32_t maxTexelBufferElements = 0;
   std::uint32_t maxStorageBufferRange = 0;
   bool timestamps = true;
+  std::uint32_t timestampValidBits = 0;  // fewer valid bits: the counter wraps sooner
 };
 
 struct ContextOptions {
@@ -121,6 +122,8 @@ class Context {
   std::uint32_t subgroupSize() const { return subgroupSize_; }
   VkDeviceSize maxAllocationSize() const { return maxAllocationSize_; }
   bool timestampsSupported() const { return timestampValidBits_ != 0; }
+  // Bits of a timestamp that count (36 on some GPUs): differences are taken modulo 2^bits.
+  std::uint32_t timestampValidBits() const { return timestampValidBits_; }
   double timestampPeriodNs() const { return properties_.limits.timestampPeriod; }
   bool validationEnabled() const { return validation_ != Validation::Off; }
   Validation validation() const { return validation_; }
