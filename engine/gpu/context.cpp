@@ -448,6 +448,7 @@ void Context::lowerLimits(const LimitOverrides& o) {
   lower(l.maxComputeWorkGroupCount[0], o.maxComputeWorkGroupCountX);
   lower(l.maxTexelBufferElements, o.maxTexelBufferElements);
   lower(l.maxStorageBufferRange, o.maxStorageBufferRange);
+  lower(l.maxPerStageDescriptorStorageBuffers, o.maxPerStageDescriptorStorageBuffers);
   lower(timestampValidBits_, o.timestampValidBits);
   if (!o.timestamps) timestampValidBits_ = 0;
 }

@@ -58,6 +58,26 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
   if ((uniformSlots_ & texelSlots_) != 0 || (storageTexelSlots_ & (uniformSlots_ | texelSlots_)) != 0) {
     throw GpuError("'" + name_ + "' declares a slot of two kinds (uniform, texel, storage texel)");
   }
+  // Descriptors of each kind against the device's per-stage limits (Vulkan guarantees only 4
+  // storage buffers; desktop GPUs allow far more, and the SPH passes bind up to 17 slots).
+  const auto uniformCount = static_cast<std::uint32_t>(std::popcount(uniformSlots_));
+  const auto texelCount = static_cast<std::uint32_t>(std::popcount(texelSlots_));
+  const auto storageTexelCount = static_cast<std::uint32_t>(std::popcount(storageTexelSlots_));
+  const std::uint32_t storageCount = bindingCount_ - std::min(bindingCount_, uniformCount + texelCount + storageTexelCount);
+  const struct {
+    std::uint32_t count, limit;
+    const char* what;
+  } kinds[] = {{storageCount, limits.maxPerStageDescriptorStorageBuffers, "storage buffers (maxPerStageDescriptorStorageBuffers"},
+               {uniformCount, limits.maxPerStageDescriptorUniformBuffers, "uniform buffers (maxPerStageDescriptorUniformBuffers"},
+               {texelCount, limits.maxPerStageDescriptorSampledImages, "uniform texel buffers (maxPerStageDescriptorSampledImages"},
+               {storageTexelCount, limits.maxPerStageDescriptorStorageImages, "storage texel buffers (maxPerStageDescriptorStorageImages"},
+               {bindingCount_, limits.maxPerStageResources, "descriptors (maxPerStageResources"}};
+  for (const auto& k : kinds) {
+    if (k.count > k.limit) {
+      throw GpuError("'" + name_ + "' binds " + std::to_string(k.count) + " " + k.what + " is " +
+                     std::to_string(k.limit) + " on this device)");
+    }
+  }
   if (pushBytes_ > limits.maxPushConstantsSize) {
     throw GpuError("push constants of '" + name_ + "' exceed the device's " +
                    std::to_string(limits.maxPushConstantsSize) + " bytes");

@@ -451,6 +451,26 @@ TEST_F(GpuLayerTest, TimestampDifferencesWrapAtTheValidBits) {
   for (const auto& m : narrow.takeValidationMessages()) ADD_FAILURE() << m;
 }
 
+// A device with fewer storage-buffer descriptors per stage than a pass binds (forced; Vulkan
+// guarantees only 4) refuses the pipeline with the count and the limit, not a driver crash.
+TEST_F(GpuLayerTest, PipelineBeyondTheDescriptorLimitsIsAClearError) {
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.maxPerStageDescriptorStorageBuffers = 2;
+  gpu::Context small(options);
+  EXPECT_NO_THROW(small.pipelines().get({"bench/dispatch_probe", HEMO_BENCH_PROBE_BINDING_COUNT, 4, 64, {}}));
+  std::string message;
+  try {
+    small.pipelines().get({"scan/scan_add", HEMO_SCAN_BINDING_COUNT, 16, 256, {}});
+  } catch (const gpu::GpuError& e) {
+    message = e.what();
+  }
+  EXPECT_NE(message.find("'scan/scan_add' binds 3 storage buffers (maxPerStageDescriptorStorageBuffers is 2"),
+            std::string::npos)
+      << "got: " << message;
+  for (const auto& m : small.takeValidationMessages()) ADD_FAILURE() << m;
+}
+
 TEST_F(GpuLayerTest, UnknownShaderNameThrows) {
   EXPECT_THROW(ctx().pipelines().get({"scan/nope", 1, 0, 64, {}}), std::invalid_argument);
 }

@@ -58,6 +58,7 @@ struct LimitOverrides {
   std::uint32_t maxComputeWorkGroupCountX = 0;  // along x
   std::uint32_t maxTexelBufferElements = 0;
   std::uint32_t maxStorageBufferRange = 0;
+  std::uint32_t maxPerStageDescriptorStorageBuffers = 0;
   bool timestamps = true;
   std::uint32_t timestampValidBits = 0;  // fewer valid bits: the counter wraps sooner
 };
