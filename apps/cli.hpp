@@ -1,10 +1,14 @@
 #pragma once
 // Minimal command-line parsing shared by the hemo apps: positional arguments and
-// "--name value" options, with errors that name the argument.
+// "--name value" options, with errors that name the argument; and the programs' shared report
+// of validation messages.
+#include "hemo/gpu/context.hpp"
+
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <fstream>
+#include <iostream>
 #include <map>
 #include <utility>
 #include <set>
@@ -81,6 +85,15 @@ struct Args {
 // When the command line asks for help ("--help" or "-h" where an option may stand, not as
 // the value of another option), prints `usage` to stdout and returns true: the app then
 // exits 0.
+// With the validation layer on (HEMO_VALIDATION), prints what it reported, under `app`'s
+// name; true when it reported anything (the program then exits with 3).
+inline bool validationProblems(hemo::gpu::Context& ctx, const char* app) {
+  if (!ctx.validationEnabled() || ctx.validationMessageCount() == 0) return false;
+  for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";
+  std::cerr << app << ": the Vulkan validation layer reported problems\n";
+  return true;
+}
+
 inline bool printUsageIfAsked(int argc, char** argv, const char* usage) {
   for (int i = 1; i < argc; ++i) {
     const std::string s = argv[i];

@@ -819,14 +819,6 @@ Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
   return rows;
 }
 
-// With HEMO_VALIDATION set, prints what the validation layer reported; true when it did.
-bool validationProblems(Context& ctx) {
-  if (!ctx.validationEnabled() || ctx.validationMessageCount() == 0) return false;
-  for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";
-  std::cerr << "hemo-bench: the Vulkan validation layer reported problems\n";
-  return true;
-}
-
 // What the engine reads from the device instead of assuming it (a GPU check's first record):
 // the sizes and limits the shaders and buffers are sized by, timestamps, and the memory types
 // (a discrete GPU's large device-local heap is not host-visible: buffers there go through
@@ -951,28 +943,21 @@ int main(int argc, char** argv) {
     Context ctx(options);
     const std::string host = hemo::cli::hostCpu();
     std::printf("device: %s (%s), host: %s\n", ctx.info().name.c_str(), ctx.info().typeName().c_str(), host.c_str());
-    if (suite == "device") {
-      const Json rows = deviceFacts(ctx);
-      if (json.is_open()) {
-        json << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
-        if (!json) throw std::runtime_error("failed while writing --json file '" + args.text("--json") + "'");
-      }
-      return validationProblems(ctx) ? 3 : 0;
-    }
-    if (!ctx.timestampsSupported()) {
+    if (suite != "device" && !ctx.timestampsSupported()) {
       std::cerr << "hemo-bench: the device has no timestamp queries; GPU times are unavailable\n";
       return 3;
     }
-    const Json rows = suite == "primitives" ? primitives(ctx, repeat)
-                      : suite == "table1"   ? table1(ctx, std::max(1, repeat / 3))
-                      : suite == "render"   ? render(ctx, repeat, std::filesystem::path(HEMO_SOURCE_DIR) / "scenes")
-                      : suite == "speed"    ? speed(ctx, scene, scenePath, until, repeat)
-                                            : accuracy(ctx, only);
+    const Json rows = suite == "device"     ? deviceFacts(ctx)
+                      : suite == "primitives" ? primitives(ctx, repeat)
+                      : suite == "table1"     ? table1(ctx, std::max(1, repeat / 3))
+                      : suite == "render"     ? render(ctx, repeat, std::filesystem::path(HEMO_SOURCE_DIR) / "scenes")
+                      : suite == "speed"      ? speed(ctx, scene, scenePath, until, repeat)
+                                              : accuracy(ctx, only);
     if (json.is_open()) {
       json << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
       if (!json) throw std::runtime_error("failed while writing --json file '" + args.text("--json") + "'");
     }
-    if (validationProblems(ctx)) return 3;
+    if (hemo::cli::validationProblems(ctx, "hemo-bench")) return 3;
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
     return 1;

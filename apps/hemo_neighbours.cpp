@@ -106,11 +106,7 @@ int main(int argc, char** argv) {
       if (counts[i] > capacity || got != want) ++bad;
     }
     std::printf("check         %u of %u sampled particles match brute force\n", samples - bad, samples);
-    if (ctx.validationEnabled() && ctx.validationMessageCount() > 0) {
-      for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";
-      std::cerr << "hemo-neighbours: the Vulkan validation layer reported problems\n";
-      return 3;
-    }
+    if (hemo::cli::validationProblems(ctx, "hemo-neighbours")) return 3;
     return bad == 0 ? 0 : 2;
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-neighbours: " << e.what() << "\n" << usage;

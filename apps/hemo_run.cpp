@@ -287,11 +287,7 @@ int main(int argc, char** argv) {
       summary["surface_triangles"] = lastSurface.triangles;
     }
     if (!finite) summary["error"] = failure;
-    if (ctx.validationEnabled() && ctx.validationMessageCount() > 0) {
-      for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";
-      std::cerr << "hemo-run: the Vulkan validation layer reported problems\n";
-      return 3;
-    }
+    if (hemo::cli::validationProblems(ctx, "hemo-run")) return 3;
   } catch (const hemo::scene::SceneError& e) {
     std::cerr << "hemo-run: " << e.what() << "\n";
     return 1;

@@ -225,11 +225,7 @@ int main(int argc, char** argv) {
     std::printf("hemo-view: presented %llu frames (%llu to the swapchain), %llu steps, t = %.6g s, %.1f frames/s\n",
                 static_cast<unsigned long long>(frames), static_cast<unsigned long long>(swapchain.presentedFrames()),
                 static_cast<unsigned long long>(sim.steps()), sim.time(), frames / std::max(seconds, 1e-9));
-    if (ctx.validationEnabled() && ctx.validationMessageCount() > 0) {
-      for (const auto& m : ctx.takeValidationMessages()) std::cerr << m << "\n";
-      std::cerr << "hemo-view: the Vulkan validation layer reported problems\n";
-      code = 3;
-    }
+    if (hemo::cli::validationProblems(ctx, "hemo-view")) code = 3;
   } catch (const hemo::scene::SceneError& e) {
     std::cerr << "hemo-view: " << e.what() << "\n";
     code = 1;

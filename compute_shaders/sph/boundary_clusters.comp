@@ -90,8 +90,8 @@ void main() {
         activeClusters[k] = c;
         if (k % gl_WorkGroupSize.x == 0u) {
           const uvec2 groups = hemo_fold_groups(k / gl_WorkGroupSize.x + 1u);  // (atomicMax: any order)
-        atomicMax(activeArgs.x, groups.x);
-        atomicMax(activeArgs.y, groups.y);
+          atomicMax(activeArgs.x, groups.x);
+          atomicMax(activeArgs.y, groups.y);
         }
       }
       return;

@@ -218,9 +218,9 @@ void CommandRecorder::computeToHost() { barrier(kComputeAndTransferWrites, kHost
 void CommandRecorder::checkNotPending(VkBuffer buffer, VkDeviceSize begin, VkDeviceSize end, const std::string& user,
                                       const char* barrierName) const {
   for (const Range& r : pendingTransfer_) {
-    if (r.buffer == buffer && overlaps(r.begin, r.end, begin, end)) {
+    if (r.buffer->handle() == buffer && overlaps(r.begin, r.end, begin, end)) {
       throw std::logic_error(user + " touches bytes " + std::to_string(std::max(r.begin, begin)) + " to " +
-                             std::to_string(std::min(r.end, end)) + " of buffer '" + r.name +
+                             std::to_string(std::min(r.end, end)) + " of buffer '" + r.buffer->name() +
                              "' that a fill or copy wrote with no barrier since (" + barrierName + ")");
     }
   }
@@ -241,7 +241,7 @@ void CommandRecorder::checkDispatchReads(const ComputePipeline& pipeline, const 
 void CommandRecorder::transferWrote(const Buffer& buffer, VkDeviceSize offset, VkDeviceSize bytes, const char* what) {
   const VkDeviceSize end = bytes == VK_WHOLE_SIZE ? buffer.allocatedSize() : offset + bytes;
   checkNotPending(buffer.handle(), offset, end, what, "transferToTransfer");
-  pendingTransfer_.push_back({buffer.handle(), offset, end, buffer.name()});
+  pendingTransfer_.push_back({&buffer, offset, end});
 }
 
 void CommandRecorder::fill(const Buffer& buffer, std::uint32_t value, VkDeviceSize offset, VkDeviceSize bytes) {

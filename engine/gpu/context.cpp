@@ -273,12 +273,12 @@ bool flagFromEnvironment(const char* name) {
   return v && std::string(v) != "" && std::string(v) != "0";
 }
 
-// The options' level, unless HEMO_VALIDATION names one: the environment wins over the
-// default (tests and apps ask for Standard; HEMO_VALIDATION=gpu switches them to GPU-assisted).
+// The level HEMO_VALIDATION names, else Standard when the options ask for validation
+// (HEMO_VALIDATION=gpu switches the test suite to GPU-assisted validation).
 Validation chooseValidation(const ContextOptions& options) {
   const Validation fromEnvironment = validationFromText(std::getenv("HEMO_VALIDATION"));
   if (fromEnvironment != Validation::Off) return fromEnvironment;
-  return options.validation ? options.level : Validation::Off;
+  return options.validation ? Validation::Standard : Validation::Off;
 }
 }  // namespace
 

@@ -60,17 +60,14 @@ ComputePipeline::ComputePipeline(Context& context, const PipelineDesc& desc)
   }
   // Descriptors of each kind against the device's per-stage limits (Vulkan guarantees only 4
   // storage buffers; desktop GPUs allow far more, and the SPH passes bind up to 17 slots).
-  const auto uniformCount = static_cast<std::uint32_t>(std::popcount(uniformSlots_));
-  const auto texelCount = static_cast<std::uint32_t>(std::popcount(texelSlots_));
-  const auto storageTexelCount = static_cast<std::uint32_t>(std::popcount(storageTexelSlots_));
-  const std::uint32_t storageCount = bindingCount_ - std::min(bindingCount_, uniformCount + texelCount + storageTexelCount);
+  const DescriptorCounts n = descriptorCounts();
   const struct {
     std::uint32_t count, limit;
     const char* what;
-  } kinds[] = {{storageCount, limits.maxPerStageDescriptorStorageBuffers, "storage buffers (maxPerStageDescriptorStorageBuffers"},
-               {uniformCount, limits.maxPerStageDescriptorUniformBuffers, "uniform buffers (maxPerStageDescriptorUniformBuffers"},
-               {texelCount, limits.maxPerStageDescriptorSampledImages, "uniform texel buffers (maxPerStageDescriptorSampledImages"},
-               {storageTexelCount, limits.maxPerStageDescriptorStorageImages, "storage texel buffers (maxPerStageDescriptorStorageImages"},
+  } kinds[] = {{n.storage, limits.maxPerStageDescriptorStorageBuffers, "storage buffers (maxPerStageDescriptorStorageBuffers"},
+               {n.uniform, limits.maxPerStageDescriptorUniformBuffers, "uniform buffers (maxPerStageDescriptorUniformBuffers"},
+               {n.texel, limits.maxPerStageDescriptorSampledImages, "uniform texel buffers (maxPerStageDescriptorSampledImages"},
+               {n.storageTexel, limits.maxPerStageDescriptorStorageImages, "storage texel buffers (maxPerStageDescriptorStorageImages"},
                {bindingCount_, limits.maxPerStageResources, "descriptors (maxPerStageResources"}};
   for (const auto& k : kinds) {
     if (k.count > k.limit) {
@@ -196,6 +193,15 @@ Groups ComputePipeline::groupsFor(std::uint64_t invocations) const {
 
 Groups ComputePipeline::groupsFor(std::uint64_t items, std::uint32_t itemsPerInvocation) const {
   return groupsFor((items + itemsPerInvocation - 1) / itemsPerInvocation);
+}
+
+ComputePipeline::DescriptorCounts ComputePipeline::descriptorCounts() const {
+  DescriptorCounts n;
+  n.uniform = static_cast<std::uint32_t>(std::popcount(uniformSlots_));
+  n.texel = static_cast<std::uint32_t>(std::popcount(texelSlots_));
+  n.storageTexel = static_cast<std::uint32_t>(std::popcount(storageTexelSlots_));
+  n.storage = bindingCount_ - std::min(bindingCount_, n.uniform + n.texel + n.storageTexel);
+  return n;
 }
 
 VkDescriptorType ComputePipeline::descriptorType(std::uint32_t slot) const {
@@ -324,14 +330,12 @@ DescriptorSet ComputePipeline::makeSet(std::initializer_list<Binding> bindings) 
 
   DescriptorSet set;
   set.device_ = context_->device();
-  const auto uniformCount = static_cast<std::uint32_t>(std::popcount(uniformSlots_));
-  const auto texelCount = static_cast<std::uint32_t>(std::popcount(texelSlots_));
-  const auto storageTexelCount = static_cast<std::uint32_t>(std::popcount(storageTexelSlots_));
+  const DescriptorCounts n = descriptorCounts();
   const VkDescriptorPoolSize sizes[4] = {
-      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(bindingCount_ - uniformCount - texelCount - storageTexelCount, 1u)},
-      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, std::max(uniformCount, 1u)},
-      {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, std::max(texelCount, 1u)},
-      {VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, std::max(storageTexelCount, 1u)}};
+      {VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, std::max(n.storage, 1u)},
+      {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, std::max(n.uniform, 1u)},
+      {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, std::max(n.texel, 1u)},
+      {VK_DESCRIPTOR_TYPE_STORAGE_TEXEL_BUFFER, std::max(n.storageTexel, 1u)}};
   VkDescriptorPoolCreateInfo poolInfo{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
   poolInfo.maxSets = 1;
   poolInfo.poolSizeCount = 4;

@@ -101,9 +101,8 @@ class CommandRecorder {
   void barrier(const detail::BarrierScope& producer, const detail::BarrierScope& consumer);
   // The pending transfer writes (see fill/copy).
   struct Range {
-    VkBuffer buffer;
+    const Buffer* buffer;
     VkDeviceSize begin, end;
-    std::string name;  // the buffer's, for the error
   };
   void transferWrote(const Buffer& buffer, VkDeviceSize offset, VkDeviceSize bytes, const char* what);
   void checkNotPending(VkBuffer buffer, VkDeviceSize begin, VkDeviceSize end, const std::string& user,

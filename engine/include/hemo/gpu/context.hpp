@@ -64,11 +64,10 @@ struct LimitOverrides {
 };
 
 struct ContextOptions {
-  // Enable VK_LAYER_KHRONOS_validation and count its messages. Fails if the layer is missing.
-  // The environment variable HEMO_VALIDATION (validationFromText) turns it on as well, and
-  // picks the level when this is left at Off or Standard.
+  // Enable VK_LAYER_KHRONOS_validation at the Standard level (core and synchronization checks)
+  // and count its messages. Fails if the layer is missing. The environment variable
+  // HEMO_VALIDATION (validationFromText), when set, turns it on as well and picks the level.
   bool validation = false;
-  Validation level = Validation::Standard;  // what `validation` turns on
   // Device selector: an index into the device list or a case-insensitive substring of the
   // device name. Empty: the HEMO_DEVICE environment variable, else the default choice
   // (discrete > integrated > virtual > CPU).

@@ -130,6 +130,10 @@ class ComputePipeline {
  private:
   void release();
   VkDescriptorType descriptorType(std::uint32_t slot) const;
+  struct DescriptorCounts {
+    std::uint32_t storage = 0, uniform = 0, texel = 0, storageTexel = 0;
+  };
+  DescriptorCounts descriptorCounts() const;  // slots of each kind
   Context* context_ = nullptr;
   VkDescriptorSetLayout setLayout_ = VK_NULL_HANDLE;
   VkPipelineLayout layout_ = VK_NULL_HANDLE;
