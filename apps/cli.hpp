@@ -51,6 +51,24 @@ struct Args {
     }
     return x;
   }
+  // A finite number in [min, max], or `fallback` when the option is absent.
+  double number(const std::string& name, double fallback, double min, double max) const {
+    auto it = options.find(name);
+    if (it == options.end()) return fallback;
+    const std::string& v = it->second;
+    std::size_t used = 0;
+    double x = 0;
+    try {
+      x = std::stod(v, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != v.size() || !std::isfinite(x)) throw UsageError(name + " expects a number, got '" + v + "'");
+    if (x < min || x > max) {
+      throw UsageError(name + " must be between " + std::to_string(min) + " and " + std::to_string(max) + ", got " + v);
+    }
+    return x;
+  }
   // A non-negative, finite number of seconds, or `fallback` when the option is absent.
   double seconds(const std::string& name, double fallback) const {
     auto it = options.find(name);

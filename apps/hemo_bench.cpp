@@ -1,7 +1,8 @@
 // hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME] [--scene FILE] [--until S]
 // Benchmarks (not tests): GPU times from timestamp queries, medians over repeated runs after a
 // warm-up. Suites: primitives, accuracy, table1, render (surface field, extraction and draw),
-// speed (a whole scene, the dam break by default, run from start to end).
+// speed (a whole scene, the dam break by default, run from start to end), scale (a 3D dam
+// break from 0.1M to 64M particles), device (what hemo reads from the device).
 #include "cli.hpp"
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/gpu/primitives.hpp"
@@ -686,6 +687,114 @@ Json speed(Context& ctx, const hemo::scene::Scene& scene, const std::string& sce
   return rows;
 }
 
+// The scale suite's scene: a 3D dam break in the geometry of SPHERIC's benchmark 2 (a column
+// of water 1.228 x 1 x 0.55 m at one end of a tank 3.22 x 1 m, here without the obstacle and
+// with walls 0.6 m high), at the spacing that gives about `target` particles in all (fluid
+// and tank). Per unit spacing the fluid holds 0.675 m^3 / dp^3 particles and the tank's
+// walls (bottom, ends and sides, `layers` deep) about 8.28 m^2 layers / dp^2.
+hemo::scene::Scene scaleScene(double target, double ratio) {
+  const int layers = static_cast<int>(std::ceil(2.0 * ratio - 1e-6));  // the kernel support, 2h, in spacings
+  double dp = std::cbrt(0.675 / target);
+  for (int it = 0; it < 60; ++it) {  // fluid + wall particles = target
+    const double f = 0.675 / (dp * dp * dp) + 8.28 * layers / (dp * dp);
+    const double df = -3.0 * 0.675 / (dp * dp * dp * dp) - 2.0 * 8.28 * layers / (dp * dp * dp);
+    dp -= (f - target) / df;
+  }
+  // List entries: the particles within the list radius 2h (1 + skin) of a particle inside the
+  // fluid, with a third to spare for compression, in whole texels of four.
+  const double skin = 0.1;
+  const double reach = 2.0 * ratio * (1.0 + skin);
+  const auto capacity = static_cast<std::uint32_t>(
+      std::min(1024.0, std::ceil(1.35 * 4.0 / 3.0 * std::numbers::pi * reach * reach * reach / 4.0) * 4.0));
+  Json j = Json::parse(R"({
+    "scene": "dam_break_3d",
+    "description": "3D dam break (SPHERIC benchmark 2's column and tank, no obstacle), sized by hemo-bench scale",
+    "fluid": { "density_kg_m3": 1000.0, "viscosity_pa_s": 0.001, "expected_max_speed_m_s": 3.5,
+               "blocks": [ { "min_m": [0.0, 0.0, 0.0], "max_m": [1.228, 1.0, 0.55] } ] },
+    "boundary": { "tanks": [ { "min_m": [0.0, 0.0, 0.0], "max_m": [3.22, 1.0, 0.6], "open_top": true } ] },
+    "forces": { "gravity_m_s2": [0.0, 0.0, -9.81] },
+    "time": { "integrator": "symplectic_euler", "cfl_acoustic": 0.3, "max_dt_s": 0.0005, "steps_per_batch": 32 },
+    "domain": { "min_m": [-0.1, -0.1, -0.1], "max_m": [3.32, 1.1, 1.0] }
+  })");
+  j["particles"] = {{"spacing_m", dp}, {"smoothing_ratio", ratio}, {"list_skin", skin}, {"neighbour_capacity", capacity}};
+  j["boundary"]["tanks"][0]["layers"] = layers;
+  return hemo::scene::parseScene(j.dump(), "hemo-bench scale");
+}
+
+// Throughput against size: the 3D dam break (scaleScene) at about 0.1M, 1M, 4M, 16M and 64M
+// particles, up to `maxParticles` or the largest the device holds. Per size, after 10 steps of
+// warm-up, timed windows of steps (about 2 s each, median of `repeat`): steps/s, fluid and
+// total particle-steps/s, the device memory hemo's buffers held (bytes per particle), and the
+// GPU ms of each stage (median of 5 steps as they come, and of 5 steps forced to rebuild the
+// neighbour list). A size the device refuses (memory or a binding limit) is reported with the
+// reason, and ends the suite.
+Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio) {
+  Json rows = Json::array();
+  std::printf("%10s %10s %5s %10s %10s %14s %14s %10s %9s\n", "particles", "fluid", "h/dp", "spacing m", "steps/s",
+              "part-steps/s", "fluid p-st/s", "B/particle", "step ms");
+  for (const double target : {1.0e5, 1.0e6, 4.0e6, 1.6e7, 6.4e7}) {
+    if (target > 1.05 * double(maxParticles)) break;
+    const hemo::scene::Scene scene = scaleScene(target, ratio);
+    Json row = {{"target_particles", target}, {"smoothing_ratio", ratio}, {"spacing_m", scene.sph.spacing},
+                {"neighbour_capacity", scene.sph.neighbourCapacity}};
+    ctx.resetPeakDeviceMemoryBytes();
+    try {
+      hemo::sim::Simulation sim(ctx, scene);
+      const std::uint64_t total = std::uint64_t(sim.fluidParticles()) + sim.boundaryParticles() + sim.wallParticles();
+      hemo::sim::RunOptions opt;
+      opt.steps = 10;
+      const hemo::sim::RunResult warm = sim.run(opt);  // pipelines, the first list build
+      const double guess = warm.wallSeconds > 0 ? double(warm.steps) / warm.wallSeconds : 100.0;
+      const auto window = static_cast<std::uint64_t>(std::clamp(2.0 * guess, 10.0, 4000.0));
+      opt.steps = window;
+      std::vector<double> rates;
+      for (int w = 0; w < repeat; ++w) {
+        const hemo::sim::RunResult r = sim.run(opt);
+        rates.push_back(r.wallSeconds > 0 ? double(r.steps) / r.wallSeconds : 0.0);
+      }
+      const double rate = median(rates);
+      Json stageMs = Json::object(), rebuildMs = Json::object();
+      double stepMs = 0.0;
+      for (const auto& [stage, ms] : sim.profileStep(5)) {
+        stageMs[stage] = ms;
+        stepMs += ms;
+      }
+      for (const auto& [stage, ms] : sim.profileStep(5, true)) rebuildMs[stage] = ms;
+      const std::uint64_t bytes = ctx.peakDeviceMemoryBytes();
+      const double perParticle = double(bytes) / double(std::max<std::uint64_t>(total, 1));
+      const Json measured = {{"particles", total},
+                  {"fluid", sim.fluidParticles()},
+                  {"boundary", sim.boundaryParticles()},
+                  {"steps", window * std::uint64_t(repeat)},
+                  {"steps_per_s", rate},
+                  {"steps_per_s_windows", rates},
+                  {"particle_steps_per_s", rate * double(total)},
+                  {"fluid_particle_steps_per_s", rate * sim.fluidParticles()},
+                  {"gpu_memory_bytes", bytes},
+                  {"bytes_per_particle", perParticle},
+                  {"stage_ms", stageMs},
+                  {"rebuild_stage_ms", rebuildMs},
+                  {"finite", true}};
+      row.update(measured);
+      std::printf("%10llu %10u %5.2f %10.3e %10.1f %14.3e %14.3e %10.0f %9.3f\n", static_cast<unsigned long long>(total),
+                  sim.fluidParticles(), ratio, double(scene.sph.spacing), rate, rate * double(total),
+                  rate * sim.fluidParticles(), perParticle, stepMs);
+      std::fflush(stdout);
+      rows.push_back(row);
+    } catch (const std::exception& e) {
+      // The device's memory or a binding limit (hemo::gpu::OutOfDeviceMemory, GpuError, or
+      // the simulation's own fit check, a SceneError); a blow-up (SimulationError) is a failure.
+      if (dynamic_cast<const hemo::sim::SimulationError*>(&e)) throw;
+      row["refused"] = e.what();
+      std::printf("%10s about %.0f particles at h/dp %.2f refused: %s\n", "-", target, ratio, e.what());
+      std::fflush(stdout);
+      rows.push_back(row);
+      break;
+    }
+  }
+  return rows;
+}
+
 // Marching-cubes rendering benchmark: for the dam break and the aneurysm (after a few hundred
 // steps, so the surface has moved), the GPU field (bounds + splat) and extraction (classify,
 // scans, compact, generate) at grids of 64^3, 128^3 and 256^3 voxels over the fluid's box, the
@@ -890,18 +999,23 @@ Json deviceFacts(Context& ctx) {
 int main(int argc, char** argv) {
   const char* usage =
       "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME] [--scene FILE] [--until S]\n"
-      "  SUITE: primitives | accuracy | table1 | render | speed | device\n"
+      "                  [--max-particles N] [--smoothing-ratio R]\n"
+      "  SUITE: primitives | accuracy | table1 | render | speed | scale | device\n"
       "         (device: what hemo reads from the device: sizes, limits, timestamps, memory types)\n"
       "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
       "                speed: whole runs, default 3)\n"
       "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
       "  --scene FILE  speed: the scene to run (default scenes/dam_break.json)\n"
       "  --until S     speed: simulated seconds per run (default: the scene's time.end_time_s)\n"
+      "  --max-particles N    scale: the largest size to run (sizes of about 0.1M, 1M, 4M, 16M, 64M;\n"
+      "                       default: up to what the device holds)\n"
+      "  --smoothing-ratio R  scale: h/dp of the 3D dam break (default 1.3)\n"
       "  --help        prints this text\n";
   if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
   hemo::cli::Args args;
   try {
-    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case", "--scene", "--until"});
+    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case", "--scene", "--until", "--max-particles",
+                                          "--smoothing-ratio"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SUITE");
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
@@ -910,11 +1024,11 @@ int main(int argc, char** argv) {
   const std::string suite = args.positional[0];
   try {
     if (suite != "primitives" && suite != "accuracy" && suite != "table1" && suite != "render" && suite != "speed" &&
-        suite != "device") {
+        suite != "scale" && suite != "device") {
       std::cerr << "hemo-bench: unknown suite '" << suite << "'\n" << usage;
       return 1;
     }
-    const int repeat = static_cast<int>(args.count("--repeat", suite == "speed" ? 3 : 9, 1, 1000));
+    const int repeat = static_cast<int>(args.count("--repeat", suite == "speed" || suite == "scale" ? 3 : 9, 1, 1000));
     const std::string only = args.text("--case");
     if (args.has("--case") && suite != "accuracy") throw hemo::cli::UsageError("--case applies to the accuracy suite only");
     if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break") {
@@ -925,6 +1039,13 @@ int main(int argc, char** argv) {
         throw hemo::cli::UsageError(std::string(option) + " applies to the speed suite only");
       }
     }
+    for (const char* option : {"--max-particles", "--smoothing-ratio"}) {
+      if (args.has(option) && suite != "scale") {
+        throw hemo::cli::UsageError(std::string(option) + " applies to the scale suite only");
+      }
+    }
+    const std::uint64_t maxParticles = args.count("--max-particles", 100000000, 1000, 1000000000);
+    const double ratio = args.number("--smoothing-ratio", 1.3, 1.0, 3.0);
     const double until = args.seconds("--until", 0.0);
     if (args.has("--until") && until <= 0) throw hemo::cli::UsageError("--until must be above 0 s");
     // The scene is read before any device is opened: a bad file fails at once.
@@ -952,6 +1073,7 @@ int main(int argc, char** argv) {
                       : suite == "table1"     ? table1(ctx, std::max(1, repeat / 3))
                       : suite == "render"     ? render(ctx, repeat, std::filesystem::path(HEMO_SOURCE_DIR) / "scenes")
                       : suite == "speed"      ? speed(ctx, scene, scenePath, until, repeat)
+                      : suite == "scale"      ? scale(ctx, repeat, maxParticles, ratio)
                                               : accuracy(ctx, only);
     if (json.is_open()) {
       json << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";

@@ -275,6 +275,12 @@ int main(int argc, char** argv) {
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},
                // fluid particles times steps per wall second: throughput across scene sizes
                {"fluid_particle_steps_per_s", wall > 0 ? double(result.steps) * sim.fluidParticles() / wall : 0.0},
+               // simulated seconds per wall-clock second of the run (1: keeps up with the clock)
+               {"real_time_factor", wall > 0 ? result.simTime / wall : 0.0},
+               // the most device memory hemo's buffers held (device-local heaps), and per particle
+               {"gpu_memory_bytes", ctx.peakDeviceMemoryBytes()},
+               {"bytes_per_particle", double(ctx.peakDeviceMemoryBytes()) /
+                                          std::max(1u, sim.fluidParticles() + sim.boundaryParticles() + sim.wallParticles())},
                {"finite", finite}};
     if (rupture) summary["rupture_pressure_estimate_Pa"] = rupture->pressure;
     if (profileSteps > 0) {
@@ -291,6 +297,9 @@ int main(int argc, char** argv) {
   } catch (const hemo::scene::SceneError& e) {
     std::cerr << "hemo-run: " << e.what() << "\n";
     return 1;
+  } catch (const hemo::gpu::OutOfDeviceMemory& e) {
+    std::cerr << "hemo-run: the scene does not fit the device: " << e.what() << "\n";
+    return 3;
   } catch (const hemo::gpu::GpuError& e) {
     std::cerr << "hemo-run: GPU error: " << e.what() << "\n";
     return 3;

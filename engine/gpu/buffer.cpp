@@ -59,6 +59,9 @@ Buffer::Buffer(Context& context, VkDeviceSize bytes, MemoryUse use, std::string 
   alloc.allocationSize = req.size;
   try {
     alloc.memoryTypeIndex = context.memoryType(req.memoryTypeBits, required, preferred);
+    context.takeMemory(alloc.memoryTypeIndex, req.size, name_);  // throws when its heap is full
+    memoryType_ = alloc.memoryTypeIndex;
+    memoryBytes_ = req.size;
     const VkResult r = vkAllocateMemory(device, &alloc, nullptr, &memory_);
     if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY) {
       throw GpuError("out of memory allocating buffer '" + name_ + "' of " + mib(bytes));
@@ -94,6 +97,8 @@ Buffer& Buffer::operator=(Buffer&& other) noexcept {
     mapped_ = std::exchange(other.mapped_, nullptr);
     size_ = std::exchange(other.size_, 0);
     capacity_ = std::exchange(other.capacity_, 0);
+    memoryType_ = other.memoryType_;
+    memoryBytes_ = std::exchange(other.memoryBytes_, 0);
     use_ = other.use_;
     name_ = std::move(other.name_);
   }
@@ -105,6 +110,8 @@ void Buffer::release() {
   VkDevice device = context_->device();
   if (buffer_) vkDestroyBuffer(device, buffer_, nullptr);
   if (memory_) vkFreeMemory(device, memory_, nullptr);  // unmaps implicitly
+  if (memoryBytes_) context_->releaseMemory(memoryType_, memoryBytes_);
+  memoryBytes_ = 0;
   buffer_ = VK_NULL_HANDLE;
   memory_ = VK_NULL_HANDLE;
   mapped_ = nullptr;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <sstream>
@@ -311,6 +312,7 @@ Context::Context(const ContextOptions& options)
     }
     pickDevice(selector);
     lowerLimits(options.limits);
+    limitMemory(options.limits.deviceMemoryBytes);
 
     const float priority = 1.0f;
     VkDeviceQueueCreateInfo queueInfo{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
@@ -451,6 +453,85 @@ void Context::lowerLimits(const LimitOverrides& o) {
   lower(l.maxPerStageDescriptorStorageBuffers, o.maxPerStageDescriptorStorageBuffers);
   lower(timestampValidBits_, o.timestampValidBits);
   if (!o.timestamps) timestampValidBits_ = 0;
+}
+
+void Context::limitMemory(std::uint64_t cap) {
+  if (const char* env = std::getenv("HEMO_DEVICE_MEMORY_MIB"); env && *env) {
+    char* end = nullptr;
+    const unsigned long long mib = std::strtoull(env, &end, 10);
+    if (*end != '\0' || mib == 0 || mib > (1ull << 40)) {
+      throw GpuError(std::string("HEMO_DEVICE_MEMORY_MIB must be a positive whole number of MiB, got '") + env + "'");
+    }
+    cap = cap == 0 ? mib << 20 : std::min<std::uint64_t>(cap, mib << 20);
+  }
+  heapUsed_.assign(memory_.memoryHeapCount, 0);
+  heapLimit_.resize(memory_.memoryHeapCount);
+  for (std::uint32_t h = 0; h < memory_.memoryHeapCount; ++h) {
+    heapLimit_[h] = memory_.memoryHeaps[h].size;
+    if (cap != 0 && (memory_.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)) {
+      heapLimit_[h] = std::min<std::uint64_t>(heapLimit_[h], cap);
+    }
+  }
+}
+
+namespace {
+std::string gib(std::uint64_t bytes) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.3f GiB (%llu bytes)", double(bytes) / double(1ull << 30),
+                static_cast<unsigned long long>(bytes));
+  return text;
+}
+}  // namespace
+
+void Context::takeMemory(std::uint32_t type, std::uint64_t bytes, const std::string& name) {
+  std::lock_guard<std::mutex> lock(memoryMutex_);
+  const std::uint32_t heap = memory_.memoryTypes[type].heapIndex;
+  const bool local = (memory_.memoryHeaps[heap].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) != 0;
+  if (heapUsed_[heap] + bytes > heapLimit_[heap]) {
+    const std::uint64_t needed = heapUsed_[heap] + bytes;
+    throw OutOfDeviceMemory("the device's memory cannot hold buffer '" + name + "' of " + gib(bytes) + ": with it hemo would hold " +
+                                gib(needed) + " of " + (local ? "device-local " : "host ") + "heap " + std::to_string(heap) +
+                                ", which has " + gib(heapLimit_[heap]) + "; the scene needs at least " + gib(needed) +
+                                " (fewer particles, or a device with more memory)",
+                            needed, heapLimit_[heap]);
+  }
+  heapUsed_[heap] += bytes;
+  if (local) {
+    deviceLocalUsed_ += bytes;
+    deviceLocalPeak_ = std::max(deviceLocalPeak_, deviceLocalUsed_);
+  }
+}
+
+void Context::releaseMemory(std::uint32_t type, std::uint64_t bytes) {
+  std::lock_guard<std::mutex> lock(memoryMutex_);
+  const std::uint32_t heap = memory_.memoryTypes[type].heapIndex;
+  heapUsed_[heap] -= std::min(heapUsed_[heap], bytes);
+  if (memory_.memoryHeaps[heap].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) {
+    deviceLocalUsed_ -= std::min(deviceLocalUsed_, bytes);
+  }
+}
+
+std::uint64_t Context::deviceMemoryBytes() const {
+  std::lock_guard<std::mutex> lock(memoryMutex_);
+  return deviceLocalUsed_;
+}
+
+std::uint64_t Context::peakDeviceMemoryBytes() const {
+  std::lock_guard<std::mutex> lock(memoryMutex_);
+  return deviceLocalPeak_;
+}
+
+void Context::resetPeakDeviceMemoryBytes() {
+  std::lock_guard<std::mutex> lock(memoryMutex_);
+  deviceLocalPeak_ = deviceLocalUsed_;
+}
+
+std::uint64_t Context::deviceMemoryCapacity() const {
+  std::uint64_t total = 0;
+  for (std::uint32_t h = 0; h < memory_.memoryHeapCount; ++h) {
+    if (memory_.memoryHeaps[h].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT) total += heapLimit_[h];
+  }
+  return total;
 }
 
 Context::~Context() {

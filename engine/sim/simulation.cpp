@@ -24,6 +24,15 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
         << mib(limit) << " per buffer (increase the spacing or lower particles.neighbour_capacity)";
     throw scene::SceneError(scene.name + ": " + msg.str());
   }
+  const std::uint64_t texels = SphSolver::listTexels(context, scene.sph, count);
+  if (texels > context.limits().maxTexelBufferElements) {
+    std::ostringstream msg;
+    msg << "particles.spacing_m: " << scene.sph.spacing << " m gives " << count << " particles; their neighbour list ("
+        << scene.sph.neighbourCapacity << " entries each) binds " << texels << " texels but the device allows "
+        << context.limits().maxTexelBufferElements
+        << " per texel buffer (maxTexelBufferElements; increase the spacing or lower particles.neighbour_capacity)";
+    throw scene::SceneError(scene.name + ": " + msg.str());
+  }
   const scene::SceneBuild build = scene::buildScene(scene);
   const scene::ParticleSet& set = build.particles;
   if (set.fluid == 0) throw scene::SceneError(scene.name + ": fluid.blocks: the scene holds no fluid particles");

@@ -293,6 +293,14 @@ TileGrid tilesFor(const GridSpec& spec, glm::vec3 lo, glm::vec3 hi, const SphSet
 }
 }  // namespace
 
+std::uint64_t SphSolver::listTexels(const gpu::Context& context, const SphSettings& settings, std::uint64_t slots) {
+  const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  const bool contiguous = settings.listLayout == ListLayout::Contiguous || settings.listLayout == ListLayout::Clusters ||
+                          (settings.listLayout == ListLayout::Auto && cpu);
+  const std::uint64_t width = contiguous && settings.neighbourCapacity % 4u == 0u ? 4u : 1u;  // as the constructor
+  return (std::max<std::uint64_t>(slots, 1) * settings.neighbourCapacity + width - 1) / width;
+}
+
 SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 domainMin, glm::vec3 domainMax,
                      const SphSettings& settings, std::uint32_t maxStepsPerBatch)
     : context_(&context),

@@ -471,6 +471,59 @@ TEST_F(GpuLayerTest, PipelineBeyondTheDescriptorLimitsIsAClearError) {
   for (const auto& m : small.takeValidationMessages()) ADD_FAILURE() << m;
 }
 
+// hemo's account of device memory: each buffer adds what its allocation took (at least its
+// size) and gives it back when destroyed; the peak stays until reset.
+TEST_F(GpuLayerTest, DeviceMemoryIsCountedPerBuffer) {
+  const std::uint64_t before = ctx().deviceMemoryBytes();
+  ctx().resetPeakDeviceMemoryBytes();
+  EXPECT_EQ(ctx().peakDeviceMemoryBytes(), before);
+  EXPECT_GT(ctx().deviceMemoryCapacity(), 0u);
+  {
+    gpu::Buffer a(ctx(), 1 << 20, gpu::MemoryUse::Device, "a");
+    const std::uint64_t withA = ctx().deviceMemoryBytes();
+    EXPECT_GE(withA, before + (1u << 20));
+    EXPECT_LT(withA, before + (1u << 20) + (1u << 16));  // alignment at most
+    gpu::Buffer b(ctx(), 3 << 20, gpu::MemoryUse::Device, "b");
+    EXPECT_GE(ctx().deviceMemoryBytes(), withA + (3u << 20));
+    gpu::Buffer moved = std::move(b);  // the allocation moves with the buffer, counted once
+    EXPECT_GE(ctx().deviceMemoryBytes(), withA + (3u << 20));
+    EXPECT_LT(ctx().deviceMemoryBytes(), withA + (3u << 20) + (1u << 16));
+  }
+  EXPECT_EQ(ctx().deviceMemoryBytes(), before);
+  EXPECT_GE(ctx().peakDeviceMemoryBytes(), before + (4u << 20));
+  ctx().resetPeakDeviceMemoryBytes();
+  EXPECT_EQ(ctx().peakDeviceMemoryBytes(), before);
+}
+
+// A device with little memory (capped at 4 MiB) refuses the buffer that does not fit before
+// allocating it, naming the buffer and the figures, and keeps the buffers it holds.
+TEST_F(GpuLayerTest, BufferBeyondTheDeviceMemoryIsRefusedWithTheFigures) {
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.deviceMemoryBytes = 4u << 20;
+  gpu::Context small(options);
+  EXPECT_EQ(small.deviceMemoryCapacity() % (4u << 20), 0u);  // 4 MiB per device-local heap
+  gpu::Buffer a(small, 3u << 20, gpu::MemoryUse::Device, "particle positions");
+  const std::uint64_t held = small.deviceMemoryBytes();
+  std::string message;
+  std::uint64_t needed = 0;
+  try {
+    gpu::Buffer b(small, 2u << 20, gpu::MemoryUse::Device, "neighbour list");
+  } catch (const gpu::OutOfDeviceMemory& e) {
+    message = e.what();
+    needed = e.needed;
+    EXPECT_EQ(e.available, 4u << 20);
+  }
+  EXPECT_NE(message.find("cannot hold buffer 'neighbour list'"), std::string::npos) << message;
+  EXPECT_NE(message.find("needs at least"), std::string::npos) << message;
+  EXPECT_GE(needed, held + (2u << 20));
+  EXPECT_EQ(small.deviceMemoryBytes(), held);  // nothing was taken for the refused buffer
+  a.upload(std::vector<std::uint32_t>(4, 9u));
+  EXPECT_EQ(a.readback<std::uint32_t>(4)[3], 9u);
+  gpu::Buffer c(small, 512u << 10, gpu::MemoryUse::Device, "fits");  // what is left still serves
+  for (const auto& m : small.takeValidationMessages()) ADD_FAILURE() << m;
+}
+
 TEST_F(GpuLayerTest, UnknownShaderNameThrows) {
   EXPECT_THROW(ctx().pipelines().get({"scan/nope", 1, 0, 64, {}}), std::invalid_argument);
 }

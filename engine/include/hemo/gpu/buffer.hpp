@@ -65,6 +65,8 @@ class Buffer {
   void* mapped_ = nullptr;
   VkDeviceSize size_ = 0;
   VkDeviceSize capacity_ = 0;
+  std::uint32_t memoryType_ = 0;
+  VkDeviceSize memoryBytes_ = 0;  // taken from the context's account (Context::takeMemory)
   MemoryUse use_ = MemoryUse::Device;
   std::string name_;
 };

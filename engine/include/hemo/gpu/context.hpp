@@ -20,6 +20,18 @@ class GpuError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A buffer that the device's memory cannot hold (a heap's size, or the cap that
+// LimitOverrides::deviceMemoryBytes or HEMO_DEVICE_MEMORY_MIB sets), thrown before anything is
+// allocated for it. The message names the buffer and the figures; `needed` is the device
+// memory hemo would hold with it, a lower bound of what the whole scene needs.
+class OutOfDeviceMemory : public GpuError {
+ public:
+  OutOfDeviceMemory(const std::string& what, std::uint64_t neededBytes, std::uint64_t availableBytes)
+      : GpuError(what), needed(neededBytes), available(availableBytes) {}
+  std::uint64_t needed;     // bytes
+  std::uint64_t available;  // bytes of the heap (or the cap)
+};
+
 // Throws GpuError naming `what` when `result` is not VK_SUCCESS.
 void check(VkResult result, const char* what);
 const char* resultName(VkResult result);
@@ -61,6 +73,9 @@ struct LimitOverrides {
   std::uint32_t maxPerStageDescriptorStorageBuffers = 0;
   bool timestamps = true;
   std::uint32_t timestampValidBits = 0;  // fewer valid bits: the counter wraps sooner
+  // The most device-local memory hemo allocates (each device-local heap's size, at most), in
+  // bytes. HEMO_DEVICE_MEMORY_MIB sets it too (the smaller of the two counts).
+  std::uint64_t deviceMemoryBytes = 0;
 };
 
 struct ContextOptions {
@@ -129,6 +144,18 @@ class Context {
   Validation validation() const { return validation_; }
   bool stagingOnly() const { return stagingOnly_; }
 
+  // Device memory that hemo's buffers hold: device-local heaps only (on a discrete GPU the
+  // staging buffers live in host memory and are not counted), now and at most so far, and
+  // what the device-local heaps hold in all (lowered by LimitOverrides::deviceMemoryBytes).
+  std::uint64_t deviceMemoryBytes() const;
+  std::uint64_t peakDeviceMemoryBytes() const;
+  std::uint64_t deviceMemoryCapacity() const;
+  void resetPeakDeviceMemoryBytes();  // the peak starts again from what is held now
+  // Buffer's bookkeeping: takes `bytes` of memory type `type` for buffer `name`, or throws
+  // OutOfDeviceMemory when its heap cannot hold them; release gives them back.
+  void takeMemory(std::uint32_t type, std::uint64_t bytes, const std::string& name);
+  void releaseMemory(std::uint32_t type, std::uint64_t bytes);
+
   // Validation-layer messages (warnings and errors) seen so far.
   std::uint64_t validationMessageCount() const;
   std::vector<std::string> takeValidationMessages();
@@ -152,6 +179,7 @@ class Context {
                                                   void* user);
   void pickDevice(const std::string& selector);
   void lowerLimits(const LimitOverrides& overrides);
+  void limitMemory(std::uint64_t cap);
 
   VkInstance instance_ = VK_NULL_HANDLE;
   VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
@@ -175,6 +203,12 @@ class Context {
   mutable std::mutex messageMutex_;
   std::uint64_t messageCount_ = 0;
   std::vector<std::string> messages_;
+
+  mutable std::mutex memoryMutex_;
+  std::vector<std::uint64_t> heapUsed_;   // bytes per heap
+  std::vector<std::uint64_t> heapLimit_;  // bytes per heap
+  std::uint64_t deviceLocalUsed_ = 0;
+  std::uint64_t deviceLocalPeak_ = 0;
 
   std::unique_ptr<PipelineCache> pipelines_;  // destroyed before the device
 };

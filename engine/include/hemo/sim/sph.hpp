@@ -191,6 +191,11 @@ class SphSolver {
   // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
   void setInflow(const Inflow& inflow);
 
+  // Texels of the neighbour list (and of the interacting pairs) as the pair passes bind it, for
+  // `slots` particle slots on `context`'s device: the binding that outgrows
+  // maxTexelBufferElements first as a scene grows.
+  static std::uint64_t listTexels(const gpu::Context& context, const SphSettings& settings, std::uint64_t slots);
+
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);
   // Makes the next recorded step rebuild the grid and the neighbour list whatever the
