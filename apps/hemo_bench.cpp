@@ -805,7 +805,7 @@ Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio) {
 Json render(Context& ctx, int repeat, const std::filesystem::path& scenes) {
   // The CPU reference allocates its mesh and work arrays on every call. By default glibc maps
   // large blocks afresh and returns them on free, so each call would also pay the kernel's
-  // page faults (up to 3x its time on the dam break at 64^3, session 34), which the GPU
+  // page faults (up to 3x its time on the dam break at 64^3), which the GPU
   // side, whose buffers are made once, does not. Keeping freed memory in the heap times the
   // reference in its steady state, as an application that runs it every frame would see it.
   mallopt(M_MMAP_MAX, 0);

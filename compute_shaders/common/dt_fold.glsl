@@ -5,10 +5,10 @@
 // many partials the dispatch wrote in dtCounts[pass]. sph/dt_reduce.comp, one workgroup
 // dispatched before the integrator, reduces the partials of both passes. The result does not
 // depend on the order (min and max are exact); a NaN limit makes its partial (NaN, NaN), so a
-// blown-up step is never hidden. (Until session 25 each workgroup reduced through shared
-// memory and the last to finish reduced the partials: its barriers, atomic counter and the
-// tail llvmpipe runs under an empty mask in every workgroup cost the dam break's force pass
-// 0.3-0.5 ms, more than a dispatch of its own; docs/benchmarks.md, "Session 25".)
+// blown-up step is never hidden. (Reducing in each workgroup through shared memory, with the
+// last to finish reducing the partials, cost the dam break's force pass 0.3-0.5 ms on
+// lavapipe, more than a dispatch of its own: the barriers, the atomic counter and the tail
+// llvmpipe runs under an empty mask in every workgroup.)
 // The including shader enables GL_KHR_shader_subgroup_basic, _arithmetic and _vote and
 // declares
 //   writeonly buffer { vec2 dtPartials[]; }

@@ -11,7 +11,7 @@
 // large but finite force.
 // The parameters with their reciprocals, computed once per invocation: the pair loops then
 // multiply where they would divide (a vector division or square root is the costliest
-// arithmetic of the force pass on lavapipe; docs/benchmarks.md, "Session 15").
+// arithmetic of the force pass on lavapipe).
 struct HemoRepulsionParams {
   float psi;             // Psi (m/s^2)
   float cutoff;          // D (m)

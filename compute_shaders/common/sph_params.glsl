@@ -71,7 +71,7 @@ uint hemo_list_slot(uint i, uint k, HemoPairParams pp) {
 // 4, are one RGBA32UI texel of the list's buffer; a pass with specialization constant
 // kListWidth = 4 binds the list in that format and walks it a texel at a time. On lavapipe a
 // one-component texel fetch is a hardware gather (vpgatherdd), the costliest instruction of
-// the pair loops (perf, docs/benchmarks.md "Session 15"); a four-component fetch is eight plain
+// the pair loops (perf record of the dam break); a four-component fetch is eight plain
 // loads, once per four entries. The interleaved layout (GPUs) reads one entry per texel.
 // Entries past the count in the last texel are not valid: the passes substitute the particle
 // itself (a pair at zero distance, which adds exactly nothing to a force sum) or skip them.

@@ -8,7 +8,7 @@
 // An invocation's HEMO_SCAN_ITEMS keys are read and written four at a time, as uvec4 texels
 // and stores: llvmpipe loops over the lanes for each load (as a texel, one vector gather) and
 // each store, and a grid has several keys per particle (the dam break: 6.7), so the scan's
-// cost was in those loops (docs/benchmarks.md, "Session 30"). The buffers hold whole texels.
+// cost was in those loops. The buffers hold whole texels.
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require

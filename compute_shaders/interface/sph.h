@@ -89,8 +89,8 @@
 // cut into clusters of HEMO_CLUSTER_SIZE consecutive slots (the last may hold fewer), and each
 // cluster has one list, the union of its members' neighbour lists, which the cluster passes walk
 // evaluating every entry against all members: on llvmpipe a texel fetch costs per lane whatever
-// the arithmetic, so a fetch that serves eight pairs costs an eighth (docs/benchmarks.md,
-// "Session 26"). An entry is a slot (bits 0-22) with the members within the list radius of it
+// the arithmetic, so a fetch that serves eight pairs costs an eighth (hemo-bench
+// primitives, pair_gather with clusters). An entry is a slot (bits 0-22) with the members within the list radius of it
 // as a mask (bit 23 + m for member m) and HEMO_LIST_BOUNDARY_BIT for a boundary or wall
 // neighbour. A slot appears at most once in a cluster's list: a cluster whose members lie in
 // more than one row of grid cells walks each row's members separately, and a row keeps only
@@ -224,8 +224,8 @@
 // particle's own velocity, a boundary particle's no-slip velocity. The sign of the volume
 // tells the kind: positive for fluid, negative for boundary and wall particles, zero for
 // detached wall particles (no SPH mass). On llvmpipe a storage-buffer gather cost by its components
-// (a float a third of a vec4, a vec2 nearly a vec4; sessions 11-12, docs/benchmarks.md); Monaghan's pressure form, which
-// also needs m_j, took a third gather and 12% more time in the force pass (session 12).
+// (a float a third of a vec4, a vec2 nearly a vec4; hemo-bench primitives, pair_gather); Monaghan's pressure form,
+// which also needs m_j, took a third gather and 12% more time in the force pass.
 #define HEMO_BPRESSURE_BINDING_VISCOUS_VEL 6
 #define HEMO_BPRESSURE_BINDING_CLOCK 7
 #define HEMO_BPRESSURE_BINDING_PAIR_POSITION 8

@@ -257,7 +257,7 @@ void main() {
     atomicAdd(status[HEMO_STATUS_NEIGHBOUR_OVERFLOW], 1u);
   }
   // One atomic per SIMD group on the shared word rather than one per invocation (on lavapipe
-  // the build measured the same either way; docs/benchmarks.md "Session 30").
+  // the build measured the same either way).
   const uint groupMost = subgroupMax(most);
   if (subgroupElect()) {
     atomicMax(status[HEMO_STATUS_MAX_NEIGHBOURS], groupMost);

@@ -58,7 +58,7 @@ void main() {
   const uint rangeCount = hemo_list_ranges(pc.grid, c, u, u, fluidI, params.listRadius);
   // The candidates: every slot of the ranges in order, as one flat loop. A loop per range
   // ran, per SIMD group, each range as long as its longest lane's; this one runs as long as
-  // the group's largest total (docs/benchmarks.md, "Session 22").
+  // the group's largest total.
   uint count = 0u;
   uint next = 0u;  // the next range
   uint j = 0u;
@@ -95,7 +95,7 @@ void main() {
     atomicAdd(status[HEMO_STATUS_NEIGHBOUR_OVERFLOW], 1u);
   }
   // One atomic per SIMD group on the shared word rather than one per invocation (on lavapipe
-  // the build measured the same either way; docs/benchmarks.md "Session 30").
+  // the build measured the same either way).
   const uint groupMost = subgroupMax(count);
   if (subgroupElect()) {
     atomicMax(status[HEMO_STATUS_MAX_NEIGHBOURS], groupMost);

@@ -122,7 +122,7 @@ bool hemo_moves(float kind) {
 // the list holds every pair within the support while r1 + r2 stays under the skin (the test
 // below). Taking c in the middle of the flow's displacements halves the reach of a uniform or parabolic drift along x
 // (a vessel's axis), which does not change who neighbours whom. Predicting the middle lets
-// this pass compute the reach (no pass of its own, docs/benchmarks.md "Session 17"); the
+// this pass compute the reach (no pass of its own); the
 // previous step's middle alone lagged the dam break's front by a step's motion, 15% of the
 // threshold, and rebuilt the list 30 times in 600 steps against 21. After a rebuild both
 // middles restart at 0 (sph/rebuild_decide.comp).
@@ -201,11 +201,10 @@ void hemo_tile_collect(vec3 x0, vec3 d) {
 // The rebuild test's partial, in uniform control flow: each SIMD group (subgroup) reduces its
 // slots' (d.x, reach) to (min d.x, max d.x, the two largest reaches), NaN if any lane saw one,
 // and one lane stores it; sph/rebuild_decide.comp, one workgroup dispatched after this pass,
-// reduces the partials, decides and arms the gate. (Until session 25 the workgroups reduced
-// through shared memory and the last one to finish, found with an atomic counter, reduced the
-// partials and armed the gate: the barriers, the counter and the masked tail that llvmpipe
-// runs in every workgroup cost the dam break's step 0.5 ms of this pass's 2.0,
-// docs/benchmarks.md "Session 25".)
+// reduces the partials, decides and arms the gate. (Reducing through shared memory in each
+// workgroup, with the last one to finish, found with an atomic counter, reducing the partials
+// and arming the gate, cost the dam break's step 0.5 ms of this pass's 2.0 on lavapipe: the
+// barriers, the counter and the masked tail that llvmpipe runs in every workgroup.)
 void hemo_store_rebuild_partial(vec2 test, bool valid) {
   const float inf = uintBitsToFloat(0x7f800000u);
   const bool nan = valid && (isnan(test.x) || isnan(test.y));

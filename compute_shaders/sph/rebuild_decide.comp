@@ -28,7 +28,7 @@ layout(constant_id = 1) const uint kTiles = 1u;
 layout(std140, binding = HEMO_DECIDE_BINDING_TILE_GRID) uniform TileGridBlock { TileGrid tiles; };
 // A tile's HEMO_TILE_WORDS words as two uvec4: read as texels (llvmpipe loads a storage buffer
 // lane by lane and word by word: with seven loads per box and 27 boxes per occupied tile the
-// comparison took most of this pass; docs/benchmarks.md "Session 30"), cleared as stores.
+// comparison took most of this pass), cleared as stores.
 #if HEMO_TILE_WORDS != 8 || HEMO_TILE_STATIC_WORD != 3
 #error "the tile boxes are read and cleared as two uvec4 per tile"
 #endif
@@ -186,7 +186,7 @@ void main() {
     // reach test may fail, past HEMO_TILE_COLLECT_FROM of the threshold (or NaN). Collecting
     // cost the dam break's integrator 0.4-0.6 ms a step, and compiled in but skipped under an
     // empty lane mask it still cost about 40% of the pass (llvmpipe runs a branch's body
-    // whether or not a lane takes it; docs/benchmarks.md "Session 29"). A step whose half-sum
+    // whether or not a lane takes it). A step whose half-sum
     // jumps past the threshold without having collected rebuilds.
     const bool collect = !(result.z <= float(HEMO_TILE_COLLECT_FROM) * pc.threshold);
     const uvec4 run = uvec4(pc.groupsX, pc.groupsY, 1u, 0u);

@@ -243,7 +243,7 @@ VKAPI_ATTR VkBool32 VKAPI_CALL Context::onMessage(VkDebugUtilsMessageSeverityFla
 
 std::string cpuDriverThreads(const char* current, unsigned cores) {
   if (current != nullptr) return {};
-  // Measured on a 2-core VM (docs/benchmarks.md, session 16), paired runs against one thread
+  // Measured on a 2-core VM (hemo-bench speed), paired runs against one thread
   // per core: the dam break 10% faster with the same particle order, 18% with the fluid-first
   // order (which loses 16% at one thread per core).
   return std::to_string(3u * std::max(cores, 1u));

@@ -70,7 +70,7 @@ struct DecidePush {  // sph/rebuild_decide.comp
   std::uint32_t groupsX, groupsY;  // the integrator's workgroups, for the next step's indirect arguments
 };
 // Scalars only, so the GLSL block has the same offsets (a uvec2 there would align to 8 and
-// read past this struct: session 29's hang).
+// read past this struct, and the GPU hang).
 static_assert(sizeof(DecidePush) == 20);
 static_assert(SphSolver::kListBoundaryBit == HEMO_LIST_BOUNDARY_BIT);
 static_assert(HEMO_GRID_FLUID_KIND == HEMO_KIND_FLUID);  // the grid sorts the fluid first
@@ -247,8 +247,8 @@ namespace {
 // are a quarter of R along x, so the trimmed rows hold few candidates beyond the sphere, and
 // two thirds of R along y and z, the widest for which five rows still reach R, so fewer rows
 // remain: a dam-break list pass 10% cheaper than with cells of R / 2 on all axes (which test
-// about half the candidates of the 27 cells of R), at the same sort cost (docs/benchmarks.md,
-// "Session 22"). A periodic y or z axis too short for five such cells gets cells of R / 2
+// about half the candidates of the 27 cells of R), at the same sort cost (the dam break,
+// hemo-bench speed on lavapipe). A periodic y or z axis too short for five such cells gets cells of R / 2
 // (five distinct rows need a period of 2.5 R). Two parts: the fluid's slots first, so the
 // fluid passes' SIMD groups hold fluid only (mixed groups ran their boundary lanes idle: 16%
 // of the dam break's fluid lanes, docs/benchmarks.md).
@@ -278,7 +278,7 @@ GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
 // The tile test's grid: tiles of at least 1.5 list radii over the domain (on periodic axes the
 // grid's period). Replayed offline on the whole dam break (positions of every step), the
 // reach test alone rebuilt 860 times, with tiles of 1.5 R 731 times, of 2 R 750 (the tiles
-// alone; docs/benchmarks.md, "Session 23").
+// alone).
 TileGrid tilesFor(const GridSpec& spec, glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
   std::uint32_t periodic = 0;
   for (int a = 0; a < 3; ++a) {
@@ -417,7 +417,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   // constant 2: the stage (symplectic Euler, or RK2's two), one pipeline each; constant 3: the
   // inflow zone's code compiled in or out (llvmpipe runs a branch's body under an empty lane
   // mask: the zone's test, waveform and mass supply cost the dam break's integrator about a
-  // sixth, docs/benchmarks.md "Session 29"). All their sets' layouts are identical, so one
+  // sixth on lavapipe). All their sets' layouts are identical, so one
   // descriptor set serves them all.
   continuity_ = continuity;
   for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, false);
@@ -896,7 +896,7 @@ std::uint32_t SphSolver::nonFluidStart() const {
   // The passes over boundary and wall particles start past the fluid's slots. Dispatched over
   // all slots, their work sat in the last workgroups, and lavapipe hands each thread one
   // contiguous share of a dispatch: in Table 1's tubes one thread of six ran the whole wall
-  // stage (docs/benchmarks.md, "Session 19").
+  // stage (hemo-bench table1 on lavapipe).
   return inGridOrder() ? particles_->fluidCount() : 0u;
 }
 

@@ -517,8 +517,8 @@ TEST_F(SphStageTest, NeighbourListHoldsExactlyThePairsWithinTheListRadius) {
 }
 
 // A particle's list filled to exactly its capacity keeps every neighbour: the candidates the
-// build walks after the last neighbour must not take its slot (until session 28 they did, and a
-// particle with exactly `capacity` neighbours silently lost one). One neighbour more is an
+// build walks after the last neighbour must not take its slot (where they do, a particle with
+// exactly `capacity` neighbours silently loses one). One neighbour more is an
 // overflow. The capacity is set to the largest count a first build finds.
 TEST_F(SphStageTest, ListFilledToItsCapacityKeepsEveryNeighbour) {
   auto rng = rngFor();

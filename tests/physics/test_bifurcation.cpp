@@ -51,8 +51,8 @@ TEST_F(BifurcationTest, FlowSplitsEquallyAndIsConserved) {
   // upper, y < 0 the lower.
   // Why from 0.025 s and over stretches: right after the ramp the flow sloshes (over 0.02-0.0245 s
   // the branches carried 1.14 of the parent's flow), and a 2 dp slab sees the particles'
-  // layering, which they keep over the measurement (until session 12 the test read 2 dp slabs
-  // over 0.02-0.029 s: 0.98). The flow is still developing (viscous time R^2 / nu of about
+  // layering, which they keep over the measurement (2 dp slabs over 0.02-0.029 s read
+  // 0.98). The flow is still developing (viscous time R^2 / nu of about
   // 0.7 s), so parent and branches differ by what the lumen between them stores over the
   // window. That moves by a few percent with small changes of the scene: here 0.954, with the
   // background pressure at 198-202 Pa 0.954-1.014 (Monaghan's pressure form: 0.988-1.013;

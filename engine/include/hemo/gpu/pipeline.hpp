@@ -93,8 +93,7 @@ struct PipelineDesc {
   std::uint32_t texelSlots = 0;
   // Bit i set: slot i is a storage texel buffer (GLSL imageBuffer / uimageBuffer with an
   // explicit format, written with imageStore). Unlike texel reads, texel stores cost llvmpipe
-  // more than storage-buffer stores (hemo-bench primitives, store_scatter; docs/benchmarks.md
-  // "Session 22"), so the engine's passes write storage buffers; the probe uses this slot kind.
+  // more than storage-buffer stores (hemo-bench primitives, store_scatter), so the engine's passes write storage buffers; the probe uses this slot kind.
   std::uint32_t storageTexelSlots = 0;
 };
 
