@@ -17,16 +17,23 @@
 // Every invocation of the dispatch calls one of these once, in uniform control flow. An
 // invocation with several limits (the cluster passes) gives their (min, max) ((+inf, -inf)
 // for none) and whether any is NaN.
-void hemo_dt_partial_range(vec2 mm, bool anyNan, uint partialBase, uint pass) {
+// A pass dispatched in pieces (the pages of a split neighbour list, SphSolver) numbers its
+// workgroups from `groupBase` on, so the pieces' partials follow one another, and only the
+// last piece (`counts`) writes the count, which covers them all.
+void hemo_dt_partial_range_of(vec2 mm, bool anyNan, uint partialBase, uint pass, uint groupBase, bool counts) {
   const vec2 sub = vec2(subgroupMin(mm.x), subgroupMax(mm.y));
   const bool nan = subgroupAny(anyNan);
   if (subgroupElect()) {
-    dtPartials[partialBase + hemo_group_index() * gl_NumSubgroups + gl_SubgroupID] =
+    dtPartials[partialBase + (groupBase + hemo_group_index()) * gl_NumSubgroups + gl_SubgroupID] =
         nan ? vec2(uintBitsToFloat(0x7fc00000u)) : sub;
   }
-  if (gl_LocalInvocationID.x == 0u && hemo_group_index() == 0u) {
-    dtCounts[pass] = gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z * gl_NumSubgroups;
+  if (counts && gl_LocalInvocationID.x == 0u && hemo_group_index() == 0u) {
+    dtCounts[pass] = (groupBase + gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumWorkGroups.z) * gl_NumSubgroups;
   }
+}
+
+void hemo_dt_partial_range(vec2 mm, bool anyNan, uint partialBase, uint pass) {
+  hemo_dt_partial_range_of(mm, anyNan, partialBase, pass, 0u, true);
 }
 
 // One limit (s), and whether the invocation has one.

@@ -1,5 +1,5 @@
 // The SPH parameter block (see interface/sph.h for units), bound as a uniform buffer (its
-// layout is the same under std140 and std430: scalars and vec4 only, 192 bytes).
+// layout is the same under std140 and std430: scalars and vec4 only, 208 bytes).
 struct SphParams {
   vec4 gravity;
   float h;
@@ -34,6 +34,8 @@ struct SphParams {
   uint listParticleStride;
   float deltaSph;  // delta of the continuity density's diffusion term
   vec4 gravityOnly;  // xyz: gravity without the body force (m/s^2)
+  uint listPageMask;  // the list's pages (interface/sph.h): a slot's index in its page is slot & mask
+  uint pad0, pad1, pad2;
 };
 
 // Declares `params` at a binding slot. A uniform buffer, not a storage buffer: llvmpipe reads a
@@ -51,7 +53,8 @@ struct HemoPairParams {
   float kernelNorm;
   float support2;    // (2h)^2, m^2
   uint listStride;   // entry k of particle i's list is at
-  uint listParticleStride;  // i * listParticleStride + k * listStride (interface/sph.h)
+  uint listParticleStride;  // (i & listPageMask) * listParticleStride + k * listStride in i's page
+  uint listPageMask;        // (interface/sph.h)
   vec3 period;       // m on periodic axes, 0 on the others
   vec3 invPeriod;    // 1 / period, 0 on bounded axes
 };
@@ -59,11 +62,12 @@ struct HemoPairParams {
 // Where the shader has bound `params` (a macro, since the buffer is declared after this file).
 #define hemo_pair_params()                                                                          \
   HemoPairParams(params.h, params.kernelNorm, params.supportRadius * params.supportRadius, params.listStride, \
-                 params.listParticleStride,                                                          \
+                 params.listParticleStride, params.listPageMask,                                     \
                  params.period.xyz, params.invPeriod.xyz)
 
+// Entry k of slot i's list, in the buffer of i's page (the page the dispatch binds).
 uint hemo_list_slot(uint i, uint k, HemoPairParams pp) {
-  return i * pp.listParticleStride + k * pp.listStride;
+  return (i & pp.listPageMask) * pp.listParticleStride + k * pp.listStride;
 }
 
 // A list read four entries per texel. With the contiguous layout and a capacity that is a

@@ -50,12 +50,13 @@
 //   float spsSmagorinsky     (C_s dp)^2 (m^2): eddy viscosity nu_t = (C_s dp)^2 |S|
 //   float spsBlinn           C_I dp^2 (m^2): isotropic part -2/3 C_I dp^2 |S|^2
 //   uint  listStride         entry k of particle i's neighbour list is at
-//                            i * listParticleStride + k * listStride: interleaved on GPUs
-//                            (listStride = particle capacity, listParticleStride = 1: neighbouring
-//                            invocations read neighbouring words), contiguous on CPU devices
-//                            (listStride = 1, listParticleStride = capacity: each lane streams
-//                            its own list, where the interleaved walk missed the cache on every
-//                            entry; docs/benchmarks.md, pair_gather)
+//                            (i & listPageMask) * listParticleStride + k * listStride of the
+//                            buffer of i's page: interleaved on GPUs (listStride = the page's
+//                            slots, listParticleStride = 1: neighbouring invocations read
+//                            neighbouring words), contiguous on CPU devices (listStride = 1,
+//                            listParticleStride = capacity: each lane streams its own list,
+//                            where the interleaved walk missed the cache on every entry;
+//                            docs/benchmarks.md, pair_gather)
 //   vec4  origin             xyz: domain origin (m), where periodic axes start
 //   vec4  period             xyz: period (m) on periodic axes, 0 on the others
 //   vec4  invPeriod          xyz: 1 / period, 0 on non-periodic axes
@@ -67,6 +68,17 @@
 //                            summation density
 //   vec4  gravityOnly        xyz: gravity alone (m/s^2), without the body force: the hydrostatic
 //                            density difference the diffusion term leaves alone
+//   uint  listPageMask       pages: the neighbour list and the interacting pairs are split into
+//                            pages of 2^k slots, each its own buffer, where one buffer for all
+//                            slots would pass a binding limit of the device (a storage buffer's
+//                            range, a texel buffer's elements, the largest allocation); a slot's
+//                            index in its page is i & listPageMask (~0: one page, all slots).
+//                            The passes that walk a list (build, density, boundary pressure,
+//                            SPS, forces, the wall's reaction) run once per page over its slots
+//                            ([first, n) in their push constants), with that page's buffers
+//                            bound, and the boundary pass over each page's own active list and
+//                            indirect arguments.
+//   uint  pad[3]
 
 // sph/build_list.comp: the neighbour (Verlet) list, over a grid of two parts (interface/grid.h:
 // the fluid's slots first, then the boundary and wall particles', each part by cell).

@@ -27,7 +27,8 @@ layout(std430, binding = HEMO_BUILD_BINDING_STATUS) buffer Status { uint status[
 layout(std430, binding = HEMO_BUILD_BINDING_ACTIVE_ARGS) writeonly buffer ActiveArgs { uvec4 activeArgs; };
 layout(push_constant) uniform Push {
   HemoGrid grid;
-  uint first;  // the slots [first, n) get lists (with clusters, the fluid's are the clusters')
+  uint first;  // the slots [first, end) get lists (with clusters, the fluid's are the clusters'),
+  uint end;    // all in one page of the list
 } pc;
 
 #include "common/list_ranges.glsl"
@@ -37,7 +38,7 @@ void main() {
   if (hemo_global_index() == 0u) {
     activeArgs = uvec4(0u, 1u, 1u, 0u);  // boundary_pressure.comp's active list, filled after this pass
   }
-  if (i >= pc.grid.dimsN.w) {
+  if (i >= pc.end) {
     return;
   }
   const vec4 xi4 = texelFetch(positions, int(i));

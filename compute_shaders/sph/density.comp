@@ -52,8 +52,9 @@ layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 cont
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 2) const uint kListWidth = 1u;
 layout(push_constant) uniform Push {
-  uint n;
+  uint n;        // the slots [first, n), all in one page of the list
   uint clockIn;  // the record this step reads
+  uint first;
 } pc;
 
 // The pair loop's state, shared by its body (pair()) whichever way the list is read.
@@ -100,7 +101,7 @@ void pair(uint entry, bool valid) {
 }
 
 void main() {
-  const uint i = hemo_global_index();
+  const uint i = pc.first + hemo_global_index();
   if (i >= pc.n) {
     return;
   }

@@ -68,7 +68,9 @@ mat3 hemo_sps_tensor(uint j) {
   return mat3(a.x, a.w, b.x, a.w, a.y, b.y, b.x, b.y, a.z);
 }
 layout(push_constant) uniform Push {
-  uint n;
+  uint n;      // the slots [first, n), all in one page of the list
+  uint first;  // a multiple of the workgroup size
+  uint last;   // 1: the last of the pass's dispatches (it writes the time-step partials' count)
 } pc;
 
 #include "common/dt_fold.glsl"
@@ -197,11 +199,14 @@ float hemo_forces(uint i) {
 }
 
 void main() {
-  const uint i = hemo_global_index();
+  const uint i = pc.first + hemo_global_index();
   const bool valid = i < pc.n;
   float limit = kNoLimit;
   if (valid) {
     limit = hemo_forces(i);
   }
-  hemo_dt_partial(limit, valid, 0u, 0u);  // every invocation: subgroup operations
+  // every invocation: subgroup operations; the pages' workgroups numbered on from the first's
+  const float inf = uintBitsToFloat(0x7f800000u);
+  hemo_dt_partial_range_of(valid ? vec2(limit) : vec2(inf, -inf), valid && isnan(limit), 0u, 0u,
+                           pc.first / gl_WorkGroupSize.x, pc.last != 0u);
 }

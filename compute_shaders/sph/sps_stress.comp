@@ -24,7 +24,10 @@ layout(std430, binding = HEMO_SPS_BINDING_TAU_A) writeonly buffer TauA { vec4 ta
 layout(std430, binding = HEMO_SPS_BINDING_TAU_B) writeonly buffer TauB { vec4 tauB[]; };
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
-layout(push_constant) uniform Push { uint n; } pc;
+layout(push_constant) uniform Push {
+  uint n;  // the slots [first, n), all in one page of the list
+  uint first;
+} pc;
 
 // The loop's state, shared by its body (pair()) whichever way the list is read.
 vec3 gXi, gVi;
@@ -60,7 +63,7 @@ void pairRange(uint i, uint first, uint end) {
 }
 
 void main() {
-  const uint i = hemo_global_index();
+  const uint i = pc.first + hemo_global_index();
   if (i >= pc.n) {
     return;
   }

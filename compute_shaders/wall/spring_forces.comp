@@ -164,6 +164,8 @@ layout(push_constant) uniform Push {
   float c0;
   uint first;  // the slots [first, n): the fluid's, first after a sort, are left out
   uint dtPartialBase;  // this pass's first partial of the time step's reduction (past the force pass's)
+  uint groupBase;      // the workgroups of the pass's earlier dispatches (the pages of the fluid's list)
+  uint last;           // 1: the pass's last dispatch (it writes the partials' count)
 } pc;
 
 #include "common/dt_fold.glsl"
@@ -249,5 +251,8 @@ void main() {
       valid = true;
     }
   }
-  hemo_dt_partial(limit, valid, pc.dtPartialBase, 1u);  // every invocation: subgroup operations
+  // every invocation: subgroup operations
+  const float inf = uintBitsToFloat(0x7f800000u);
+  hemo_dt_partial_range_of(valid ? vec2(limit) : vec2(inf, -inf), valid && isnan(limit), pc.dtPartialBase, 1u,
+                           pc.groupBase, pc.last != 0u);
 }

@@ -7,31 +7,14 @@
 
 namespace hemo::sim {
 
-namespace {
-std::string mib(std::uint64_t bytes) { return std::to_string(bytes / (1024 * 1024)) + " MiB"; }
-}  // namespace
-
 Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : context_(&context), scene_(scene) {
-  // Fit check before building anything: the largest per-particle buffer is the neighbour list
-  // (with clusters, their lists: a little more, bounded by (count + 8) (capacity + 2) entries).
+  // Before building anything: slots are 32-bit indices, with a bit of list entries to spare.
+  // (The neighbour list splits into pages where one buffer would pass a binding limit, and a
+  // buffer the device's memory cannot hold is refused as it is made: gpu::OutOfDeviceMemory.)
   const std::uint64_t count = scene::countSceneParticles(scene);
-  const std::uint64_t listBytes = (count + 8) * (scene.sph.neighbourCapacity + 2) * 4;
-  const std::uint64_t limit = context.limits().maxStorageBufferRange;
-  if (count > 0xffffffffull / 2 || listBytes > limit) {
-    std::ostringstream msg;
-    msg << "particles.spacing_m: " << scene.sph.spacing << " m gives " << count << " particles; their neighbour list ("
-        << scene.sph.neighbourCapacity << " entries each) needs " << mib(listBytes) << " but the device allows "
-        << mib(limit) << " per buffer (increase the spacing or lower particles.neighbour_capacity)";
-    throw scene::SceneError(scene.name + ": " + msg.str());
-  }
-  const std::uint64_t texels = SphSolver::listTexels(context, scene.sph, count);
-  if (texels > context.limits().maxTexelBufferElements) {
-    std::ostringstream msg;
-    msg << "particles.spacing_m: " << scene.sph.spacing << " m gives " << count << " particles; their neighbour list ("
-        << scene.sph.neighbourCapacity << " entries each) binds " << texels << " texels but the device allows "
-        << context.limits().maxTexelBufferElements
-        << " per texel buffer (maxTexelBufferElements; increase the spacing or lower particles.neighbour_capacity)";
-    throw scene::SceneError(scene.name + ": " + msg.str());
+  if (count > 0x7fffffffull) {
+    throw scene::SceneError(scene.name + ": particles.spacing_m: " + std::to_string(scene.sph.spacing) + " m gives " +
+                            std::to_string(count) + " particles, more than hemo's 32-bit slot indices allow");
   }
   const scene::SceneBuild build = scene::buildScene(scene);
   const scene::ParticleSet& set = build.particles;

@@ -20,12 +20,15 @@ constexpr std::uint32_t kWorkgroup = 256;
 struct CountPush {
   std::uint32_t n;
 };
-struct ClockedPush {
-  std::uint32_t n, clockIn;
+struct DensityPush {  // sph/density.comp: the slots [first, n), in one page of the list
+  std::uint32_t n, clockIn, first;
+};
+struct SpsPush {  // sph/sps_stress.comp: the slots [first, n), in one page of the list
+  std::uint32_t n, first;
 };
 struct BuildPush {  // sph/build_list.comp
   NeighbourGrid::Push grid;
-  std::uint32_t first;  // the slots [first, n) get lists
+  std::uint32_t first, end;  // the slots [first, end) get lists, in one page
 };
 struct ClusterBuildPush {  // sph/build_clusters.comp
   NeighbourGrid::Push grid;
@@ -49,8 +52,9 @@ struct BoundaryClusterPush {  // sph/boundary_clusters.comp
   BoundaryPush range;
   std::uint32_t capacity, base;  // entries per cluster; the cluster of slot range.first
 };
-struct ForcesPush {  // sph/forces.comp
-  std::uint32_t n;
+struct ForcesPush {  // sph/forces.comp: the slots [first, n), in one page of the list
+  std::uint32_t n, first;
+  std::uint32_t last;  // 1: the pass's last dispatch (it writes the time-step partials' count)
 };
 struct DtReducePush {  // sph/dt_reduce.comp
   std::uint32_t wallBase;  // the wall stage's first partial
@@ -90,12 +94,58 @@ std::uint64_t clustersFor(const ParticleStore& particles) {
 std::uint32_t clusterEntries(std::uint32_t neighbourCapacity) {
   return (HEMO_CLUSTER_SIZE * (neighbourCapacity + 1) + 6 + 3) & ~3u;
 }
+// The list's layout (interface/sph.h): on a CPU device each SIMD lane walks its own list,
+// and entries next to each other stream from cache; interleaved entries, which coalesce
+// on a GPU, cost a cache miss per entry there (pair_gather in hemo-bench primitives).
+bool contiguousList(const gpu::Context& context, const SphSettings& s) {
+  const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+  return s.listLayout == ListLayout::Contiguous || s.listLayout == ListLayout::Clusters ||
+         (s.listLayout == ListLayout::Auto && cpu);
+}
+// Contiguous lists whose capacity is a multiple of 4 are read four entries per texel
+// (common/sph_params.glsl, hemo_list_texel).
+std::uint32_t listReadWidthFor(const gpu::Context& context, const SphSettings& s) {
+  return contiguousList(context, s) && s.neighbourCapacity % 4u == 0u ? 4u : 1u;
+}
+
+// Slots per page of the neighbour list and the interacting pairs (interface/sph.h, "pages"):
+// all the slots when one buffer holds their lists within every binding limit of the device
+// (a storage buffer's range, the texels of a texel buffer as the pair passes read it, the
+// largest allocation), else the largest power of two of slots whose lists do. A page of
+// fewer than 1024 slots (a device with absurdly small limits) is refused.
+std::uint32_t listPageSlotsFor(const gpu::Context& context, const SphSettings& s, std::uint32_t slots) {
+  const std::uint64_t entryBytes = 4;
+  const std::uint64_t slotBytes = std::uint64_t(s.neighbourCapacity) * entryBytes;
+  std::uint64_t limit = context.limits().maxStorageBufferRange;
+  limit = std::min<std::uint64_t>(limit, std::uint64_t(context.limits().maxTexelBufferElements) * entryBytes *
+                                             listReadWidthFor(context, s));
+  if (context.maxAllocationSize() != 0) limit = std::min<std::uint64_t>(limit, context.maxAllocationSize());
+  slots = std::max(slots, 1u);
+  if (std::uint64_t(slots) * slotBytes <= limit) return slots;
+  std::uint64_t page = 1;
+  while (page * 2 * slotBytes <= limit) page *= 2;
+  if (page < 1024) {
+    throw gpu::GpuError("the neighbour list of " + std::to_string(slots) + " particles (" + std::to_string(s.neighbourCapacity) +
+                        " entries each) would need pages of " + std::to_string(page) +
+                        " particles to stay within the device's buffer limits (" + std::to_string(limit) +
+                        " bytes per binding); hemo needs at least 1024 per page");
+  }
+  return static_cast<std::uint32_t>(page);
+}
+bool listSplit(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
+  return listPageSlotsFor(context, s, particles.capacity()) < std::max(particles.capacity(), 1u);
+}
+// The boundary pass's indirect arguments of each page of the list, apart by the largest
+// storage-buffer offset alignment Vulkan allows.
+constexpr std::uint64_t kActiveArgsStride = 256;
+
 // Whether the fluid walks clusters (ListLayout): on CPU devices, where a fetch costs per lane,
-// for summation density without the SPS term (the cluster passes have neither).
+// for summation density without the SPS term (the cluster passes have neither), with the list
+// in one page.
 bool clusterLayout(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
   const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
   const bool clusterable = !s.sps && s.densityMethod == DensityMethod::Summation &&
-                           particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS;
+                           particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS && !listSplit(context, s, particles);
   return clusterable && (s.listLayout == ListLayout::Clusters || (s.listLayout == ListLayout::Auto && cpu));
 }
 
@@ -293,14 +343,6 @@ TileGrid tilesFor(const GridSpec& spec, glm::vec3 lo, glm::vec3 hi, const SphSet
 }
 }  // namespace
 
-std::uint64_t SphSolver::listTexels(const gpu::Context& context, const SphSettings& settings, std::uint64_t slots) {
-  const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
-  const bool contiguous = settings.listLayout == ListLayout::Contiguous || settings.listLayout == ListLayout::Clusters ||
-                          (settings.listLayout == ListLayout::Auto && cpu);
-  const std::uint64_t width = contiguous && settings.neighbourCapacity % 4u == 0u ? 4u : 1u;  // as the constructor
-  return (std::max<std::uint64_t>(slots, 1) * settings.neighbourCapacity + width - 1) / width;
-}
-
 SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 domainMin, glm::vec3 domainMax,
                      const SphSettings& settings, std::uint32_t maxStepsPerBatch)
     : context_(&context),
@@ -314,10 +356,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       accel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "sph accel"),
       dtLimit_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "sph dt limits"),
       ncount_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "neighbour counts"),
-      nlist_(context, perParticle(particles, 4) * settings.neighbourCapacity, gpu::MemoryUse::Device, "neighbour list"),
       pairCount_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "interacting pair counts"),
-      pairList_(context, perParticle(particles, 4) * settings.neighbourCapacity, gpu::MemoryUse::Device,
-                "interacting pairs"),
       viscousVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "viscous velocities"),
       clusterCapacity_(clusterEntries(settings.neighbourCapacity)),
       // (a texel's worth when the solver does not use them)
@@ -329,7 +368,10 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
               gpu::MemoryUse::Device, "cluster walk order"),
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
-      activeArgs_(context, 16, gpu::MemoryUse::Device, "boundary-pressure indirect arguments"),
+      activeArgs_(context, listSplit(context, settings, particles) ? kActiveArgsStride * (std::max(particles.capacity(), 1u) /
+                                                                          listPageSlotsFor(context, settings, particles.capacity()) + 1)
+                                                                   : 16,
+                  gpu::MemoryUse::Device, "boundary-pressure indirect arguments"),
       activeAppended_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 : 16,
                       gpu::MemoryUse::Device, "boundary clusters' active list as appended"),
       integrateArgs_(context, 32, gpu::MemoryUse::Device, "integrator indirect arguments"),
@@ -359,18 +401,27 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       tileResult_(context, 4, gpu::MemoryUse::Device, "rebuild tile result"),
       tileOccupied_(context, (std::uint64_t(tileSpec_.tiles()) + 2) * 4, gpu::MemoryUse::Device, "rebuild tiles occupied"),
       rebuildGate_(context, checkResult_, 64, "neighbour rebuild", 2) {
-  // The list's layout (interface/sph.h): on a CPU device each SIMD lane walks its own list,
-  // and entries next to each other stream from cache; interleaved entries, which coalesce
-  // on a GPU, cost a cache miss per entry there (pair_gather in hemo-bench primitives).
-  const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
-  const bool contiguous = settings.listLayout == ListLayout::Contiguous || settings.listLayout == ListLayout::Clusters ||
-                          (settings.listLayout == ListLayout::Auto && cpu);
+  const bool contiguous = contiguousList(context, settings);
   clusters_ = clusterLayout(context, settings, particles);
-  params_.listStride = contiguous ? 1u : std::max(particles.capacity(), 1u);
+  // The lists in pages of pageSlots_ slots, each its own buffer (one page when one buffer
+  // passes no binding limit): entry k of slot i is entry (i & mask) * particleStride +
+  // k * listStride of its page's buffer, the interleaved layout's stride being the page's slots.
+  const std::uint32_t slots = std::max(particles.capacity(), 1u);
+  pageSlots_ = listPageSlotsFor(context, settings, slots);
+  const std::uint32_t pages = (slots + pageSlots_ - 1) / pageSlots_;
+  params_.listStride = contiguous ? 1u : pageSlots_;
   params_.listParticleStride = contiguous ? settings.neighbourCapacity : 1u;
-  // Contiguous lists whose capacity is a multiple of 4 are read four entries per texel
-  // (common/sph_params.glsl, hemo_list_texel): specialization constant 2 of the pair passes.
-  listWidth_ = contiguous && settings.neighbourCapacity % 4u == 0u ? 4u : 1u;
+  params_.listPageMask = pages > 1 ? pageSlots_ - 1u : ~0u;
+  for (std::uint32_t p = 0; p < pages; ++p) {
+    const std::uint64_t count = std::min<std::uint64_t>(pageSlots_, slots - std::uint64_t(p) * pageSlots_);
+    const std::uint64_t cap = settings.neighbourCapacity;
+    const std::uint64_t entries = contiguous ? count * cap : (cap - 1) * pageSlots_ + count;
+    const std::string page = pages > 1 ? " (page " + std::to_string(p) + " of " + std::to_string(pages) + ")" : "";
+    nlist_.emplace_back(context, entries * 4, gpu::MemoryUse::Device, "neighbour list" + page);
+    pairList_.emplace_back(context, entries * 4, gpu::MemoryUse::Device, "interacting pairs" + page);
+  }
+  // Specialization constant 2 of the pair passes: list entries per texel read.
+  listWidth_ = listReadWidthFor(context, settings);
   const VkFormat listFormat = listWidth_ == 4u ? gpu::texel::kUvec4 : gpu::texel::kUint;
   for (int a = 0; a < 3; ++a) {
     if (grid_.spec().periodic(a)) periodicAxes_ |= 1u << a;
@@ -392,7 +443,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   const std::uint32_t continuity = settings.densityMethod == DensityMethod::Summation ? 0u
                                    : settings.integrator == Integrator::Rk2Midpoint  ? 2u
                                                                                      : 1u;
-  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(ClockedPush), kWorkgroup, pairSpecialization({continuity, listWidth_}),
+  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(DensityPush), kWorkgroup, pairSpecialization({continuity, listWidth_}),
                          1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK,
                          1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
                              1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
@@ -402,7 +453,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
                                       1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
                                       1u << HEMO_BPRESSURE_BINDING_FLUID_STATE});
-  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(CountPush), kWorkgroup, pairSpecialization({listWidth_}), 1u << HEMO_SPS_BINDING_PARAMS,
+  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(SpsPush), kWorkgroup, pairSpecialization({listWidth_}), 1u << HEMO_SPS_BINDING_PARAMS,
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
                                1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
   // constant 1: the SPS term compiled in or out; 2: the list's read width
@@ -436,13 +487,29 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                          gpu::texelBinding(HEMO_TILE_STATIC_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                          {HEMO_TILE_STATIC_BINDING_TILE_GRID, &tileGrid_},
                                          {HEMO_TILE_STATIC_BINDING_TILE_BOXES, &tileBoxes_}});
-  buildListSet_ = buildList_->makeSet({gpu::texelBinding(HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
-                                       gpu::texelBinding(HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
-                                       {HEMO_BUILD_BINDING_PARAMS, &paramsBuffer_},
-                                       {HEMO_BUILD_BINDING_NCOUNT, &ncount_},
-                                       {HEMO_BUILD_BINDING_NLIST, &nlist_},
-                                       {HEMO_BUILD_BINDING_STATUS, &status_},
-                                       {HEMO_BUILD_BINDING_ACTIVE_ARGS, &activeArgs_}});
+  // Per page of the list: its buffers, its part of the boundary pass's active list and its
+  // indirect arguments (one page: the whole of each).
+  auto activeArgsOf = [&](std::uint32_t page) {
+    return gpu::Binding{0, &activeArgs_, pages > 1 ? kActiveArgsStride * page : 0, 16};
+  };
+  auto activeSlotsOf = [&](std::uint32_t page) {
+    const std::uint64_t first = std::uint64_t(page) * pageSlots_;
+    return gpu::Binding{0, &activeSlots_, pages > 1 ? first * 4 : 0,
+                        pages > 1 ? std::min<std::uint64_t>(pageSlots_, slots - first) * 4 : VK_WHOLE_SIZE};
+  };
+  auto at = [](gpu::Binding b, std::uint32_t slot) {
+    b.slot = slot;
+    return b;
+  };
+  for (std::uint32_t p = 0; p < pages; ++p) {
+    buildListSets_.push_back(buildList_->makeSet({gpu::texelBinding(HEMO_BUILD_BINDING_POSITIONS, &grid_.positionsAtBuild(), gpu::texel::kVec4),
+                                                  gpu::texelBinding(HEMO_BUILD_BINDING_CELL_START, &grid_.cellStart(), gpu::texel::kUint),
+                                                  {HEMO_BUILD_BINDING_PARAMS, &paramsBuffer_},
+                                                  {HEMO_BUILD_BINDING_NCOUNT, &ncount_},
+                                                  {HEMO_BUILD_BINDING_NLIST, &nlist_[p]},
+                                                  {HEMO_BUILD_BINDING_STATUS, &status_},
+                                                  at(activeArgsOf(p), HEMO_BUILD_BINDING_ACTIVE_ARGS)}));
+  }
   boundaryClusters_ = &cache.get({"sph/boundary_clusters", HEMO_BPRESSURE_BINDING_COUNT, sizeof(BoundaryClusterPush), kWorkgroup,
                                   pairSpecialization({}), 1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK,
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
@@ -508,21 +575,23 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   };
   clusterOrderSet_ = orderSetFor(&corder_);
   boundaryOrderSet_ = orderSetFor(&activeSlots_);
-  densitySet_ = density_->makeSet({gpu::texelBinding(HEMO_DENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
-                                   gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
-                                   {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
-                                   {HEMO_DENSITY_BINDING_STATE, &state_},
-                                   gpu::texelBinding(HEMO_DENSITY_BINDING_NCOUNT, &ncount_, gpu::texel::kUint),
-                                   gpu::texelBinding(HEMO_DENSITY_BINDING_NLIST, &nlist_, listFormat),
-                                   {HEMO_DENSITY_BINDING_CLOCK, &clock_},
-                                   {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
-                                   gpu::texelBinding(HEMO_DENSITY_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
-                                   {HEMO_DENSITY_BINDING_PAIR_POSITION, &pairPosition_},
-                                   {HEMO_DENSITY_BINDING_PAIR_COUNT, &pairCount_},
-                                   {HEMO_DENSITY_BINDING_PAIR_LIST, &pairList_}});
+  for (std::uint32_t p = 0; p < pages; ++p) {
+    densitySets_.push_back(density_->makeSet({gpu::texelBinding(HEMO_DENSITY_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                              gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                              {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
+                                              {HEMO_DENSITY_BINDING_STATE, &state_},
+                                              gpu::texelBinding(HEMO_DENSITY_BINDING_NCOUNT, &ncount_, gpu::texel::kUint),
+                                              gpu::texelBinding(HEMO_DENSITY_BINDING_NLIST, &nlist_[p], listFormat),
+                                              {HEMO_DENSITY_BINDING_CLOCK, &clock_},
+                                              {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
+                                              gpu::texelBinding(HEMO_DENSITY_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
+                                              {HEMO_DENSITY_BINDING_PAIR_POSITION, &pairPosition_},
+                                              {HEMO_DENSITY_BINDING_PAIR_COUNT, &pairCount_},
+                                              {HEMO_DENSITY_BINDING_PAIR_LIST, &pairList_[p]}}));
+  }
   // The boundary-pressure pass and its cluster form share their bindings but for the lists.
   auto boundarySetFor = [&](const gpu::ComputePipeline& pipeline, const gpu::Buffer* counts, const gpu::Buffer* list,
-                            VkFormat format, const gpu::Buffer* active) {
+                            VkFormat format, gpu::Binding active, gpu::Binding args) {
     return pipeline.makeSet({gpu::texelBinding(HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                              gpu::texelBinding(HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                              gpu::texelBinding(HEMO_BPRESSURE_BINDING_FLUID_STATE, &state_, gpu::texel::kVec4),
@@ -533,31 +602,38 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                              {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
                              {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
                              {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_},
-                             {HEMO_BPRESSURE_BINDING_ACTIVE, active},
-                             {HEMO_BPRESSURE_BINDING_ACTIVE_ARGS, &activeArgs_}});
+                             at(active, HEMO_BPRESSURE_BINDING_ACTIVE),
+                             at(args, HEMO_BPRESSURE_BINDING_ACTIVE_ARGS)});
   };
-  boundarySet_ = boundarySetFor(*boundaryPressure_, &ncount_, &nlist_, listFormat, &activeSlots_);
-  boundaryClustersSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4, &activeSlots_);
+  for (std::uint32_t p = 0; p < pages; ++p) {
+    boundarySets_.push_back(boundarySetFor(*boundaryPressure_, &ncount_, &nlist_[p], listFormat, activeSlotsOf(p), activeArgsOf(p)));
+  }
+  boundaryClustersSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4, {0, &activeSlots_},
+                                        {0, &activeArgs_});
   // (the sorting mode appends to a list of its own, which sph/cluster_order.comp sorts)
-  boundaryClustersSortSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4, &activeAppended_);
-  spsSet_ = spsStress_->makeSet({gpu::texelBinding(HEMO_SPS_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_SPS_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
-                                 {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
-                                 gpu::texelBinding(HEMO_SPS_BINDING_STATE, &state_, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_SPS_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
-                                 gpu::texelBinding(HEMO_SPS_BINDING_NLIST, &pairList_, listFormat),
-                                 {HEMO_SPS_BINDING_TAU_A, &tauA_},
-                                 {HEMO_SPS_BINDING_TAU_B, &tauB_}});
+  boundaryClustersSortSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4, {0, &activeAppended_},
+                                            {0, &activeArgs_});
+  for (std::uint32_t p = 0; p < pages; ++p) {
+    spsSets_.push_back(spsStress_->makeSet({gpu::texelBinding(HEMO_SPS_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_SPS_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                            {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
+                                            gpu::texelBinding(HEMO_SPS_BINDING_STATE, &state_, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_SPS_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
+                                            gpu::texelBinding(HEMO_SPS_BINDING_NLIST, &pairList_[p], listFormat),
+                                            {HEMO_SPS_BINDING_TAU_A, &tauA_},
+                                            {HEMO_SPS_BINDING_TAU_B, &tauB_}}));
+  }
   dtReduceSet_ = dtReduce_->makeSet({gpu::texelBinding(HEMO_DTREDUCE_BINDING_PARTIALS, &dtPartials_, gpu::texel::kVec2),
                                      {HEMO_DTREDUCE_BINDING_COUNTS, &dtCounts_},
                                      {HEMO_DTREDUCE_BINDING_RESULT, &dtResult_}});
-  forcesSet_ = forces_->makeSet({gpu::texelBinding(HEMO_FORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+  for (std::uint32_t p = 0; p < pages; ++p) {
+  forcesSets_.push_back(forces_->makeSet({gpu::texelBinding(HEMO_FORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
                                  {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
                                  gpu::texelBinding(HEMO_FORCES_BINDING_STATE, &state_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_, listFormat),
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_[p], listFormat),
                                  {HEMO_FORCES_BINDING_ACCEL, &accel_},
                                  {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
                                  {HEMO_FORCES_BINDING_DT_PARTIALS, &dtPartials_},
@@ -567,7 +643,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                  gpu::texelBinding(HEMO_FORCES_BINDING_TAU_A, &tauA_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_TAU_B, &tauB_, gpu::texel::kVec4),
                                  gpu::texelBinding(HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)});
+                                 gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)}));
+  }
   integrateSet_ = integrate_[0][HEMO_INTEGRATE_SYMPLECTIC_EULER]->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
                                        gpu::texelBinding(HEMO_INTEGRATE_BINDING_ACCEL, &accel_, gpu::texel::kVec4),
@@ -623,8 +700,10 @@ std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
 void SphSolver::attachWall(const SpringNetwork& network) {
+  std::vector<const gpu::Buffer*> pages;
+  for (const gpu::Buffer& page : nlist_) pages.push_back(&page);
   const FluidBuffers fluid{&grid_.slotOfId(), &accel_,      &dtLimit_,      &paramsBuffer_, &state_,
-                           &ncount_,           &nlist_,      &viscousVel_,   &pairPosition_, listWidth_,
+                           &ncount_,           pages,        pageSlots_,     &viscousVel_,   &pairPosition_, listWidth_,
                            &dtPartials_,       &dtCounts_,   pairSpecialization({listWidth_})};
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
@@ -699,7 +778,14 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
   const std::uint32_t fluid = particles_->fluidCount();
   if (!boundaryClusterPath()) {
     const std::uint32_t listFirst = clusterPath() ? fluid : 0u;
-    rec.dispatch(*buildList_, buildListSet_, BuildPush{grid_.push(n), listFirst}, buildList_->groupsFor(std::max(n - listFirst, 1u)));
+    if (listPages() == 1) {  // (at least one workgroup: its invocation 0 empties the active list)
+      rec.dispatch(*buildList_, buildListSets_[0], BuildPush{grid_.push(n), listFirst, n},
+                   buildList_->groupsFor(std::max(n - listFirst, 1u)));
+    } else {
+      forEachPage(rec, listFirst, n, [&](std::uint32_t p, std::uint32_t first, std::uint32_t end) {
+        rec.dispatch(*buildList_, buildListSets_[p], BuildPush{grid_.push(n), first, end}, buildList_->groupsFor(end - first));
+      });
+    }
     rec.computeToCompute();
     if (timestamps) timestamps->mark(rec, "neighbour list");
   }
@@ -742,8 +828,14 @@ void SphSolver::recordBoundaryRange(gpu::CommandRecorder& rec, std::uint32_t mod
     }
     return;
   }
-  rec.dispatch(*boundaryPressure_, boundarySet_, BoundaryPush{first, n, clockIn, mode},
-               boundaryPressure_->groupsFor(n - first));
+  if (listPages() == 1) {
+    rec.dispatch(*boundaryPressure_, boundarySets_[0], BoundaryPush{first, n, clockIn, mode},
+                 boundaryPressure_->groupsFor(n - first));
+    return;
+  }
+  forEachPage(rec, first, n, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
+    rec.dispatch(*boundaryPressure_, boundarySets_[p], BoundaryPush{lo, hi, clockIn, mode}, boundaryPressure_->groupsFor(hi - lo));
+  });
 }
 
 void SphSolver::recordBoundaryRest(gpu::CommandRecorder& rec) {
@@ -766,7 +858,13 @@ void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluid
     rec.dispatch(*densityClusters_, densityClustersSet_, ClusterPush{fluid, clusterCapacity_, clockParity_},
                  densityClusters_->groupsFor(std::max(clusters, 1u)));
   } else {
-    rec.dispatch(*density_, densitySet_, ClockedPush{fluidSlots, clockParity_}, density_->groupsFor(fluidSlots));
+    if (listPages() == 1) {
+      rec.dispatch(*density_, densitySets_[0], DensityPush{fluidSlots, clockParity_, 0u}, density_->groupsFor(fluidSlots));
+    } else {
+      forEachPage(rec, 0, fluidSlots, [&](std::uint32_t p, std::uint32_t first, std::uint32_t end) {
+        rec.dispatch(*density_, densitySets_[p], DensityPush{end, clockParity_, first}, density_->groupsFor(end - first));
+      });
+    }
   }
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
@@ -776,8 +874,15 @@ void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluid
                          BoundaryClusterPush{{nonFluidStart(), n, clockParity_, HEMO_BPRESSURE_ACTIVE}, clusterCapacity_, clusterCount()},
                          activeArgs_, 0);
   } else {
-    rec.dispatchIndirect(*boundaryPressure_, boundarySet_, BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
-                         activeArgs_, 0);
+    if (listPages() == 1) {
+      rec.dispatchIndirect(*boundaryPressure_, boundarySets_[0], BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
+                           activeArgs_, 0);
+    } else {  // each page's active list, as its sort appended it
+      forEachPage(rec, nonFluidStart(), n, [&](std::uint32_t p, std::uint32_t, std::uint32_t) {
+        rec.dispatchIndirect(*boundaryPressure_, boundarySets_[p], BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
+                             activeArgs_, kActiveArgsStride * p);
+      });
+    }
   }
   boundaryClockIn_ = clockParity_;
   rec.computeToCompute();
@@ -790,7 +895,9 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
                                  gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
   if (settings_.sps) {  // only scenes that ask for turbulence pay for it
-    rec.dispatch(*spsStress_, spsSet_, CountPush{fluidSlots}, spsStress_->groupsFor(fluidSlots));
+    forEachPage(rec, 0, fluidSlots, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
+      rec.dispatch(*spsStress_, spsSets_[p], SpsPush{hi, lo}, spsStress_->groupsFor(hi - lo));
+    });
     rec.computeToCompute();
   }
   // The time step's reduction: the SIMD groups of this pass and, with a wall, of the wall
@@ -806,7 +913,17 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
     rec.dispatch(*forcesClusters_, forcesClustersSet_, ClusterPush{fluid, clusterCapacity_, fluidSlots}, groups);
   } else {
     groups = forces_->groupsFor(fluidSlots);
-    rec.dispatch(*forces_, forcesSet_, ForcesPush{fluidSlots}, groups);
+    if (listPages() == 1) {
+      rec.dispatch(*forces_, forcesSets_[0], ForcesPush{fluidSlots, 0u, 1u}, groups);
+    } else {
+      // Pages start at multiples of the workgroup size: each page's time-step partials follow
+      // the previous page's, and the last page writes their count (common/dt_fold.glsl).
+      static_assert(kWorkgroup <= 1024, "pages of at least 1024 slots start on workgroup boundaries");
+      const std::uint32_t lastPage = (fluidSlots - 1) / pageSlots_;
+      forEachPage(rec, 0, fluidSlots, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
+        rec.dispatch(*forces_, forcesSets_[p], ForcesPush{hi, lo, p == lastPage ? 1u : 0u}, forces_->groupsFor(hi - lo));
+      });
+    }
   }
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "forces");

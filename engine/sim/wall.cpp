@@ -24,8 +24,10 @@ struct ForcesPush {
   float timeStepFactor, acousticLength, c0;
   std::uint32_t first;
   std::uint32_t dtPartialBase;
+  std::uint32_t groupBase;  // the workgroups of the pass's earlier dispatches (pages)
+  std::uint32_t last;       // 1: the pass's last dispatch (it writes the partials' count)
 };
-static_assert(sizeof(ForcesPush) == 44);
+static_assert(sizeof(ForcesPush) == 52);
 
 bool finiteNonNegative(float x) { return std::isfinite(x) && x >= 0.0f; }
 }  // namespace
@@ -131,7 +133,9 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   const ParticleArrays& a = particles.live();
   using gpu::texelBinding;
   using namespace gpu::texel;
-  forcesSet_ = forces_->makeSet({texelBinding(HEMO_SPRINGF_BINDING_POSITIONS, &a.positions, kVec4),
+  pageSlots_ = fluid.listPageSlots;
+  for (const gpu::Buffer* page : fluid.neighbourListPages) {
+  forcesSets_.push_back(forces_->makeSet({texelBinding(HEMO_SPRINGF_BINDING_POSITIONS, &a.positions, kVec4),
                                  texelBinding(HEMO_SPRINGF_BINDING_VELOCITIES, &a.velocities, kVec4),
                                  texelBinding(HEMO_SPRINGF_BINDING_IDS, &a.ids, kUint),
                                  texelBinding(HEMO_SPRINGF_BINDING_SLOT_OF_ID, fluid.slotOfId, kUint),
@@ -145,7 +149,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  {HEMO_SPRINGF_BINDING_PARAMS, fluid.params},
                                  texelBinding(HEMO_SPRINGF_BINDING_STATE, fluid.state, kVec4),
                                  texelBinding(HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts, kUint),
-                                 texelBinding(HEMO_SPRINGF_BINDING_NLIST, fluid.neighbourList, fluid.listReadWidth == 4u ? kUvec4 : kUint),
+                                 texelBinding(HEMO_SPRINGF_BINDING_NLIST, page, fluid.listReadWidth == 4u ? kUvec4 : kUint),
                                  {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
                                  texelBinding(HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities, kVec4),
                                  {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
@@ -153,7 +157,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                  texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, kVec4),
                                  {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_},
                                  {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
-                                 {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts}});
+                                 {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts}}));
+  }
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
                                     {HEMO_SHADE_BINDING_IDS, &a.ids},
@@ -177,14 +182,32 @@ void MassSpring::recordReset(gpu::CommandRecorder& rec) {
 }
 
 void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t dtPartialBase) {
-  const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, n, idCount_, timeStepFactor_, acousticLength_,
-                        soundSpeed_, first, dtPartialBase};
-  rec.dispatch(*forces_, forcesSet_, push, forces_->groupsFor(n - first));
-  rec.computeToCompute();
+  if (forcesSets_.size() == 1) {
+    const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, n, idCount_, timeStepFactor_, acousticLength_,
+                          soundSpeed_, first, dtPartialBase, 0u, 1u};
+    rec.dispatch(*forces_, forcesSets_[0], push, forces_->groupsFor(n - first));
+    rec.computeToCompute();
+    return;
+  }
+  // Once per page of the fluid's list, a barrier between them (SphSolver::forEachPage); the
+  // pages' time-step partials follow one another, and the last page writes their count.
+  std::uint32_t groupBase = 0;
+  std::uint32_t lastPage = 0;
+  forEachPage(first, n, [&](std::uint32_t p, std::uint32_t, std::uint32_t) { lastPage = p; });
+  forEachPage(first, n, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
+    const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, hi, idCount_, timeStepFactor_, acousticLength_,
+                          soundSpeed_, lo, dtPartialBase, groupBase, p == lastPage ? 1u : 0u};
+    const gpu::Groups groups = forces_->groupsFor(hi - lo);
+    rec.dispatch(*forces_, forcesSets_[p], push, groups);
+    rec.computeToCompute();
+    groupBase += static_cast<std::uint32_t>(groups.total());
+  });
 }
 
 std::uint32_t MassSpring::workgroups(std::uint32_t first, std::uint32_t n) const {
-  return static_cast<std::uint32_t>(forces_->groupsFor(n - first).total());
+  std::uint64_t total = 0;
+  forEachPage(first, n, [&](std::uint32_t, std::uint32_t lo, std::uint32_t hi) { total += forces_->groupsFor(hi - lo).total(); });
+  return static_cast<std::uint32_t>(total);
 }
 
 std::uint32_t MassSpring::readBrokenCount() const {

@@ -436,6 +436,96 @@ TEST_F(SphPhysicsTest, FoldedDispatchesGiveBitIdenticalRuns) {
   for (const auto& m : narrow.takeValidationMessages()) ADD_FAILURE() << m;
 }
 
+// A device whose buffer limits hold only part of the neighbour list (a storage buffer's range
+// or a texel buffer's elements, forced low): the list and the interacting pairs split into
+// pages of 4,096 slots, the passes that walk them run once per page (the boundary pass over
+// each page's own active list), and the run is bit-identical to the one with each list in one
+// buffer: with the contiguous layout (four entries a texel) and the interleaved one (a GPU's:
+// the page's slots are the stride), and with the SPS term's pass.
+TEST_F(SphPhysicsTest, ListSplitIntoPagesGivesBitIdenticalRuns) {
+  struct Case {
+    const char* name;
+    sim::ListLayout layout;
+    bool sps;
+    gpu::LimitOverrides limits;
+  };
+  // Each holds the lists of 4,096 slots of 128 entries and a little more: a storage buffer's
+  // bytes, or the texels as the pair passes read them (one entry each when interleaved, four
+  // when contiguous).
+  gpu::LimitOverrides storage, texels, texels4;
+  storage.maxStorageBufferRange = 4096 * 128 * 4 + 4096;
+  texels.maxTexelBufferElements = 4096 * 128 + 1024;
+  texels4.maxTexelBufferElements = 4096 * 128 / 4 + 256;
+  const Case cases[] = {{"contiguous, storage range", sim::ListLayout::Contiguous, false, storage},
+                        {"interleaved, texel elements", sim::ListLayout::Interleaved, false, texels},
+                        {"contiguous with SPS, texel elements", sim::ListLayout::Contiguous, true, texels4}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+    ASSERT_EQ(scene.sph.neighbourCapacity, 128u);
+    scene.sph.listLayout = c.layout;
+    scene.sph.sps = c.sps;
+    auto run = [&](gpu::Context& context, std::uint32_t expectPages) {
+      sim::Simulation sim(context, scene);
+      EXPECT_EQ(sim.solver().listPages(), expectPages);
+      EXPECT_FALSE(sim.solver().usesClusters());
+      sim::RunOptions opt;
+      opt.steps = 300;
+      sim.run(opt);
+      EXPECT_GE(sim.solver().readRebuilds(), 2u) << "the split lists were rebuilt";
+      const auto s = sim.snapshot();
+      std::vector<glm::vec4> state = s.positions;
+      state.insert(state.end(), s.velocities.begin(), s.velocities.end());
+      return std::make_pair(state, sim.time());
+    };
+    gpu::ContextOptions options;
+    options.validation = true;
+    options.limits = c.limits;
+    gpu::Context small(options);
+    const auto whole = run(ctx(), 1u);
+    const std::uint32_t slots = sim::Simulation(ctx(), scene).store().capacity();
+    const auto split = run(small, (slots + 4095) / 4096);
+    ASSERT_GE((slots + 4095) / 4096, 3u) << "pages enough to test: " << slots << " slots";
+    ASSERT_EQ(whole.first.size(), split.first.size());
+    EXPECT_EQ(whole.second, split.second) << "the same simulated time";
+    EXPECT_EQ(0, std::memcmp(whole.first.data(), split.first.data(), whole.first.size() * sizeof(glm::vec4)))
+        << "the run with the list in pages differs";
+    for (const auto& m : small.takeValidationMessages()) ADD_FAILURE() << m;
+  }
+}
+
+// The aneurysm with its list split into pages (a storage buffer's range forced to hold 2,048
+// slots' lists): the wall's reaction pass runs once per page too, and the run, springs and
+// ruptures included, is bit-identical to the one with the list in one buffer.
+TEST_F(SphPhysicsTest, VesselWithItsListInPagesGivesBitIdenticalRuns) {
+  scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/aneurysm.json");
+  scene.sph.listLayout = sim::ListLayout::Contiguous;  // (a split list never walks clusters)
+  auto run = [&](gpu::Context& context) {
+    sim::Simulation sim(context, scene);
+    EXPECT_FALSE(sim.solver().usesClusters());
+    sim::RunOptions opt;
+    opt.steps = 150;
+    sim.run(opt);
+    const auto s = sim.snapshot();
+    std::vector<glm::vec4> state = s.positions;
+    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
+    return std::make_tuple(state, sim.solver().listPages(), sim.time());
+  };
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.maxStorageBufferRange = 2048 * scene.sph.neighbourCapacity * 4 + 4096;
+  gpu::Context small(options);
+  const auto [whole, wholePages, wholeTime] = run(ctx());
+  const auto [split, splitPages, splitTime] = run(small);
+  EXPECT_EQ(wholePages, 1u);
+  EXPECT_GE(splitPages, 3u);
+  EXPECT_EQ(wholeTime, splitTime);
+  ASSERT_EQ(whole.size(), split.size());
+  EXPECT_EQ(0, std::memcmp(whole.data(), split.data(), whole.size() * sizeof(glm::vec4)))
+      << "the vessel's run with the list in pages differs";
+  for (const auto& m : small.takeValidationMessages()) ADD_FAILURE() << m;
+}
+
 TEST_F(SphPhysicsTest, EndTimeIsHitExactlyAndStepsAfterItDoNothing) {
   const scene::Scene scene = scene::parseScene(kColumn, "column_test");
   sim::Simulation sim(ctx(), scene);

@@ -23,9 +23,11 @@
 #include <glm/vec3.hpp>
 #include <glm/vector_relational.hpp>
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 namespace hemo::sim {
 
@@ -113,8 +115,10 @@ struct SphParams {
   std::uint32_t listParticleStride;
   float deltaSph;  // delta of the continuity density's diffusion term (0 with summation density)
   float gravityOnly[4];  // gravity without the body force (m/s^2): the diffusion term's hydrostatic part
+  std::uint32_t listPageMask;  // set by the solver: slot i's index in its page of the list is i & mask
+  std::uint32_t pad[3];
 };
-static_assert(sizeof(SphParams) == 192);
+static_assert(sizeof(SphParams) == 208);
 
 SphParams makeParams(const SphSettings& s);
 
@@ -191,11 +195,6 @@ class SphSolver {
   // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
   void setInflow(const Inflow& inflow);
 
-  // Texels of the neighbour list (and of the interacting pairs) as the pair passes bind it, for
-  // `slots` particle slots on `context`'s device: the binding that outgrows
-  // maxTexelBufferElements first as a scene grows.
-  static std::uint64_t listTexels(const gpu::Context& context, const SphSettings& settings, std::uint64_t slots);
-
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);
   // Makes the next recorded step rebuild the grid and the neighbour list whatever the
@@ -212,7 +211,17 @@ class SphSolver {
   // reduced on the GPU for the integrator's dt (common/dt_fold.glsl).
   const gpu::Buffer& stepLimits() const { return dtResult_; }
   const gpu::Buffer& neighbourCounts() const { return ncount_; }
-  const gpu::Buffer& neighbourList() const { return nlist_; }
+  // The neighbour list of the slots [0, listPageSlots()), the first page (all of it when the
+  // list is one page).
+  const gpu::Buffer& neighbourList() const { return nlist_.front(); }
+  // The list and the interacting pairs in pages of listPageSlots() slots (a power of two), each
+  // its own buffer, when one buffer for all slots would pass a binding limit of the device
+  // (maxStorageBufferRange, maxTexelBufferElements, the largest allocation): the passes that
+  // walk them run once per page (interface/sph.h, "pages").
+  std::uint32_t listPages() const { return static_cast<std::uint32_t>(nlist_.size()); }
+  std::uint32_t listPageSlots() const { return pageSlots_; }
+  const gpu::Buffer& neighbourListPage(std::uint32_t page) const { return nlist_.at(page); }
+  const gpu::Buffer& interactingPairsPage(std::uint32_t page) const { return pairList_.at(page); }
   // A neighbour-list entry is a slot, with kListBoundaryBit set for a boundary or wall
   // neighbour (interface/sph.h); the interacting-pair list holds plain slots, the fluid pairs
   // from entry 0 up and the boundary pairs from entry capacity - 1 down, and its count packs
@@ -227,7 +236,7 @@ class SphSolver {
   // A fluid particle's list entries within interaction range at the last density pass, in
   // list order and layout (interface/sph.h, HEMO_DENSITY_BINDING_PAIR_LIST), and their number.
   const gpu::Buffer& interactingPairCounts() const { return pairCount_; }
-  const gpu::Buffer& interactingPairs() const { return pairList_; }
+  const gpu::Buffer& interactingPairs() const { return pairList_.front(); }
   // Clusters (interface/sph.h, "Clusters"): whether the fluid passes walk them (they do while
   // the slots are in grid order), whether the boundary particles' slots are in clusters too
   // (then numbered after the fluid's, without per-particle lists), the entries per cluster,
@@ -299,7 +308,26 @@ class SphSolver {
   gpu::Buffer paramsBuffer_;
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
   std::uint32_t periodicAxes_ = 0;  // bit a: axis a is periodic (HEMO_SPEC_PERIODIC_AXES)
-  gpu::Buffer state_, accel_, dtLimit_, ncount_, nlist_, pairCount_, pairList_, viscousVel_;
+  gpu::Buffer state_, accel_, dtLimit_, ncount_, pairCount_, viscousVel_;
+  // The lists' pages (listPages()) of pageSlots_ slots each.
+  std::vector<gpu::Buffer> nlist_, pairList_;
+  std::uint32_t pageSlots_ = 0;
+  // Records fn(page, first, end) for each page that holds some of the slots [begin, end), with
+  // a barrier between them: a page's dispatch writes records of buffers (state, partials) that
+  // the others bind whole, and the layer's synchronization validation cannot tell the records
+  // apart. (Pages exist only in scenes of millions of particles, where a barrier costs little.)
+  template <class Fn>
+  void forEachPage(gpu::CommandRecorder& rec, std::uint32_t begin, std::uint32_t end, Fn fn) const {
+    bool first = true;
+    for (std::uint32_t p = 0; p < listPages(); ++p) {
+      const std::uint64_t lo = std::max<std::uint64_t>(begin, std::uint64_t(p) * pageSlots_);
+      const std::uint64_t hi = std::min<std::uint64_t>(end, std::uint64_t(p + 1) * pageSlots_);
+      if (lo >= hi) continue;
+      if (!first) rec.computeToCompute();
+      first = false;
+      fn(p, static_cast<std::uint32_t>(lo), static_cast<std::uint32_t>(hi));
+    }
+  }
   // Clusters (interface/sph.h): their lists' capacity, counts and entries.
   std::uint32_t clusterCapacity_ = 0;
   gpu::Buffer ccount_, clist_, corder_;
@@ -369,7 +397,9 @@ class SphSolver {
   // decision has been recorded for these workgroups since the host last reset the test.
   bool integrateArgsValid_ = false;
   gpu::Groups integrateArgsGroups_;
-  gpu::DescriptorSet buildListSet_, densitySet_, spsSet_, boundarySet_, forcesSet_, integrateSet_;
+  gpu::DescriptorSet integrateSet_;
+  // one per page of the list
+  std::vector<gpu::DescriptorSet> buildListSets_, densitySets_, spsSets_, boundarySets_, forcesSets_;
   // The gate must be armed by its own pass before the next step (after a reset or a rebuild
   // request); otherwise the last step's rebuild check has armed it.
   bool armPending_ = true;

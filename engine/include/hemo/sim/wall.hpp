@@ -72,7 +72,10 @@ struct FluidBuffers {
   const gpu::Buffer* params;
   const gpu::Buffer* state;
   const gpu::Buffer* neighbourCounts;
-  const gpu::Buffer* neighbourList;
+  // The fluid's neighbour list in pages of listPageSlots slots (SphSolver::listPages): the
+  // reaction pass runs once per page over the wall slots in it.
+  std::vector<const gpu::Buffer*> neighbourListPages;
+  std::uint32_t listPageSlots;
   const gpu::Buffer* viscousVelocities;  // a wall particle's entry: the no-slip velocity the fluid saw
   const gpu::Buffer* pairPositions;      // (x, V p) per slot (interface/sph.h, the pair data)
   std::uint32_t listReadWidth;           // list entries per texel read (SphSolver::listReadWidth)
@@ -122,7 +125,18 @@ class MassSpring {
   gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_, shade_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* shadeStage_;
-  gpu::DescriptorSet forcesSet_, shadeSet_;
+  std::vector<gpu::DescriptorSet> forcesSets_;  // one per page of the fluid's list
+  gpu::DescriptorSet shadeSet_;
+  std::uint32_t pageSlots_ = 0;
+  // Calls fn(page, first, end) for each page holding some of the slots [begin, end).
+  template <class Fn>
+  void forEachPage(std::uint32_t begin, std::uint32_t end, Fn fn) const {
+    for (std::uint32_t p = 0; p < forcesSets_.size(); ++p) {
+      const std::uint64_t lo = std::max<std::uint64_t>(begin, std::uint64_t(p) * pageSlots_);
+      const std::uint64_t hi = std::min<std::uint64_t>(end, std::uint64_t(p + 1) * pageSlots_);
+      if (lo < hi) fn(p, static_cast<std::uint32_t>(lo), static_cast<std::uint32_t>(hi));
+    }
+  }
 };
 
 }  // namespace hemo::sim
