@@ -21,11 +21,14 @@ def main():
         sys.exit(__doc__)
     out = sys.argv[1]
     rows = []
+    devices = []
     for path in sys.argv[2:]:
         with open(path) as f:
-            rows += json.load(f)["rows"]
+            bench = json.load(f)
+        rows += bench["rows"]
+        devices.append(bench.get("device", "unknown device"))
     for case in sorted({r["case"] for r in rows}):
-        fig, ax = plt.subplots(figsize=(6, 4.2))
+        fig, ax = plt.subplots(figsize=(9, 4.2))
         ratios = sorted({r.get("smoothing_ratio", 1.3) for r in rows if r["case"] == case}, reverse=True)
         series = (("symplectic_euler", "summation", "o"), ("rk2_midpoint", "summation", "s"),
                   ("symplectic_euler", "continuity", "^"), ("rk2_midpoint", "continuity", "v"))
@@ -44,11 +47,11 @@ def main():
         metric = next(r["error_metric"] for r in rows if r["case"] == case)
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("wall seconds per simulated second (lavapipe, 2 cores)")
+        ax.set_xlabel(f"wall seconds per simulated second ({', '.join(sorted(set(devices)))})")
         ax.set_ylabel(metric)
         ax.set_title(f"{case}: error against cost")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend()
+        ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.02, 1.0))
         fig.tight_layout()
         fig.savefig(f"{out}/accuracy_{case}.png", dpi=110)
 

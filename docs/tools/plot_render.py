@@ -19,7 +19,9 @@ def main():
     if len(sys.argv) != 3:
         sys.exit(__doc__)
     with open(sys.argv[2]) as f:
-        rows = json.load(f)["rows"]
+        bench = json.load(f)
+    rows = bench["rows"]
+    device = bench.get("device", "unknown device")
     scenes = sorted({r["scene"] for r in rows})
     fig, axes = plt.subplots(1, len(scenes), figsize=(5.2 * len(scenes), 4.2), sharey=True)
     if len(scenes) == 1:
@@ -44,7 +46,7 @@ def main():
         ax.set_title(f"{scene} ({sel[0]['fluid_particles']} fluid particles)")
         ax.set_xlabel("surface grid (voxels along the longest side)")
         ax.grid(True, which="both", axis="y", alpha=0.3)
-    axes[0].set_ylabel("ms per surface (GPU timestamps, lavapipe)")
+    axes[0].set_ylabel(f"ms per surface (GPU timestamps, {device})")
     axes[-1].legend(fontsize=8, loc="upper left")
     fig.tight_layout()
     fig.savefig(sys.argv[1], dpi=110)

@@ -301,7 +301,7 @@ namespace {
 // hemo-bench speed on lavapipe). A periodic y or z axis too short for five such cells gets cells of R / 2
 // (five distinct rows need a period of 2.5 R). Two parts: the fluid's slots first, so the
 // fluid passes' SIMD groups hold fluid only (mixed groups ran their boundary lanes idle: 16%
-// of the dam break's fluid lanes, docs/benchmarks.md).
+// of the dam break's fluid lanes).
 GridSpec gridFor(glm::vec3 lo, glm::vec3 hi, const SphSettings& s) {
   s.validate();
   const float radius = s.listRadius();
