@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -412,6 +413,29 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   params_.listStride = contiguous ? 1u : pageSlots_;
   params_.listParticleStride = contiguous ? settings.neighbourCapacity : 1u;
   params_.listPageMask = pages > 1 ? pageSlots_ - 1u : ~0u;
+  // The lists are the largest buffers and the last the solver makes: what the device's memory
+  // must hold is known here, within a few percent, before they are allocated.
+  std::uint64_t listBytes = 0;
+  for (std::uint32_t p = 0; p < pages; ++p) {
+    const std::uint64_t count = std::min<std::uint64_t>(pageSlots_, slots - std::uint64_t(p) * pageSlots_);
+    const std::uint64_t cap = settings.neighbourCapacity;
+    listBytes += 2 * 4 * (contiguous ? count * cap : (cap - 1) * pageSlots_ + count);
+  }
+  const std::uint64_t held = context.deviceMemoryBytes();
+  if (held + listBytes > context.deviceMemoryCapacity()) {
+    auto gib = [](std::uint64_t bytes) {
+      char text[32];
+      std::snprintf(text, sizeof text, "%.3f GiB", double(bytes) / double(1ull << 30));
+      return std::string(text);
+    };
+    throw gpu::OutOfDeviceMemory(
+        "the device's memory cannot hold the neighbour list and the interacting pairs of " + std::to_string(slots) +
+            " particles (" + std::to_string(settings.neighbourCapacity) + " entries each): " + gib(listBytes) +
+            ", with the " + gib(held) + " hemo already holds: the scene needs about " + gib(held + listBytes) +
+            " and the device has " + gib(context.deviceMemoryCapacity()) +
+            " (fewer particles, a smaller particles.neighbour_capacity or smoothing_ratio, or a device with more memory)",
+        held + listBytes, context.deviceMemoryCapacity());
+  }
   for (std::uint32_t p = 0; p < pages; ++p) {
     const std::uint64_t count = std::min<std::uint64_t>(pageSlots_, slots - std::uint64_t(p) * pageSlots_);
     const std::uint64_t cap = settings.neighbourCapacity;

@@ -2,6 +2,7 @@
 // pages where one buffer would pass a binding limit, the device memory hemo holds) on
 // whatever device runs the suite.
 #include "gpu_test.hpp"
+#include "hemo/gpu/context.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/sim/simulation.hpp"
 
@@ -62,6 +63,38 @@ TEST_F(ScaleTest, MillionParticleRunIsBitIdenticalWhenRerun) {
     ASSERT_TRUE(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z));
   }
   EXPECT_EQ(0, std::memcmp(first.data(), second.data(), first.size() * sizeof(glm::vec4))) << "the rerun differs";
+}
+
+// A device whose memory holds three quarters of what the dam break needs (capped) refuses it
+// before its largest buffers are allocated, naming the lists and the memory the whole scene
+// needs, within a few percent of what it takes on a device that holds it.
+TEST_F(ScaleTest, SceneBeyondTheDeviceMemoryIsRefusedWithWhatItNeeds) {
+  const scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  const std::uint64_t before = ctx().deviceMemoryBytes();
+  std::uint64_t takes = 0;
+  {
+    sim::Simulation sim(ctx(), scene);
+    takes = ctx().deviceMemoryBytes() - before;
+  }
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.deviceMemoryBytes = takes * 3 / 4;
+  gpu::Context small(options);
+  std::string message;
+  std::uint64_t needed = 0;
+  try {
+    sim::Simulation sim(small, scene);
+    ADD_FAILURE() << "expected the scene to be refused";
+  } catch (const gpu::OutOfDeviceMemory& e) {
+    message = e.what();
+    needed = e.needed;
+  }
+  EXPECT_NE(message.find("the neighbour list and the interacting pairs of"), std::string::npos) << message;
+  EXPECT_NE(message.find("the scene needs about"), std::string::npos) << message;
+  EXPECT_LE(needed, takes);
+  EXPECT_GE(double(needed), 0.97 * double(takes)) << "needs " << needed << " of the " << takes << " bytes it takes";
+  EXPECT_EQ(small.deviceMemoryBytes(), 0u) << "everything the refused scene took is given back";
+  for (const auto& m : small.takeValidationMessages()) ADD_FAILURE() << m;
 }
 
 }  // namespace
