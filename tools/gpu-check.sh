@@ -10,14 +10,14 @@
 #   --device SEL  the Vulkan device: an index or part of its name (default: hemo's choice,
 #                 discrete > integrated > virtual > CPU)
 #   --phases      a subset of: device gtest aneurysm validated speed table1 render primitives
-#                 (default: all, in that order)
+#                 scale scale_h2 (default: all, in that order)
 # Exit status: 0 when every phase passed, 1 otherwise (the report says which).
 set -uo pipefail
 
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$root/build/release
 out=$root/out/gpu-check
-phases="device gtest aneurysm validated speed table1 render primitives"
+phases="device gtest aneurysm validated speed table1 render primitives scale scale_h2"
 device=${HEMO_DEVICE:-}
 while [ $# -gt 0 ]; do
   case $1 in
@@ -31,7 +31,7 @@ while [ $# -gt 0 ]; do
 done
 for phase in $phases; do
   case $phase in
-    device|gtest|aneurysm|validated|speed|table1|render|primitives) ;;
+    device|gtest|aneurysm|validated|speed|table1|render|primitives|scale|scale_h2) ;;
     *) echo "gpu-check: unknown phase '$phase'" >&2; exit 1 ;;
   esac
 done
@@ -105,6 +105,9 @@ for phase in $phases; do
     table1) run table1 600 "$out/table1.json" "$build/apps/hemo-bench" table1 --json "$out/table1.json" ;;
     render) run render 600 "$out/render.json" "$build/apps/hemo-bench" render --json "$out/render.json" ;;
     primitives) run primitives 600 "$out/primitives.json" "$build/apps/hemo-bench" primitives --json "$out/primitives.json" ;;
+    # The 3D dam break from 0.1M particles up to what the device holds, at h/dp 1.3 and 2.
+    scale) run scale 900 "$out/scale.json" "$build/apps/hemo-bench" scale --json "$out/scale.json" ;;
+    scale_h2) run scale_h2 900 "$out/scale_h2.json" "$build/apps/hemo-bench" scale --smoothing-ratio 2 --json "$out/scale_h2.json" ;;
   esac
 done
 
