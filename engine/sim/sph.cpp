@@ -380,8 +380,11 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       status_(context, HEMO_STATUS_COUNT * 4, gpu::MemoryUse::Device, "sph status"),
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
       inflow_(context, sizeof(InflowParams), gpu::MemoryUse::Device, "inflow params"),
-      savedPos_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "rk2 saved positions"),
-      savedVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "rk2 saved velocities"),
+      // (the RK2 stages only: a texel's worth for symplectic Euler, whose pipelines leave them out)
+      savedPos_(context, settings.integrator == Integrator::Rk2Midpoint ? perParticle(particles, 16) : 16,
+                gpu::MemoryUse::Device, "rk2 saved positions"),
+      savedVel_(context, settings.integrator == Integrator::Rk2Midpoint ? perParticle(particles, 16) : 16,
+                gpu::MemoryUse::Device, "rk2 saved velocities"),
       stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
       tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
       tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
