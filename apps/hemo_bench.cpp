@@ -730,12 +730,12 @@ hemo::scene::Scene scaleScene(double target, double ratio) {
 // warm-up, timed windows of steps (about 2 s each, median of `repeat`): steps/s, fluid and
 // total particle-steps/s, the device memory hemo's buffers held (bytes per particle), and the
 // GPU ms of each stage (median of 5 steps as they come, and of 5 steps forced to rebuild the
-// neighbour list). A size the device refuses (memory or a binding limit) is reported with the
+// neighbour list), and the pages the neighbour list takes. A size the device refuses (memory or a binding limit) is reported with the
 // reason, and ends the suite.
 Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio) {
   Json rows = Json::array();
-  std::printf("%10s %10s %5s %10s %10s %14s %14s %10s %9s\n", "particles", "fluid", "h/dp", "spacing m", "steps/s",
-              "part-steps/s", "fluid p-st/s", "B/particle", "step ms");
+  std::printf("%10s %10s %5s %10s %10s %14s %14s %10s %9s %6s\n", "particles", "fluid", "h/dp", "spacing m", "steps/s",
+              "part-steps/s", "fluid p-st/s", "B/particle", "step ms", "pages");
   for (const double target : {1.0e5, 1.0e6, 4.0e6, 1.6e7, 6.4e7}) {
     if (target > 1.05 * double(maxParticles)) break;
     const hemo::scene::Scene scene = scaleScene(target, ratio);
@@ -775,14 +775,15 @@ Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio) {
                   {"particle_steps_per_s", rate * double(total)},
                   {"fluid_particle_steps_per_s", rate * sim.fluidParticles()},
                   {"gpu_memory_bytes", bytes},
+                  {"list_pages", sim.solver().listPages()},  // the neighbour list's pages (1: one buffer)
                   {"bytes_per_particle", perParticle},
                   {"stage_ms", stageMs},
                   {"rebuild_stage_ms", rebuildMs},
                   {"finite", true}};
       row.update(measured);
-      std::printf("%10llu %10u %5.2f %10.3e %10.1f %14.3e %14.3e %10.0f %9.3f\n", static_cast<unsigned long long>(total),
+      std::printf("%10llu %10u %5.2f %10.3e %10.1f %14.3e %14.3e %10.0f %9.3f %6u\n", static_cast<unsigned long long>(total),
                   sim.fluidParticles(), ratio, double(scene.sph.spacing), rate, rate * double(total),
-                  rate * sim.fluidParticles(), perParticle, stepMs);
+                  rate * sim.fluidParticles(), perParticle, stepMs, sim.solver().listPages());
       std::fflush(stdout);
       rows.push_back(row);
     } catch (const std::exception& e) {
