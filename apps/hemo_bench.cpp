@@ -728,10 +728,10 @@ hemo::scene::Scene scaleScene(double target, double ratio) {
 // Throughput against size: the 3D dam break (scaleScene) at about 0.1M, 1M, 4M, 16M and 64M
 // particles, up to `maxParticles` or the largest the device holds. Per size, after 10 steps of
 // warm-up, timed windows of steps (about 2 s each, median of `repeat`): steps/s, fluid and
-// total particle-steps/s, the device memory hemo's buffers held (bytes per particle), and the
-// GPU ms of each stage (median of 5 steps as they come, and of 5 steps forced to rebuild the
-// neighbour list), and the pages the neighbour list takes. A size the device refuses (memory or a binding limit) is reported with the
-// reason, and ends the suite.
+// total particle-steps/s, the device memory hemo's buffers held (bytes per particle), the
+// pages the neighbour list takes, and the GPU ms of each stage (median of 5 steps as they
+// come, and of 5 steps forced to rebuild the neighbour list). A size the device refuses
+// (memory or a binding limit) is reported with the reason, and ends the suite.
 Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio) {
   Json rows = Json::array();
   std::printf("%10s %10s %5s %10s %10s %14s %14s %10s %9s %6s\n", "particles", "fluid", "h/dp", "spacing m", "steps/s",
