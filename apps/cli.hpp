@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <utility>
 #include <set>
 #include <stdexcept>
@@ -55,36 +56,33 @@ struct Args {
   double number(const std::string& name, double fallback, double min, double max) const {
     auto it = options.find(name);
     if (it == options.end()) return fallback;
-    const std::string& v = it->second;
-    std::size_t used = 0;
-    double x = 0;
-    try {
-      x = std::stod(v, &used);
-    } catch (const std::exception&) {
-      used = 0;
+    const std::optional<double> x = finite(it->second);
+    if (!x) throw UsageError(name + " expects a number, got '" + it->second + "'");
+    if (*x < min || *x > max) {
+      throw UsageError(name + " must be between " + std::to_string(min) + " and " + std::to_string(max) + ", got " +
+                       it->second);
     }
-    if (used == 0 || used != v.size() || !std::isfinite(x)) throw UsageError(name + " expects a number, got '" + v + "'");
-    if (x < min || x > max) {
-      throw UsageError(name + " must be between " + std::to_string(min) + " and " + std::to_string(max) + ", got " + v);
-    }
-    return x;
+    return *x;
   }
   // A non-negative, finite number of seconds, or `fallback` when the option is absent.
   double seconds(const std::string& name, double fallback) const {
     auto it = options.find(name);
     if (it == options.end()) return fallback;
-    const std::string& v = it->second;
+    const std::optional<double> t = finite(it->second);
+    if (!t || *t < 0) throw UsageError(name + " expects a non-negative time in seconds, got '" + it->second + "'");
+    return *t;
+  }
+  // The whole text as a finite number, if it is one.
+  static std::optional<double> finite(const std::string& v) {
     std::size_t used = 0;
-    double t = 0;
+    double x = 0;
     try {
-      t = std::stod(v, &used);
+      x = std::stod(v, &used);
     } catch (const std::exception&) {
-      used = 0;
+      return std::nullopt;
     }
-    if (used == 0 || used != v.size() || !std::isfinite(t) || t < 0) {
-      throw UsageError(name + " expects a non-negative time in seconds, got '" + v + "'");
-    }
-    return t;
+    if (used == 0 || used != v.size() || !std::isfinite(x)) return std::nullopt;
+    return x;
   }
   // An image size "WxH" (16 <= W, H <= 8192), or `fallback` when the option is absent.
   std::pair<std::uint32_t, std::uint32_t> size(const std::string& name,

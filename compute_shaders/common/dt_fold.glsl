@@ -36,8 +36,9 @@ void hemo_dt_partial_range(vec2 mm, bool anyNan, uint partialBase, uint pass) {
   hemo_dt_partial_range_of(mm, anyNan, partialBase, pass, 0u, true);
 }
 
-// One limit (s), and whether the invocation has one.
-void hemo_dt_partial(float limit, bool valid, uint partialBase, uint pass) {
+// One limit (s), and whether the invocation has one; groupBase and counts as above.
+void hemo_dt_partial(float limit, bool valid, uint partialBase, uint pass, uint groupBase, bool counts) {
   const float inf = uintBitsToFloat(0x7f800000u);
-  hemo_dt_partial_range(valid ? vec2(limit) : vec2(inf, -inf), valid && isnan(limit), partialBase, pass);
+  hemo_dt_partial_range_of(valid ? vec2(limit) : vec2(inf, -inf), valid && isnan(limit), partialBase, pass, groupBase,
+                           counts);
 }

@@ -206,7 +206,5 @@ void main() {
     limit = hemo_forces(i);
   }
   // every invocation: subgroup operations; the pages' workgroups numbered on from the first's
-  const float inf = uintBitsToFloat(0x7f800000u);
-  hemo_dt_partial_range_of(valid ? vec2(limit) : vec2(inf, -inf), valid && isnan(limit), 0u, 0u,
-                           pc.first / gl_WorkGroupSize.x, pc.last != 0u);
+  hemo_dt_partial(limit, valid, 0u, 0u, pc.first / gl_WorkGroupSize.x, pc.last != 0u);
 }

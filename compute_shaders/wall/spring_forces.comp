@@ -252,7 +252,5 @@ void main() {
     }
   }
   // every invocation: subgroup operations
-  const float inf = uintBitsToFloat(0x7f800000u);
-  hemo_dt_partial_range_of(valid ? vec2(limit) : vec2(inf, -inf), valid && isnan(limit), pc.dtPartialBase, 1u,
-                           pc.groupBase, pc.last != 0u);
+  hemo_dt_partial(limit, valid, pc.dtPartialBase, 1u, pc.groupBase, pc.last != 0u);
 }

@@ -133,12 +133,18 @@ std::uint32_t listPageSlotsFor(const gpu::Context& context, const SphSettings& s
   }
   return static_cast<std::uint32_t>(page);
 }
-bool listSplit(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
-  return listPageSlotsFor(context, s, particles.capacity()) < std::max(particles.capacity(), 1u);
+std::uint32_t listPagesFor(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
+  const std::uint32_t slots = std::max(particles.capacity(), 1u);
+  const std::uint32_t pageSlots = listPageSlotsFor(context, s, slots);
+  return (slots + pageSlots - 1) / pageSlots;
 }
 // The boundary pass's indirect arguments of each page of the list, apart by the largest
 // storage-buffer offset alignment Vulkan allows.
 constexpr std::uint64_t kActiveArgsStride = 256;
+std::uint64_t activeArgsBytes(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
+  const std::uint32_t pages = listPagesFor(context, s, particles);
+  return pages > 1 ? kActiveArgsStride * pages : 16;
+}
 
 // Whether the fluid walks clusters (ListLayout): on CPU devices, where a fetch costs per lane,
 // for summation density without the SPS term (the cluster passes have neither), with the list
@@ -146,7 +152,7 @@ constexpr std::uint64_t kActiveArgsStride = 256;
 bool clusterLayout(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
   const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
   const bool clusterable = !s.sps && s.densityMethod == DensityMethod::Summation &&
-                           particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS && !listSplit(context, s, particles);
+                           particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS && listPagesFor(context, s, particles) == 1;
   return clusterable && (s.listLayout == ListLayout::Clusters || (s.listLayout == ListLayout::Auto && cpu));
 }
 
@@ -369,10 +375,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
               gpu::MemoryUse::Device, "cluster walk order"),
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
-      activeArgs_(context, listSplit(context, settings, particles) ? kActiveArgsStride * (std::max(particles.capacity(), 1u) /
-                                                                          listPageSlotsFor(context, settings, particles.capacity()) + 1)
-                                                                   : 16,
-                  gpu::MemoryUse::Device, "boundary-pressure indirect arguments"),
+      activeArgs_(context, activeArgsBytes(context, settings, particles), gpu::MemoryUse::Device,
+                  "boundary-pressure indirect arguments"),
       activeAppended_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 : 16,
                       gpu::MemoryUse::Device, "boundary clusters' active list as appended"),
       integrateArgs_(context, 32, gpu::MemoryUse::Device, "integrator indirect arguments"),
@@ -412,18 +416,21 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   // k * listStride of its page's buffer, the interleaved layout's stride being the page's slots.
   const std::uint32_t slots = std::max(particles.capacity(), 1u);
   pageSlots_ = listPageSlotsFor(context, settings, slots);
-  const std::uint32_t pages = (slots + pageSlots_ - 1) / pageSlots_;
+  const std::uint32_t pages = listPagesFor(context, settings, particles);
+  // Entries of page p's buffer: its slots' lists, or with the interleaved layout up to its
+  // last slot's last entry (stride pageSlots_).
+  auto pageEntries = [&](std::uint32_t p) {
+    const std::uint64_t count = std::min<std::uint64_t>(pageSlots_, slots - std::uint64_t(p) * pageSlots_);
+    const std::uint64_t cap = settings.neighbourCapacity;
+    return contiguous ? count * cap : (cap - 1) * pageSlots_ + count;
+  };
   params_.listStride = contiguous ? 1u : pageSlots_;
   params_.listParticleStride = contiguous ? settings.neighbourCapacity : 1u;
   params_.listPageMask = pages > 1 ? pageSlots_ - 1u : ~0u;
   // The lists are the largest buffers and the last the solver makes: what the device's memory
   // must hold is known here, within a few percent, before they are allocated.
   std::uint64_t listBytes = 0;
-  for (std::uint32_t p = 0; p < pages; ++p) {
-    const std::uint64_t count = std::min<std::uint64_t>(pageSlots_, slots - std::uint64_t(p) * pageSlots_);
-    const std::uint64_t cap = settings.neighbourCapacity;
-    listBytes += 2 * 4 * (contiguous ? count * cap : (cap - 1) * pageSlots_ + count);
-  }
+  for (std::uint32_t p = 0; p < pages; ++p) listBytes += 2 * 4 * pageEntries(p);  // the list and the pairs
   const std::uint64_t held = context.deviceMemoryBytes();
   if (held + listBytes > context.deviceMemoryCapacity()) {
     auto gib = [](std::uint64_t bytes) {
@@ -440,9 +447,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
         held + listBytes, context.deviceMemoryCapacity());
   }
   for (std::uint32_t p = 0; p < pages; ++p) {
-    const std::uint64_t count = std::min<std::uint64_t>(pageSlots_, slots - std::uint64_t(p) * pageSlots_);
-    const std::uint64_t cap = settings.neighbourCapacity;
-    const std::uint64_t entries = contiguous ? count * cap : (cap - 1) * pageSlots_ + count;
+    const std::uint64_t entries = pageEntries(p);
     const std::string page = pages > 1 ? " (page " + std::to_string(p) + " of " + std::to_string(pages) + ")" : "";
     nlist_.emplace_back(context, entries * 4, gpu::MemoryUse::Device, "neighbour list" + page);
     pairList_.emplace_back(context, entries * 4, gpu::MemoryUse::Device, "interacting pairs" + page);
@@ -654,23 +659,23 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                      {HEMO_DTREDUCE_BINDING_COUNTS, &dtCounts_},
                                      {HEMO_DTREDUCE_BINDING_RESULT, &dtResult_}});
   for (std::uint32_t p = 0; p < pages; ++p) {
-  forcesSets_.push_back(forces_->makeSet({gpu::texelBinding(HEMO_FORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
-                                 {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_STATE, &state_, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_[p], listFormat),
-                                 {HEMO_FORCES_BINDING_ACCEL, &accel_},
-                                 {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
-                                 {HEMO_FORCES_BINDING_DT_PARTIALS, &dtPartials_},
-                                 {HEMO_FORCES_BINDING_DT_COUNTS, &dtCounts_},
-                                 {HEMO_FORCES_BINDING_IDS, &a.ids},
-                                 {HEMO_FORCES_BINDING_STATUS, &status_},
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_TAU_A, &tauA_, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_TAU_B, &tauB_, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4),
-                                 gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)}));
+    forcesSets_.push_back(forces_->makeSet({gpu::texelBinding(HEMO_FORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
+                                            {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_STATE, &state_, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_[p], listFormat),
+                                            {HEMO_FORCES_BINDING_ACCEL, &accel_},
+                                            {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
+                                            {HEMO_FORCES_BINDING_DT_PARTIALS, &dtPartials_},
+                                            {HEMO_FORCES_BINDING_DT_COUNTS, &dtCounts_},
+                                            {HEMO_FORCES_BINDING_IDS, &a.ids},
+                                            {HEMO_FORCES_BINDING_STATUS, &status_},
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_TAU_A, &tauA_, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_TAU_B, &tauB_, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)}));
   }
   integrateSet_ = integrate_[0][HEMO_INTEGRATE_SYMPLECTIC_EULER]->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
@@ -855,11 +860,6 @@ void SphSolver::recordBoundaryRange(gpu::CommandRecorder& rec, std::uint32_t mod
     }
     return;
   }
-  if (listPages() == 1) {
-    rec.dispatch(*boundaryPressure_, boundarySets_[0], BoundaryPush{first, n, clockIn, mode},
-                 boundaryPressure_->groupsFor(n - first));
-    return;
-  }
   forEachPage(rec, first, n, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
     rec.dispatch(*boundaryPressure_, boundarySets_[p], BoundaryPush{lo, hi, clockIn, mode}, boundaryPressure_->groupsFor(hi - lo));
   });
@@ -885,13 +885,9 @@ void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluid
     rec.dispatch(*densityClusters_, densityClustersSet_, ClusterPush{fluid, clusterCapacity_, clockParity_},
                  densityClusters_->groupsFor(std::max(clusters, 1u)));
   } else {
-    if (listPages() == 1) {
-      rec.dispatch(*density_, densitySets_[0], DensityPush{fluidSlots, clockParity_, 0u}, density_->groupsFor(fluidSlots));
-    } else {
-      forEachPage(rec, 0, fluidSlots, [&](std::uint32_t p, std::uint32_t first, std::uint32_t end) {
-        rec.dispatch(*density_, densitySets_[p], DensityPush{end, clockParity_, first}, density_->groupsFor(end - first));
-      });
-    }
+    forEachPage(rec, 0, fluidSlots, [&](std::uint32_t p, std::uint32_t first, std::uint32_t end) {
+      rec.dispatch(*density_, densitySets_[p], DensityPush{end, clockParity_, first}, density_->groupsFor(end - first));
+    });
   }
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
@@ -901,15 +897,11 @@ void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluid
                          BoundaryClusterPush{{nonFluidStart(), n, clockParity_, HEMO_BPRESSURE_ACTIVE}, clusterCapacity_, clusterCount()},
                          activeArgs_, 0);
   } else {
-    if (listPages() == 1) {
-      rec.dispatchIndirect(*boundaryPressure_, boundarySets_[0], BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
-                           activeArgs_, 0);
-    } else {  // each page's active list, as its sort appended it
-      forEachPage(rec, nonFluidStart(), n, [&](std::uint32_t p, std::uint32_t, std::uint32_t) {
-        rec.dispatchIndirect(*boundaryPressure_, boundarySets_[p], BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
-                             activeArgs_, kActiveArgsStride * p);
-      });
-    }
+    // each page's active list, as its sort appended it
+    forEachPage(rec, nonFluidStart(), n, [&](std::uint32_t p, std::uint32_t, std::uint32_t) {
+      rec.dispatchIndirect(*boundaryPressure_, boundarySets_[p], BoundaryPush{0, n, clockParity_, HEMO_BPRESSURE_ACTIVE},
+                           activeArgs_, kActiveArgsStride * p);
+    });
   }
   boundaryClockIn_ = clockParity_;
   rec.computeToCompute();
@@ -940,17 +932,13 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
     rec.dispatch(*forcesClusters_, forcesClustersSet_, ClusterPush{fluid, clusterCapacity_, fluidSlots}, groups);
   } else {
     groups = forces_->groupsFor(fluidSlots);
-    if (listPages() == 1) {
-      rec.dispatch(*forces_, forcesSets_[0], ForcesPush{fluidSlots, 0u, 1u}, groups);
-    } else {
-      // Pages start at multiples of the workgroup size: each page's time-step partials follow
-      // the previous page's, and the last page writes their count (common/dt_fold.glsl).
-      static_assert(kWorkgroup <= 1024, "pages of at least 1024 slots start on workgroup boundaries");
-      const std::uint32_t lastPage = (fluidSlots - 1) / pageSlots_;
-      forEachPage(rec, 0, fluidSlots, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
-        rec.dispatch(*forces_, forcesSets_[p], ForcesPush{hi, lo, p == lastPage ? 1u : 0u}, forces_->groupsFor(hi - lo));
-      });
-    }
+    // Pages start at multiples of the workgroup size: each page's time-step partials follow
+    // the previous page's, and the last page writes their count (common/dt_fold.glsl).
+    static_assert(kWorkgroup <= 1024, "pages of at least 1024 slots start on workgroup boundaries");
+    const std::uint32_t lastPage = fluidSlots > 0 ? (fluidSlots - 1) / pageSlots_ : 0u;
+    forEachPage(rec, 0, fluidSlots, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
+      rec.dispatch(*forces_, forcesSets_[p], ForcesPush{hi, lo, p == lastPage ? 1u : 0u}, forces_->groupsFor(hi - lo));
+    });
   }
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "forces");

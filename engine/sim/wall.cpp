@@ -135,29 +135,29 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   using namespace gpu::texel;
   pageSlots_ = fluid.listPageSlots;
   for (const gpu::Buffer* page : fluid.neighbourListPages) {
-  forcesSets_.push_back(forces_->makeSet({texelBinding(HEMO_SPRINGF_BINDING_POSITIONS, &a.positions, kVec4),
-                                 texelBinding(HEMO_SPRINGF_BINDING_VELOCITIES, &a.velocities, kVec4),
-                                 texelBinding(HEMO_SPRINGF_BINDING_IDS, &a.ids, kUint),
-                                 texelBinding(HEMO_SPRINGF_BINDING_SLOT_OF_ID, fluid.slotOfId, kUint),
-                                 texelBinding(HEMO_SPRINGF_BINDING_SPRINGS, &springs_, kUvec4),
-                                 texelBinding(HEMO_SPRINGF_BINDING_FIRST, &first_, kUint),
-                                 texelBinding(HEMO_SPRINGF_BINDING_SPRINGS_OF, &springsOf_, kUint),
-                                 texelBinding(HEMO_SPRINGF_BINDING_WALL_INFO, &wallInfo_, kVec4),
-                                 {HEMO_SPRINGF_BINDING_ACCEL, fluid.accel},
-                                 texelBinding(HEMO_SPRINGF_BINDING_FLUID_ACCEL, fluid.accel, kVec4),
-                                 {HEMO_SPRINGF_BINDING_DT_LIMIT, fluid.dtLimit},
-                                 {HEMO_SPRINGF_BINDING_PARAMS, fluid.params},
-                                 texelBinding(HEMO_SPRINGF_BINDING_STATE, fluid.state, kVec4),
-                                 texelBinding(HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts, kUint),
-                                 texelBinding(HEMO_SPRINGF_BINDING_NLIST, page, fluid.listReadWidth == 4u ? kUvec4 : kUint),
-                                 {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
-                                 texelBinding(HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities, kVec4),
-                                 {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
-                                 texelBinding(HEMO_SPRINGF_BINDING_FRAMES, &frames_, kUvec2),
-                                 texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, kVec4),
-                                 {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_},
-                                 {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
-                                 {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts}}));
+    forcesSets_.push_back(forces_->makeSet({texelBinding(HEMO_SPRINGF_BINDING_POSITIONS, &a.positions, kVec4),
+                                            texelBinding(HEMO_SPRINGF_BINDING_VELOCITIES, &a.velocities, kVec4),
+                                            texelBinding(HEMO_SPRINGF_BINDING_IDS, &a.ids, kUint),
+                                            texelBinding(HEMO_SPRINGF_BINDING_SLOT_OF_ID, fluid.slotOfId, kUint),
+                                            texelBinding(HEMO_SPRINGF_BINDING_SPRINGS, &springs_, kUvec4),
+                                            texelBinding(HEMO_SPRINGF_BINDING_FIRST, &first_, kUint),
+                                            texelBinding(HEMO_SPRINGF_BINDING_SPRINGS_OF, &springsOf_, kUint),
+                                            texelBinding(HEMO_SPRINGF_BINDING_WALL_INFO, &wallInfo_, kVec4),
+                                            {HEMO_SPRINGF_BINDING_ACCEL, fluid.accel},
+                                            texelBinding(HEMO_SPRINGF_BINDING_FLUID_ACCEL, fluid.accel, kVec4),
+                                            {HEMO_SPRINGF_BINDING_DT_LIMIT, fluid.dtLimit},
+                                            {HEMO_SPRINGF_BINDING_PARAMS, fluid.params},
+                                            texelBinding(HEMO_SPRINGF_BINDING_STATE, fluid.state, kVec4),
+                                            texelBinding(HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts, kUint),
+                                            texelBinding(HEMO_SPRINGF_BINDING_NLIST, page, fluid.listReadWidth == 4u ? kUvec4 : kUint),
+                                            {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
+                                            texelBinding(HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities, kVec4),
+                                            {HEMO_SPRINGF_BINDING_COUNTERS, &counters_},
+                                            texelBinding(HEMO_SPRINGF_BINDING_FRAMES, &frames_, kUvec2),
+                                            texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, kVec4),
+                                            {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_},
+                                            {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
+                                            {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts}}));
   }
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
@@ -182,18 +182,11 @@ void MassSpring::recordReset(gpu::CommandRecorder& rec) {
 }
 
 void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t dtPartialBase) {
-  if (forcesSets_.size() == 1) {
-    const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, n, idCount_, timeStepFactor_, acousticLength_,
-                          soundSpeed_, first, dtPartialBase, 0u, 1u};
-    rec.dispatch(*forces_, forcesSets_[0], push, forces_->groupsFor(n - first));
-    rec.computeToCompute();
-    return;
-  }
-  // Once per page of the fluid's list, a barrier between them (SphSolver::forEachPage); the
-  // pages' time-step partials follow one another, and the last page writes their count.
+  // Once per page of the fluid's list (one page unless it is split), each followed by a
+  // barrier; the pages' time-step partials follow one another, and the last page writes their
+  // count (common/dt_fold.glsl).
+  const std::uint32_t lastPage = n > 0 ? (n - 1) / pageSlots_ : 0u;
   std::uint32_t groupBase = 0;
-  std::uint32_t lastPage = 0;
-  forEachPage(first, n, [&](std::uint32_t p, std::uint32_t, std::uint32_t) { lastPage = p; });
   forEachPage(first, n, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
     const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, hi, idCount_, timeStepFactor_, acousticLength_,
                           soundSpeed_, lo, dtPartialBase, groupBase, p == lastPage ? 1u : 0u};

@@ -25,6 +25,14 @@ namespace {
 
 class SphPhysicsTest : public GpuTest {};
 
+// Every particle's position and velocity (in id order), for bit-for-bit comparisons of runs.
+std::vector<glm::vec4> positionsAndVelocities(const sim::Simulation& sim) {
+  const sim::Snapshot s = sim.snapshot();
+  std::vector<glm::vec4> state = s.positions;
+  state.insert(state.end(), s.velocities.begin(), s.velocities.end());
+  return state;
+}
+
 // A small column of fluid falling into place in a tank.
 const char* kColumn = R"({
   "scene": "column_test",
@@ -419,10 +427,7 @@ TEST_F(SphPhysicsTest, FoldedDispatchesGiveBitIdenticalRuns) {
     if (maxX == 1) {
       EXPECT_GT(args[1], 1u) << "a list long enough to fold: " << args[3] << " entries";
     }
-    const auto s = sim.snapshot();
-    std::vector<glm::vec4> state = s.positions;
-    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
-    return state;
+    return positionsAndVelocities(sim);
   };
   gpu::ContextOptions options;
   options.validation = true;
@@ -473,10 +478,7 @@ TEST_F(SphPhysicsTest, ListSplitIntoPagesGivesBitIdenticalRuns) {
       opt.steps = 300;
       sim.run(opt);
       EXPECT_GE(sim.solver().readRebuilds(), 2u) << "the split lists were rebuilt";
-      const auto s = sim.snapshot();
-      std::vector<glm::vec4> state = s.positions;
-      state.insert(state.end(), s.velocities.begin(), s.velocities.end());
-      return std::make_pair(state, sim.time());
+      return std::make_pair(positionsAndVelocities(sim), sim.time());
     };
     gpu::ContextOptions options;
     options.validation = true;
@@ -506,10 +508,7 @@ TEST_F(SphPhysicsTest, VesselWithItsListInPagesGivesBitIdenticalRuns) {
     sim::RunOptions opt;
     opt.steps = 150;
     sim.run(opt);
-    const auto s = sim.snapshot();
-    std::vector<glm::vec4> state = s.positions;
-    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
-    return std::make_tuple(state, sim.solver().listPages(), sim.time());
+    return std::make_tuple(positionsAndVelocities(sim), sim.solver().listPages(), sim.time());
   };
   gpu::ContextOptions options;
   options.validation = true;

@@ -16,6 +16,7 @@
 #include "hemo/gpu/gate.hpp"
 #include "hemo/gpu/primitives.hpp"
 #include "hemo/sim/inflow.hpp"
+#include "hemo/sim/list_pages.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
 #include "hemo/sim/particles.hpp"
 #include "hemo/sim/wall.hpp"
@@ -319,14 +320,11 @@ class SphSolver {
   template <class Fn>
   void forEachPage(gpu::CommandRecorder& rec, std::uint32_t begin, std::uint32_t end, Fn fn) const {
     bool first = true;
-    for (std::uint32_t p = 0; p < listPages(); ++p) {
-      const std::uint64_t lo = std::max<std::uint64_t>(begin, std::uint64_t(p) * pageSlots_);
-      const std::uint64_t hi = std::min<std::uint64_t>(end, std::uint64_t(p + 1) * pageSlots_);
-      if (lo >= hi) continue;
+    forEachListPage(pageSlots_, listPages(), begin, end, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
       if (!first) rec.computeToCompute();
       first = false;
-      fn(p, static_cast<std::uint32_t>(lo), static_cast<std::uint32_t>(hi));
-    }
+      fn(p, lo, hi);
+    });
   }
   // Clusters (interface/sph.h): their lists' capacity, counts and entries.
   std::uint32_t clusterCapacity_ = 0;

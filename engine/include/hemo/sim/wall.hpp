@@ -12,6 +12,7 @@
 // The SPH integrator then moves wall particles like fluid particles. Attach a network to an
 // SphSolver with SphSolver::attachWall.
 #include "hemo/gpu/pipeline.hpp"
+#include "hemo/sim/list_pages.hpp"
 #include "hemo/sim/particles.hpp"
 
 #include <glm/vec3.hpp>
@@ -128,14 +129,9 @@ class MassSpring {
   std::vector<gpu::DescriptorSet> forcesSets_;  // one per page of the fluid's list
   gpu::DescriptorSet shadeSet_;
   std::uint32_t pageSlots_ = 0;
-  // Calls fn(page, first, end) for each page holding some of the slots [begin, end).
   template <class Fn>
   void forEachPage(std::uint32_t begin, std::uint32_t end, Fn fn) const {
-    for (std::uint32_t p = 0; p < forcesSets_.size(); ++p) {
-      const std::uint64_t lo = std::max<std::uint64_t>(begin, std::uint64_t(p) * pageSlots_);
-      const std::uint64_t hi = std::min<std::uint64_t>(end, std::uint64_t(p + 1) * pageSlots_);
-      if (lo < hi) fn(p, static_cast<std::uint32_t>(lo), static_cast<std::uint32_t>(hi));
-    }
+    forEachListPage(pageSlots_, static_cast<std::uint32_t>(forcesSets_.size()), begin, end, fn);
   }
 };
 
