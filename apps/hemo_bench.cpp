@@ -696,7 +696,7 @@ Json speed(Context& ctx, const hemo::scene::Scene& scene, const std::string& sce
 // with walls 0.6 m high), at the spacing that gives about `target` particles in all (fluid
 // and tank). Per unit spacing the fluid holds 0.675 m^3 / dp^3 particles and the tank's
 // walls (bottom, ends and sides, `layers` deep) about 8.28 m^2 layers / dp^2.
-hemo::scene::Scene scaleScene(double target, double ratio) {
+hemo::scene::Scene scaleScene(double target, double ratio, const std::string& search) {
   const int layers = static_cast<int>(std::ceil(2.0 * ratio - 1e-6));  // the kernel support, 2h, in spacings
   double dp = std::cbrt(0.675 / target);
   for (int it = 0; it < 60; ++it) {  // fluid + wall particles = target
@@ -720,7 +720,8 @@ hemo::scene::Scene scaleScene(double target, double ratio) {
     "time": { "integrator": "symplectic_euler", "cfl_acoustic": 0.3, "max_dt_s": 0.0005, "steps_per_batch": 32 },
     "domain": { "min_m": [-0.1, -0.1, -0.1], "max_m": [3.32, 1.1, 1.0] }
   })");
-  j["particles"] = {{"spacing_m", dp}, {"smoothing_ratio", ratio}, {"list_skin", skin}, {"neighbour_capacity", capacity}};
+  j["particles"] = {{"spacing_m", dp}, {"smoothing_ratio", ratio}, {"list_skin", skin}, {"neighbour_capacity", capacity},
+                    {"neighbour_search", search}};
   j["boundary"]["tanks"][0]["layers"] = layers;
   return hemo::scene::parseScene(j.dump(), "hemo-bench scale");
 }
@@ -729,16 +730,17 @@ hemo::scene::Scene scaleScene(double target, double ratio) {
 // particles, up to `maxParticles` or the largest the device holds. Per size, after 10 steps of
 // warm-up, timed windows of steps (about 2 s each, median of `repeat`): steps/s, fluid and
 // total particle-steps/s, the device memory hemo's buffers held (bytes per particle), the
-// pages the neighbour list takes, and the GPU ms of each stage (median of 5 steps as they
-// come, and of 5 steps forced to rebuild the neighbour list). A size the device refuses
-// (memory or a binding limit) is reported with the reason, and ends the suite.
-Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio) {
+// neighbour search the solver took (`search`: auto, list or cells; a list's pages), and the GPU
+// ms of each stage (median of 5 steps as they come, and of 5 steps forced to rebuild the
+// neighbour list). A size the device refuses (memory or a binding limit) is reported with the
+// reason, and ends the suite.
+Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio, const std::string& search) {
   Json rows = Json::array();
   std::printf("%10s %10s %5s %10s %10s %14s %14s %10s %9s %6s\n", "particles", "fluid", "h/dp", "spacing m", "steps/s",
-              "part-steps/s", "fluid p-st/s", "B/particle", "step ms", "pages");
+              "part-steps/s", "fluid p-st/s", "B/particle", "step ms", "pages");  // (pages: "cells" without a list)
   for (const double target : {1.0e5, 1.0e6, 4.0e6, 1.6e7, 6.4e7}) {
     if (target > 1.05 * double(maxParticles)) break;
-    const hemo::scene::Scene scene = scaleScene(target, ratio);
+    const hemo::scene::Scene scene = scaleScene(target, ratio, search);
     Json row = {{"target_particles", target}, {"smoothing_ratio", ratio}, {"spacing_m", scene.sph.spacing},
                 {"neighbour_capacity", scene.sph.neighbourCapacity}};
     ctx.resetPeakDeviceMemoryBytes();
@@ -765,6 +767,7 @@ Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio) {
       }
       for (const auto& [stage, ms] : sim.profileStep(5, true)) rebuildMs[stage] = ms;
       const std::uint64_t bytes = ctx.peakDeviceMemoryBytes();
+      const bool cells = sim.solver().walksCells();
       const double perParticle = double(bytes) / double(std::max<std::uint64_t>(total, 1));
       const Json measured = {{"particles", total},
                   {"fluid", sim.fluidParticles()},
@@ -775,15 +778,17 @@ Json scale(Context& ctx, int repeat, std::uint64_t maxParticles, double ratio) {
                   {"particle_steps_per_s", rate * double(total)},
                   {"fluid_particle_steps_per_s", rate * sim.fluidParticles()},
                   {"gpu_memory_bytes", bytes},
-                  {"list_pages", sim.solver().listPages()},  // the neighbour list's pages (1: one buffer)
+                  {"neighbour_search", cells ? "cells" : "list"},
+                  {"list_pages", cells ? 0u : sim.solver().listPages()},  // the neighbour list's pages (1: one buffer)
                   {"bytes_per_particle", perParticle},
                   {"stage_ms", stageMs},
                   {"rebuild_stage_ms", rebuildMs},
                   {"finite", true}};
       row.update(measured);
-      std::printf("%10llu %10u %5.2f %10.3e %10.1f %14.3e %14.3e %10.0f %9.3f %6u\n", static_cast<unsigned long long>(total),
+      const std::string pages = cells ? "cells" : std::to_string(sim.solver().listPages());
+      std::printf("%10llu %10u %5.2f %10.3e %10.1f %14.3e %14.3e %10.0f %9.3f %6s\n", static_cast<unsigned long long>(total),
                   sim.fluidParticles(), ratio, double(scene.sph.spacing), rate, rate * double(total),
-                  rate * sim.fluidParticles(), perParticle, stepMs, sim.solver().listPages());
+                  rate * sim.fluidParticles(), perParticle, stepMs, pages.c_str());
       std::fflush(stdout);
       rows.push_back(row);
     } catch (const std::exception& e) {
@@ -1004,7 +1009,7 @@ Json deviceFacts(Context& ctx) {
 int main(int argc, char** argv) {
   const char* usage =
       "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME] [--scene FILE] [--until S]\n"
-      "                  [--max-particles N] [--smoothing-ratio R]\n"
+      "                  [--max-particles N] [--smoothing-ratio R] [--neighbour-search MODE]\n"
       "  SUITE: primitives | accuracy | table1 | render | speed | scale | device\n"
       "         (device: what hemo reads from the device: sizes, limits, timestamps, memory types)\n"
       "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
@@ -1015,12 +1020,14 @@ int main(int argc, char** argv) {
       "  --max-particles N    scale: the largest size to run (sizes of about 0.1M, 1M, 4M, 16M, 64M;\n"
       "                       default: up to what the device holds)\n"
       "  --smoothing-ratio R  scale: h/dp of the 3D dam break (default 1.3)\n"
+      "  --neighbour-search MODE  scale: auto (default: a neighbour list where the device's memory\n"
+      "                       holds it, else cells), list or cells (no list: the passes walk cells)\n"
       "  --help        prints this text\n";
   if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case", "--scene", "--until", "--max-particles",
-                                          "--smoothing-ratio"});
+                                          "--smoothing-ratio", "--neighbour-search"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SUITE");
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
@@ -1044,13 +1051,17 @@ int main(int argc, char** argv) {
         throw hemo::cli::UsageError(std::string(option) + " applies to the speed suite only");
       }
     }
-    for (const char* option : {"--max-particles", "--smoothing-ratio"}) {
+    for (const char* option : {"--max-particles", "--smoothing-ratio", "--neighbour-search"}) {
       if (args.has(option) && suite != "scale") {
         throw hemo::cli::UsageError(std::string(option) + " applies to the scale suite only");
       }
     }
     const std::uint64_t maxParticles = args.count("--max-particles", 100000000, 1000, 1000000000);
     const double ratio = args.number("--smoothing-ratio", 1.3, 1.0, 3.0);
+    const std::string search = args.text("--neighbour-search", "auto");
+    if (search != "auto" && search != "list" && search != "cells") {
+      throw hemo::cli::UsageError("unknown --neighbour-search '" + search + "' (expected auto, list or cells)");
+    }
     const double until = args.seconds("--until", 0.0);
     if (args.has("--until") && until <= 0) throw hemo::cli::UsageError("--until must be above 0 s");
     // The scene is read before any device is opened: a bad file fails at once.
@@ -1078,7 +1089,7 @@ int main(int argc, char** argv) {
                       : suite == "table1"     ? table1(ctx, std::max(1, repeat / 3))
                       : suite == "render"     ? render(ctx, repeat, std::filesystem::path(HEMO_SOURCE_DIR) / "scenes")
                       : suite == "speed"      ? speed(ctx, scene, scenePath, until, repeat)
-                      : suite == "scale"      ? scale(ctx, repeat, maxParticles, ratio)
+                      : suite == "scale"      ? scale(ctx, repeat, maxParticles, ratio, search)
                                               : accuracy(ctx, only);
     if (json.is_open()) {
       json << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";

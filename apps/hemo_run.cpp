@@ -279,6 +279,8 @@ int main(int argc, char** argv) {
                {"real_time_factor", wall > 0 ? result.simTime / wall : 0.0},
                // the most device memory hemo's buffers held (device-local heaps), and per particle
                {"gpu_memory_bytes", ctx.peakDeviceMemoryBytes()},
+               // how the pair passes found neighbours: "list", or "cells" (no list)
+               {"neighbour_search", sim.solver().walksCells() ? "cells" : "list"},
                {"bytes_per_particle", double(ctx.peakDeviceMemoryBytes()) /
                                           std::max(1u, sim.fluidParticles() + sim.boundaryParticles() + sim.wallParticles())},
                {"finite", finite}};

@@ -10,14 +10,14 @@
 #   --device SEL  the Vulkan device: an index or part of its name (default: hemo's choice,
 #                 discrete > integrated > virtual > CPU)
 #   --phases      a subset of: device gtest aneurysm validated speed table1 render primitives
-#                 scale scale_h2 (default: all, in that order)
+#                 scale scale_h2 scale_cells (default: all, in that order)
 # Exit status: 0 when every phase passed, 1 otherwise (the report says which).
 set -uo pipefail
 
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=$root/build/release
 out=$root/out/gpu-check
-phases="device gtest aneurysm validated speed table1 render primitives scale scale_h2"
+phases="device gtest aneurysm validated speed table1 render primitives scale scale_h2 scale_cells"
 device=${HEMO_DEVICE:-}
 while [ $# -gt 0 ]; do
   case $1 in
@@ -31,7 +31,7 @@ while [ $# -gt 0 ]; do
 done
 for phase in $phases; do
   case $phase in
-    device|gtest|aneurysm|validated|speed|table1|render|primitives|scale|scale_h2) ;;
+    device|gtest|aneurysm|validated|speed|table1|render|primitives|scale|scale_h2|scale_cells) ;;
     *) echo "gpu-check: unknown phase '$phase'" >&2; exit 1 ;;
   esac
 done
@@ -108,6 +108,7 @@ for phase in $phases; do
     # The 3D dam break from 0.1M particles up to what the device holds, at h/dp 1.3 and 2.
     scale) run scale 900 "$out/scale.json" "$build/apps/hemo-bench" scale --json "$out/scale.json" ;;
     scale_h2) run scale_h2 900 "$out/scale_h2.json" "$build/apps/hemo-bench" scale --smoothing-ratio 2 --json "$out/scale_h2.json" ;;
+    scale_cells) run scale_cells 900 "$out/scale_cells.json" "$build/apps/hemo-bench" scale --neighbour-search cells --max-particles 16000000 --json "$out/scale_cells.json" ;;
   esac
 done
 

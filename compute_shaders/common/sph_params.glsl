@@ -1,5 +1,5 @@
 // The SPH parameter block (see interface/sph.h for units), bound as a uniform buffer (its
-// layout is the same under std140 and std430: scalars and vec4 only, 208 bytes).
+// layout is the same under std140 and std430: scalars and vec4 only, 272 bytes).
 struct SphParams {
   vec4 gravity;
   float h;
@@ -36,6 +36,12 @@ struct SphParams {
   vec4 gravityOnly;  // xyz: gravity without the body force (m/s^2)
   uint listPageMask;  // the list's pages (interface/sph.h): a slot's index in its page is slot & mask
   uint pad0, pad1, pad2;
+  // The neighbour grid (common/grid.glsl, HemoGrid; dims.w unused), for the cell walks
+  // (common/cell_walk.glsl).
+  vec4 gridOrigin;
+  vec4 gridInvCell;
+  uvec4 gridDims;
+  uvec4 gridPeriodic;
 };
 
 // Declares `params` at a binding slot. A uniform buffer, not a storage buffer: llvmpipe reads a
@@ -87,6 +93,13 @@ uint hemo_list_texel(uint i, uint k, HemoPairParams pp) {
 uvec2 hemo_pair_counts(uint packed) {
   return uvec2(packed & 0xffffu, packed >> 16u);
 }
+
+// The range squared (m^2) within which a list entry is an interacting pair (sph/density.comp):
+// the support, or the repulsion's reach (its cutoff D plus a wall spacing normal to the wall,
+// and a wall spacing along it) where that is larger.
+#define hemo_pair_keep2(pp)                                                                         \
+  max((pp).support2, (abs(params.repulsionCutoff) + params.wallSpacing) * (abs(params.repulsionCutoff) + params.wallSpacing) + \
+                         params.wallSpacing * params.wallSpacing)
 
 // Specialization constant HEMO_SPEC_PERIODIC_AXES (interface/sph.h) of the passes that
 // include this file: the periodic axes, bit a for axis a. The pair loops take the minimum

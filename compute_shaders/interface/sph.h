@@ -18,6 +18,17 @@
 // the wall's reaction): the periodic axes, bit a for axis a (common/sph_params.glsl). An id
 // past the passes' own constants (1, 2).
 #define HEMO_SPEC_PERIODIC_AXES 9
+// The pair passes that read a neighbour list (density, boundary pressure, SPS, forces, the
+// wall's reaction) are also compiled with HEMO_CELL_WALK = 1, as "<name>_cells": the variant
+// the solver runs when it keeps no list (hemo::sim::NeighbourSearch::Cells) and each pass walks
+// the grid's cells instead (common/cell_walk.glsl). A separate module rather than a
+// specialization constant: with the walk's loops compiled into the force pass but never
+// taken, lavapipe (Mesa 22.3) ran the list path of a scene with its list in pages wrongly
+// (SphPhysicsTest.VesselWithItsListInPagesGivesBitIdenticalRuns: time-step partials of some
+// pages were never written), so the list variants hold none of the walk's code.
+#ifndef HEMO_CELL_WALK
+#define HEMO_CELL_WALK 0
+#endif
 #define HEMO_KIND_FLUID 0
 #define HEMO_KIND_BOUNDARY 1  // rigid: fixed position, counts in density, viscosity, repulsion
 #define HEMO_KIND_WALL 2      // vessel wall: a boundary particle for the fluid that moves as a mass
@@ -79,6 +90,10 @@
 //                            bound, and the boundary pass over each page's own active list and
 //                            indirect arguments.
 //   uint  pad[3]
+//   vec4  gridOrigin         the neighbour grid (common/grid.glsl, HemoGrid), fixed for a solver:
+//   vec4  gridInvCell        origin (m), cells per m, cells per axis, periodic axes and parts;
+//   uvec4 gridDims           what the cell walks (common/cell_walk.glsl) find a slot's
+//   uvec4 gridPeriodic       candidate ranges with, as the list build does from its push constants
 
 // sph/build_list.comp: the neighbour (Verlet) list, over a grid of two parts (interface/grid.h:
 // the fluid's slots first, then the boundary and wall particles', each part by cell).

@@ -38,6 +38,11 @@ layout(std140, binding = HEMO_BPRESSURE_BINDING_CLOCK) uniform Clock { ClockReco
 layout(std430, binding = HEMO_BPRESSURE_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
+#if HEMO_CELL_WALK
+#define HEMO_WALK_BUILD_POSITIONS neighbourCount
+#define HEMO_WALK_CELL_START neighbourList
+#include "common/cell_walk.glsl"
+#endif
 layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE) buffer Active { uint activeSlots[]; };
 layout(std430, binding = HEMO_BPRESSURE_BINDING_ACTIVE_ARGS) buffer ActiveArgs { uvec4 activeArgs; };
 #include "common/boundary_state.glsl"
@@ -90,8 +95,15 @@ void main() {
   if (uint(vb.w) == HEMO_KIND_FLUID) {
     return;
   }
-  const uint count = texelFetch(neighbourCount, int(b)).x;  // fluid neighbours only
-  if (pc.mode != HEMO_BPRESSURE_ACTIVE && count > 0u) {
+  // fluid neighbours only (without a list: whether it would hold any, common/cell_walk.glsl)
+#if HEMO_CELL_WALK
+  const uint count = 0u;
+  const bool listsFluid = pc.mode != HEMO_BPRESSURE_ACTIVE && hemo_walk_lists_any(b);
+#else
+  const uint count = texelFetch(neighbourCount, int(b)).x;
+  const bool listsFluid = count > 0u;
+#endif
+  if (pc.mode != HEMO_BPRESSURE_ACTIVE && listsFluid) {
     if (pc.mode == HEMO_BPRESSURE_SORT) {
       // Appended in whatever order the invocations run; each entry's result does not depend
       // on its place. The invocation that opens a workgroup's worth of entries adds that
@@ -115,6 +127,16 @@ void main() {
   gSumP = 0.0;
   gSumRhoR = vec3(0.0);
   gSumV = vec3(0.0);
+#if HEMO_CELL_WALK
+  if (pc.mode == HEMO_BPRESSURE_ACTIVE) {
+    const uint ranges = hemo_walk_ranges(b);  // the fluid's part only
+    for (uint r = 0u; r < ranges; ++r) {
+      for (uint f = gRanges[r].x; f < gRanges[r].y; ++f) {
+        pair(f, true);
+      }
+    }
+  }
+#endif
   for (uint k = 0u; k < count; k += kListWidth) {
     if (kListWidth == 4u) {
       const uvec4 fs = texelFetch(neighbourList, int(hemo_list_texel(b, k, gPp)));

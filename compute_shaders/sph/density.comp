@@ -51,6 +51,11 @@ layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_LIST) writeonly buffer PairLi
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 2) const uint kListWidth = 1u;
+#if HEMO_CELL_WALK
+#define HEMO_WALK_BUILD_POSITIONS neighbourCount
+#define HEMO_WALK_CELL_START neighbourList
+#include "common/cell_walk.glsl"
+#endif
 layout(push_constant) uniform Push {
   uint n;        // the slots [first, n), all in one page of the list
   uint clockIn;  // the record this step reads
@@ -78,6 +83,12 @@ void pair(uint entry, bool valid) {
   const vec4 pj = texelFetch(positions, int(j));
   const vec3 d = hemo_min_image(gPi.xyz - pj.xyz, gPp);  // x_ij
   const float r2 = dot(d, d);
+#if HEMO_CELL_WALK
+  // (a candidate beyond the support adds nothing; with no list, no interacting pairs)
+  if (!(r2 < gPp.support2)) {
+    return;
+  }
+#else
   // Interacting pairs: every entry is stored at the next free slot of its end of the list,
   // and that end advances only for entries in range (no branch around the store). Before
   // entry k, at most k pairs are kept, so both next free slots lie in the gap between the
@@ -86,6 +97,7 @@ void pair(uint entry, bool valid) {
   const bool kept = valid && r2 < gKeep2;
   gMf += kept && !boundary ? 1u : 0u;
   gMb += kept && boundary ? 1u : 0u;
+#endif
   if (kContinuity != 0u) {
     const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm);  // 0 beyond the support and for j = i
     const vec4 vj = texelFetch(velocities, int(j));
@@ -112,9 +124,7 @@ void main() {
   }
   gPi = texelFetch(positions, int(i));
   gPp = hemo_pair_params();
-  const uint count = texelFetch(neighbourCount, int(i)).x;
-  const float cutoffReach = abs(params.repulsionCutoff) + params.wallSpacing;
-  gKeep2 = max(gPp.support2, cutoffReach * cutoffReach + params.wallSpacing * params.wallSpacing);
+  gKeep2 = hemo_pair_keep2(gPp);
   gMf = 0u;
   gMb = 0u;
   gLast = params.neighbourCapacity - 1u;
@@ -132,6 +142,20 @@ void main() {
     gInvH = 1.0 / gPp.h;
     gRho = gPi.w * hemo_kernel_w(0.0, gPp.h, gPp.kernelNorm);
   }
+#if HEMO_CELL_WALK
+  // the list's entries, in its order, among the candidates (common/cell_walk.glsl)
+  const uint ranges = hemo_walk_ranges(i);
+  for (uint r = 0u; r < ranges; ++r) {
+    const uint mark = gRanges[r].y & HEMO_LIST_BOUNDARY_BIT;
+    const uint end = gRanges[r].y & ~HEMO_LIST_BOUNDARY_BIT;
+    for (uint j = gRanges[r].x; j < end; ++j) {
+      if (j != i) {
+        pair(j | mark, true);
+      }
+    }
+  }
+#else
+  const uint count = texelFetch(neighbourCount, int(i)).x;
   for (uint k = 0u; k < count; k += kListWidth) {
     if (kListWidth == 4u) {
       const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
@@ -143,6 +167,7 @@ void main() {
       pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x, true);
     }
   }
+#endif
   float rho = gRho;
   float rate = 0.0;  // d rho / dt, for the RK2 stages (kContinuity = 2)
   if (kContinuity != 0u) {
@@ -154,7 +179,9 @@ void main() {
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   const float p = hemo_tait_pressure(rho, background, params);
+#if !HEMO_CELL_WALK
   pairCount[i] = gMf | gMb << 16u;  // hemo_pair_counts
+#endif
   state[i] = vec4(rho, p, rate, 0.0);
   const float volume = gPi.w / rho;
   pairPosition[i] = vec4(gPi.xyz, volume * p);

@@ -60,6 +60,11 @@ layout(std430, binding = HEMO_FORCES_BINDING_DT_COUNTS) writeonly buffer DtCount
 layout(constant_id = 1) const uint kSps = 0u;
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 2) const uint kListWidth = 1u;
+#if HEMO_CELL_WALK
+#define HEMO_WALK_BUILD_POSITIONS neighbourCount
+#define HEMO_WALK_CELL_START neighbourList
+#include "common/cell_walk.glsl"
+#endif
 
 // The SPS stress tau (Pa) of particle j as a symmetric matrix (sps_stress.comp).
 mat3 hemo_sps_tensor(uint j) {
@@ -88,6 +93,9 @@ vec3 gStress;     // sum V_j [ -(p_i + p_j) I + tau_i + tau_j ] . gradW
 vec3 gViscous;    // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
 vec3 gRepulsion;
 float gRepulsionWeight;
+#if HEMO_CELL_WALK
+float gKeep2;  // cell walks: the interacting pairs' range squared (hemo_pair_keep2)
+#endif
 
 // One interacting pair (i, j), j a boundary or wall particle or not (a constant at each call,
 // so each loop holds only its own terms). The padding of a texel read passes j = i: a pair at
@@ -96,6 +104,11 @@ void pair(uint j, const bool boundary) {
   const vec4 pj = texelFetch(pairPosition, int(j));  // (x_j, V_j p_j)
   const vec3 d = hemo_min_image(gXi - pj.xyz, gPp);
   const float r2 = dot(d, d);
+#if HEMO_CELL_WALK
+  if (!(r2 < gKeep2)) {
+    return;  // not an interacting pair (sph/density.comp keeps those within the range)
+  }
+#endif
   // grad W vanishes beyond the support (the list's skin) and for a coincident pair (no
   // defined direction), so neither needs a branch: llvmpipe runs both ways of a branch under
   // a lane mask, and the branch itself cost ~5% of the pass.
@@ -174,9 +187,33 @@ float hemo_forces(uint i) {
   gRepulsionWeight = 0.0;
   // the fluid pairs from the list's first entry, then the boundary pairs, which end at its
   // last (interface/sph.h)
+#if HEMO_CELL_WALK
+  // The same pairs in the same order without the list (common/cell_walk.glsl): the fluid
+  // candidates forwards; the boundary ones backwards, as the density pass stores them from
+  // the list's last entry down.
+  gKeep2 = hemo_pair_keep2(gPp);
+  const uint ranges = hemo_walk_ranges(i);
+  for (uint r = 0u; r < ranges; ++r) {
+    if (gRanges[r].y < HEMO_LIST_BOUNDARY_BIT) {
+      for (uint j = gRanges[r].x; j < gRanges[r].y; ++j) {
+        if (j != i) {
+          pair(j, false);
+        }
+      }
+    }
+  }
+  for (uint r = ranges; r > 0u; --r) {
+    if (gRanges[r - 1u].y >= HEMO_LIST_BOUNDARY_BIT) {
+      for (uint j = gRanges[r - 1u].y & ~HEMO_LIST_BOUNDARY_BIT; j > gRanges[r - 1u].x; --j) {
+        pair(j - 1u, true);
+      }
+    }
+  }
+#else
   const uvec2 counts = hemo_pair_counts(texelFetch(neighbourCount, int(i)).x);
   pairRange(i, 0u, counts.x, false);
   pairRange(i, params.neighbourCapacity - counts.y, params.neighbourCapacity, true);
+#endif
   const vec3 stress = gStress, viscous = gViscous, repulsion = gRepulsion;
   const float repulsionWeight = gRepulsionWeight;
   vec3 a = (stress + twoMu * viscous) / si.x;

@@ -24,6 +24,11 @@ layout(std430, binding = HEMO_SPS_BINDING_TAU_A) writeonly buffer TauA { vec4 ta
 layout(std430, binding = HEMO_SPS_BINDING_TAU_B) writeonly buffer TauB { vec4 tauB[]; };
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
+#if HEMO_CELL_WALK
+#define HEMO_WALK_BUILD_POSITIONS neighbourCount
+#define HEMO_WALK_CELL_START neighbourList
+#include "common/cell_walk.glsl"
+#endif
 layout(push_constant) uniform Push {
   uint n;  // the slots [first, n), all in one page of the list
   uint first;
@@ -34,11 +39,19 @@ vec3 gXi, gVi;
 HemoPairParams gPp;
 float gInvH, gGradNorm;
 mat3 gG;  // g[b][a] = d u_a / d x_b (column b)
+#if HEMO_CELL_WALK
+float gKeep2;  // cell walks: the interacting pairs' range squared (hemo_pair_keep2)
+#endif
 
 // One interacting pair; the padding of the list's last texel passes j = i, whose grad W is 0.
 void pair(uint j) {
   const vec4 pj = texelFetch(positions, int(j));
   const vec3 d = hemo_min_image(gXi - pj.xyz, gPp);
+#if HEMO_CELL_WALK
+  if (!(dot(d, d) < gKeep2)) {
+    return;  // not an interacting pair (sph/density.comp keeps those within the range)
+  }
+#endif
   // grad W is 0 beyond the support and for a coincident pair (common/kernel.glsl)
   const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(dot(d, d)), gInvH, gGradNorm);
   const vec3 du = (texelFetch(velocities, int(j)).xyz - gVi) * (pj.w / texelFetch(state, int(j)).x);
@@ -81,9 +94,31 @@ void main() {
   gG = mat3(0.0);
   // the fluid pairs from the list's first entry, then the boundary pairs, which end at its
   // last (interface/sph.h)
+#if HEMO_CELL_WALK
+  // the same pairs in the same order without the list (sph/forces.comp)
+  gKeep2 = hemo_pair_keep2(gPp);
+  const uint ranges = hemo_walk_ranges(i);
+  for (uint r = 0u; r < ranges; ++r) {
+    if (gRanges[r].y < HEMO_LIST_BOUNDARY_BIT) {
+      for (uint j = gRanges[r].x; j < gRanges[r].y; ++j) {
+        if (j != i) {
+          pair(j);
+        }
+      }
+    }
+  }
+  for (uint r = ranges; r > 0u; --r) {
+    if (gRanges[r - 1u].y >= HEMO_LIST_BOUNDARY_BIT) {
+      for (uint j = gRanges[r - 1u].y & ~HEMO_LIST_BOUNDARY_BIT; j > gRanges[r - 1u].x; --j) {
+        pair(j - 1u);
+      }
+    }
+  }
+#else
   const uvec2 counts = hemo_pair_counts(texelFetch(neighbourCount, int(i)).x);
   pairRange(i, 0u, counts.x);
   pairRange(i, params.neighbourCapacity - counts.y, params.neighbourCapacity);
+#endif
   const mat3 g = gG;
   const float sxx = g[0][0], syy = g[1][1], szz = g[2][2];
   const float sxy = 0.5 * (g[1][0] + g[0][1]);

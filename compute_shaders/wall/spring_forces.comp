@@ -57,6 +57,11 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_DT_COUNTS) writeonly buffer DtCoun
 
 // 4: the fluid's list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
+#if HEMO_CELL_WALK
+#define HEMO_WALK_BUILD_POSITIONS neighbourCountT
+#define HEMO_WALK_CELL_START neighbourListT
+#include "common/cell_walk.glsl"
+#endif
 
 // Spring record k of interface/wall.h, read as its two uvec4 texels.
 Spring hemo_spring(uint k) {
@@ -121,7 +126,17 @@ vec3 hemo_fluid_reaction(uint w) {
   gRepels = xw.w > 0.0;  // detached particles (no SPH mass) do not repel
   gSum = vec3(0.0);
   gRepulsion = vec3(0.0);
+#if HEMO_CELL_WALK
+  const uint ranges = hemo_walk_ranges(w);  // the fluid's part only (common/cell_walk.glsl)
+  for (uint r = 0u; r < ranges; ++r) {
+    for (uint f = gRanges[r].x; f < gRanges[r].y; ++f) {
+      reactionPair(f, true);
+    }
+  }
+  const uint count = 0u;
+#else
   const uint count = texelFetch(neighbourCountT, int(w)).x;
+#endif
   for (uint k = 0u; k < count; k += kListWidth) {
     if (kListWidth == 4u) {
       const uvec4 fs = texelFetch(neighbourListT, int(hemo_list_texel(w, k, gPp)));

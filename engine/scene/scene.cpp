@@ -48,6 +48,7 @@ const std::vector<Field>& schema() {
            {"spacing_m", Kind::Number, "m", 0, 10, true, nullptr, "Initial particle spacing dp (fluid and boundary lattice)."},
            {"smoothing_ratio", Kind::Number, "1", 0.5, 3, false, 1.3, "Smoothing length h / dp; the kernel support is 2h."},
            {"neighbour_capacity", Kind::Integer, "1", 8, 1024, false, 128, "Neighbour-list entries per particle; exceeding it stops the run."},
+           {"neighbour_search", Kind::Choice, "", 0, 0, false, "auto", "How the passes find a particle's neighbours: a neighbour list (fastest where it fits; 8 x neighbour_capacity bytes per particle), cells (no list: each pass walks the grid cells around the particle, for scenes the list would not fit; the same results bit for bit), or auto (the list where the device's memory holds it, else cells).", {"auto", "list", "cells"}},
            {"list_skin", Kind::Number, "1", 0, 1, false, 0.1, "Neighbour-list radius = 2h (1 + skin). A larger skin rebuilds the list less often but makes it longer: 0.1 suits the dam break, 0.25 (with a capacity of 176) the vessel scenes, whose shear flows spread the displacements (docs/benchmarks.md)."},
        }},
       {"fluid", Kind::Section, "", 0, 0, false, nullptr, "The fluid (blood defaults are density 1060, viscosity 3.5e-3).", {},
@@ -529,6 +530,12 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.sph.smoothingRatio = part["smoothing_ratio"].get<float>();
   s.sph.neighbourCapacity = part["neighbour_capacity"].get<std::uint32_t>();
   s.sph.listSkin = part["list_skin"].get<float>();
+  {
+    const std::string search = part["neighbour_search"].get<std::string>();
+    s.sph.neighbourSearch = search == "list"    ? sim::NeighbourSearch::List
+                            : search == "cells" ? sim::NeighbourSearch::Cells
+                                                : sim::NeighbourSearch::Auto;
+  }
 
   const Json& fluid = j["fluid"];
   s.sph.restDensity = fluid["density_kg_m3"].get<float>();

@@ -106,6 +106,7 @@ bool contiguousList(const gpu::Context& context, const SphSettings& s) {
 // Contiguous lists whose capacity is a multiple of 4 are read four entries per texel
 // (common/sph_params.glsl, hemo_list_texel).
 std::uint32_t listReadWidthFor(const gpu::Context& context, const SphSettings& s) {
+  if (s.neighbourSearch == NeighbourSearch::Cells) return 1u;
   return contiguousList(context, s) && s.neighbourCapacity % 4u == 0u ? 4u : 1u;
 }
 
@@ -134,9 +135,45 @@ std::uint32_t listPageSlotsFor(const gpu::Context& context, const SphSettings& s
   return static_cast<std::uint32_t>(page);
 }
 std::uint32_t listPagesFor(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
+  if (s.neighbourSearch == NeighbourSearch::Cells) return 1;  // (no list: one placeholder page)
   const std::uint32_t slots = std::max(particles.capacity(), 1u);
   const std::uint32_t pageSlots = listPageSlotsFor(context, s, slots);
   return (slots + pageSlots - 1) / pageSlots;
+}
+// Entries of page p of the list (and of the interacting pairs), pages of pageSlots slots: its
+// slots' lists, or with the interleaved layout up to its last slot's last entry (stride
+// pageSlots).
+std::uint64_t listPageEntries(const gpu::Context& context, const SphSettings& s, std::uint32_t slots,
+                              std::uint32_t pageSlots, std::uint32_t p) {
+  const std::uint64_t count = std::min<std::uint64_t>(pageSlots, slots - std::uint64_t(p) * pageSlots);
+  const std::uint64_t cap = s.neighbourCapacity;
+  return contiguousList(context, s) ? count * cap : (cap - 1) * pageSlots + count;
+}
+// Bytes of the list and the interacting pairs for `slots` slots.
+std::uint64_t listBytesFor(const gpu::Context& context, const SphSettings& s, std::uint32_t slots) {
+  const std::uint32_t pageSlots = listPageSlotsFor(context, s, slots);
+  const std::uint32_t pages = (slots + pageSlots - 1) / pageSlots;
+  std::uint64_t bytes = 0;
+  for (std::uint32_t p = 0; p < pages; ++p) bytes += 2 * 4 * listPageEntries(context, s, slots, pageSlots, p);
+  return bytes;
+}
+// An upper bound of what the grid and the solver hold per slot besides the lists (their
+// per-particle buffers, RK2's and SPS's included).
+constexpr std::uint64_t kSolverBytesPerSlot = 256;
+// The settings with NeighbourSearch::Auto resolved: the list where the device's memory holds
+// it with the solver's other buffers (and its pages would not be absurdly small), else cells.
+SphSettings resolveNeighbourSearch(const gpu::Context& context, const ParticleStore& particles, SphSettings s) {
+  if (s.neighbourSearch != NeighbourSearch::Auto) return s;
+  const std::uint32_t slots = std::max(particles.capacity(), 1u);
+  s.neighbourSearch = NeighbourSearch::List;
+  try {
+    const std::uint64_t needed = context.deviceMemoryBytes() + std::uint64_t(slots) * kSolverBytesPerSlot +
+                                 listBytesFor(context, s, slots);
+    if (needed > context.deviceMemoryCapacity()) s.neighbourSearch = NeighbourSearch::Cells;
+  } catch (const gpu::GpuError&) {
+    s.neighbourSearch = NeighbourSearch::Cells;
+  }
+  return s;
 }
 // The boundary pass's indirect arguments of each page of the list, apart by the largest
 // storage-buffer offset alignment Vulkan allows.
@@ -151,7 +188,7 @@ std::uint64_t activeArgsBytes(const gpu::Context& context, const SphSettings& s,
 // in one page.
 bool clusterLayout(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
   const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
-  const bool clusterable = !s.sps && s.densityMethod == DensityMethod::Summation &&
+  const bool clusterable = s.neighbourSearch != NeighbourSearch::Cells && !s.sps && s.densityMethod == DensityMethod::Summation &&
                            particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS && listPagesFor(context, s, particles) == 1;
   return clusterable && (s.listLayout == ListLayout::Clusters || (s.listLayout == ListLayout::Auto && cpu));
 }
@@ -351,33 +388,36 @@ TileGrid tilesFor(const GridSpec& spec, glm::vec3 lo, glm::vec3 hi, const SphSet
 }  // namespace
 
 SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 domainMin, glm::vec3 domainMax,
-                     const SphSettings& settings, std::uint32_t maxStepsPerBatch)
+                     const SphSettings& requested, std::uint32_t maxStepsPerBatch)
     : context_(&context),
       particles_(&particles),
-      settings_(settings),
-      params_(makeParams(settings)),
+      settings_(resolveNeighbourSearch(context, particles, requested)),
+      params_(makeParams(settings_)),
       maxStepsPerBatch_(std::max(maxStepsPerBatch, 1u)),
-      grid_(context, gridFor(domainMin, domainMax, settings), particles),
+      grid_(context, gridFor(domainMin, domainMax, settings_), particles),
       paramsBuffer_(context, sizeof(SphParams), gpu::MemoryUse::Device, "sph params"),
       state_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "sph state"),
       accel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "sph accel"),
       dtLimit_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "sph dt limits"),
-      ncount_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "neighbour counts"),
-      pairCount_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "interacting pair counts"),
+      // (a texel's worth when the passes walk cells and keep no list)
+      ncount_(context, settings_.neighbourSearch == NeighbourSearch::Cells ? 16 : perParticle(particles, 4),
+              gpu::MemoryUse::Device, "neighbour counts"),
+      pairCount_(context, settings_.neighbourSearch == NeighbourSearch::Cells ? 16 : perParticle(particles, 4),
+                 gpu::MemoryUse::Device, "interacting pair counts"),
       viscousVel_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "viscous velocities"),
-      clusterCapacity_(clusterEntries(settings.neighbourCapacity)),
+      clusterCapacity_(clusterEntries(settings_.neighbourCapacity)),
       // (a texel's worth when the solver does not use them)
-      ccount_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 : 16,
+      ccount_(context, clusterLayout(context, settings_, particles) ? clustersFor(particles) * 4 : 16,
               gpu::MemoryUse::Device, "cluster list counts"),
-      clist_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 * clusterCapacity_ : 16,
+      clist_(context, clusterLayout(context, settings_, particles) ? clustersFor(particles) * 4 * clusterCapacity_ : 16,
              gpu::MemoryUse::Device, "cluster lists"),
-      corder_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 : 16,
+      corder_(context, clusterLayout(context, settings_, particles) ? clustersFor(particles) * 4 : 16,
               gpu::MemoryUse::Device, "cluster walk order"),
       pairPosition_(context, perParticle(particles, 16), gpu::MemoryUse::Device, "pair positions (x, V p)"),
       activeSlots_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "boundary slots with fluid neighbours"),
-      activeArgs_(context, activeArgsBytes(context, settings, particles), gpu::MemoryUse::Device,
+      activeArgs_(context, activeArgsBytes(context, settings_, particles), gpu::MemoryUse::Device,
                   "boundary-pressure indirect arguments"),
-      activeAppended_(context, clusterLayout(context, settings, particles) ? clustersFor(particles) * 4 : 16,
+      activeAppended_(context, clusterLayout(context, settings_, particles) ? clustersFor(particles) * 4 : 16,
                       gpu::MemoryUse::Device, "boundary clusters' active list as appended"),
       integrateArgs_(context, 32, gpu::MemoryUse::Device, "integrator indirect arguments"),
       clock_(context, 32, gpu::MemoryUse::Device, "sph clock"),
@@ -385,13 +425,13 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       log_(context, std::uint64_t(maxStepsPerBatch_) * 8, gpu::MemoryUse::Device, "sph step log"),
       inflow_(context, sizeof(InflowParams), gpu::MemoryUse::Device, "inflow params"),
       // (the RK2 stages only: a texel's worth for symplectic Euler, whose pipelines leave them out)
-      savedPos_(context, settings.integrator == Integrator::Rk2Midpoint ? perParticle(particles, 16) : 16,
+      savedPos_(context, settings_.integrator == Integrator::Rk2Midpoint ? perParticle(particles, 16) : 16,
                 gpu::MemoryUse::Device, "rk2 saved positions"),
-      savedVel_(context, settings.integrator == Integrator::Rk2Midpoint ? perParticle(particles, 16) : 16,
+      savedVel_(context, settings_.integrator == Integrator::Rk2Midpoint ? perParticle(particles, 16) : 16,
                 gpu::MemoryUse::Device, "rk2 saved velocities"),
       stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
-      tauA_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
-      tauB_(context, settings.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
+      tauA_(context, settings_.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
+      tauB_(context, settings_.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
       // Partials for the force pass's SIMD groups over all slots and the wall stage's over the
       // non-fluid ones.
       dtPartials_(context, 2 * partialsPerPass(particles) * 8, gpu::MemoryUse::Device, "time-step partials"),
@@ -402,27 +442,26 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                      gpu::MemoryUse::Device, "rebuild check partials"),
       checkCount_(context, 4, gpu::MemoryUse::Device, "rebuild check partials written"),
       checkResult_(context, 16, gpu::MemoryUse::Device, "rebuild check result"),
-      tileSpec_(tilesFor(grid_.spec(), domainMin, domainMax, settings)),
+      tileSpec_(tilesFor(grid_.spec(), domainMin, domainMax, settings_)),
       tileGrid_(context, sizeof(TileGrid), gpu::MemoryUse::Device, "rebuild tile grid"),
       tileBoxes_(context, std::uint64_t(tileSpec_.tiles()) * HEMO_TILE_WORDS * 4, gpu::MemoryUse::Device,
                  "rebuild tile boxes"),
       tileResult_(context, 4, gpu::MemoryUse::Device, "rebuild tile result"),
       tileOccupied_(context, (std::uint64_t(tileSpec_.tiles()) + 2) * 4, gpu::MemoryUse::Device, "rebuild tiles occupied"),
       rebuildGate_(context, checkResult_, 64, "neighbour rebuild", 2) {
+  const SphSettings& settings = settings_;  // (Auto resolved)
+  cellWalk_ = settings.neighbourSearch == NeighbourSearch::Cells;
   const bool contiguous = contiguousList(context, settings);
   clusters_ = clusterLayout(context, settings, particles);
   // The lists in pages of pageSlots_ slots, each its own buffer (one page when one buffer
   // passes no binding limit): entry k of slot i is entry (i & mask) * particleStride +
   // k * listStride of its page's buffer, the interleaved layout's stride being the page's slots.
+  // Walking cells, the lists are a texel's worth each, one page of all slots.
   const std::uint32_t slots = std::max(particles.capacity(), 1u);
-  pageSlots_ = listPageSlotsFor(context, settings, slots);
+  pageSlots_ = cellWalk_ ? slots : listPageSlotsFor(context, settings, slots);
   const std::uint32_t pages = listPagesFor(context, settings, particles);
-  // Entries of page p's buffer: its slots' lists, or with the interleaved layout up to its
-  // last slot's last entry (stride pageSlots_).
   auto pageEntries = [&](std::uint32_t p) {
-    const std::uint64_t count = std::min<std::uint64_t>(pageSlots_, slots - std::uint64_t(p) * pageSlots_);
-    const std::uint64_t cap = settings.neighbourCapacity;
-    return contiguous ? count * cap : (cap - 1) * pageSlots_ + count;
+    return cellWalk_ ? 4 : listPageEntries(context, settings, slots, pageSlots_, p);
   };
   params_.listStride = contiguous ? 1u : pageSlots_;
   params_.listParticleStride = contiguous ? settings.neighbourCapacity : 1u;
@@ -432,7 +471,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   std::uint64_t listBytes = 0;
   for (std::uint32_t p = 0; p < pages; ++p) listBytes += 2 * 4 * pageEntries(p);  // the list and the pairs
   const std::uint64_t held = context.deviceMemoryBytes();
-  if (held + listBytes > context.deviceMemoryCapacity()) {
+  if (!cellWalk_ && held + listBytes > context.deviceMemoryCapacity()) {
     auto gib = [](std::uint64_t bytes) {
       char text[32];
       std::snprintf(text, sizeof text, "%.3f GiB", double(bytes) / double(1ull << 30));
@@ -443,18 +482,32 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
             " particles (" + std::to_string(settings.neighbourCapacity) + " entries each): " + gib(listBytes) +
             ", with the " + gib(held) + " hemo already holds: the scene needs about " + gib(held + listBytes) +
             " and the device has " + gib(context.deviceMemoryCapacity()) +
-            " (fewer particles, a smaller particles.neighbour_capacity or smoothing_ratio, or a device with more memory)",
+            " (particles.neighbour_search \"cells\" keeps no list; or fewer particles, a smaller particles.neighbour_capacity"
+            " or smoothing_ratio, or a device with more memory)",
         held + listBytes, context.deviceMemoryCapacity());
   }
   for (std::uint32_t p = 0; p < pages; ++p) {
     const std::uint64_t entries = pageEntries(p);
-    const std::string page = pages > 1 ? " (page " + std::to_string(p) + " of " + std::to_string(pages) + ")" : "";
+    const std::string page = cellWalk_ ? " (none: the passes walk cells)"
+                             : pages > 1 ? " (page " + std::to_string(p) + " of " + std::to_string(pages) + ")"
+                                         : "";
     nlist_.emplace_back(context, entries * 4, gpu::MemoryUse::Device, "neighbour list" + page);
     pairList_.emplace_back(context, entries * 4, gpu::MemoryUse::Device, "interacting pairs" + page);
   }
   // Specialization constant 2 of the pair passes: list entries per texel read.
   listWidth_ = listReadWidthFor(context, settings);
   const VkFormat listFormat = listWidth_ == 4u ? gpu::texel::kUvec4 : gpu::texel::kUint;
+  // A pair pass's list bindings: its counts and the entries of page p; walking cells, the
+  // grid's positions at build (as RGBA32UI texels) and its cellStart in their slots
+  // (common/cell_walk.glsl).
+  auto countsAt = [&](std::uint32_t slot, const gpu::Buffer* counts) {
+    return cellWalk_ ? gpu::texelBinding(slot, &grid_.positionsAtBuild(), gpu::texel::kUvec4)
+                     : gpu::texelBinding(slot, counts, gpu::texel::kUint);
+  };
+  auto listAt = [&](std::uint32_t slot, const gpu::Buffer* page) {
+    return cellWalk_ ? gpu::texelBinding(slot, &grid_.cellStart(), gpu::texel::kUint)
+                     : gpu::texelBinding(slot, page, listFormat);
+  };
   for (int a = 0; a < 3; ++a) {
     if (grid_.spec().periodic(a)) periodicAxes_ |= 1u << a;
   }
@@ -464,9 +517,18 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
     params_.period[a] = spec.period[a];
     params_.invPeriod[a] = spec.periodic(a) ? 1.0f / spec.period[a] : 0.0f;
   }
+  const NeighbourGrid::Push gridPush = grid_.push(0);
+  for (int a = 0; a < 4; ++a) {
+    params_.gridOrigin[a] = gridPush.origin[a];
+    params_.gridInvCell[a] = gridPush.invCell[a];
+    params_.gridDims[a] = a < 3 ? gridPush.dims[a] : 0u;
+    params_.gridPeriodic[a] = gridPush.periodic[a];
+  }
   paramsBuffer_.upload(std::vector<SphParams>{params_});
   inflow_.upload(std::vector<InflowParams>{disabledInflowParams()});
   auto& cache = context.pipelines();
+  // The pair passes' modules: walking cells, their variants compiled for it (interface/sph.h).
+  auto pairPass = [&](const char* name) { return cellWalk_ ? std::string(name) + "_cells" : std::string(name); };
   buildList_ = &cache.get({"sph/build_list", HEMO_BUILD_BINDING_COUNT, sizeof(BuildPush), kWorkgroup,
                            pairSpecialization({}), 1u << HEMO_BUILD_BINDING_PARAMS,
                              1u << HEMO_BUILD_BINDING_POSITIONS | 1u << HEMO_BUILD_BINDING_CELL_START});
@@ -475,23 +537,23 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   const std::uint32_t continuity = settings.densityMethod == DensityMethod::Summation ? 0u
                                    : settings.integrator == Integrator::Rk2Midpoint  ? 2u
                                                                                      : 1u;
-  density_ = &cache.get({"sph/density", HEMO_DENSITY_BINDING_COUNT, sizeof(DensityPush), kWorkgroup, pairSpecialization({continuity, listWidth_}),
+  density_ = &cache.get({pairPass("sph/density"), HEMO_DENSITY_BINDING_COUNT, sizeof(DensityPush), kWorkgroup, pairSpecialization({continuity, listWidth_}),
                          1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK,
                          1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
                              1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
                              1u << HEMO_DENSITY_BINDING_NORMALS});
-  boundaryPressure_ = &cache.get({"sph/boundary_pressure", HEMO_BPRESSURE_BINDING_COUNT, sizeof(BoundaryPush), kWorkgroup, pairSpecialization({listWidth_}),
+  boundaryPressure_ = &cache.get({pairPass("sph/boundary_pressure"), HEMO_BPRESSURE_BINDING_COUNT, sizeof(BoundaryPush), kWorkgroup, pairSpecialization({listWidth_}),
                                   1u << HEMO_BPRESSURE_BINDING_PARAMS | 1u << HEMO_BPRESSURE_BINDING_CLOCK,
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
                                       1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
                                       1u << HEMO_BPRESSURE_BINDING_FLUID_STATE});
-  spsStress_ = &cache.get({"sph/sps_stress", HEMO_SPS_BINDING_COUNT, sizeof(SpsPush), kWorkgroup, pairSpecialization({listWidth_}), 1u << HEMO_SPS_BINDING_PARAMS,
+  spsStress_ = &cache.get({pairPass("sph/sps_stress"), HEMO_SPS_BINDING_COUNT, sizeof(SpsPush), kWorkgroup, pairSpecialization({listWidth_}), 1u << HEMO_SPS_BINDING_PARAMS,
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
                                1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
   // constant 1: the SPS term compiled in or out; 2: the list's read width
   dtReduce_ = &cache.get({"sph/dt_reduce", HEMO_DTREDUCE_BINDING_COUNT, sizeof(DtReducePush), kWorkgroup, {}, 0u,
                           1u << HEMO_DTREDUCE_BINDING_PARTIALS});
-  forces_ = &cache.get({"sph/forces", HEMO_FORCES_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup,
+  forces_ = &cache.get({pairPass("sph/forces"), HEMO_FORCES_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup,
                         pairSpecialization({settings.sps ? 1u : 0u, listWidth_}), 1u << HEMO_FORCES_BINDING_PARAMS,
                         1u << HEMO_FORCES_BINDING_POSITIONS | 1u << HEMO_FORCES_BINDING_VELOCITIES | 1u << HEMO_FORCES_BINDING_STATE |
                             1u << HEMO_FORCES_BINDING_NCOUNT | 1u << HEMO_FORCES_BINDING_NORMALS | 1u << HEMO_FORCES_BINDING_NLIST | 1u << HEMO_FORCES_BINDING_TAU_A |
@@ -612,8 +674,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                               gpu::texelBinding(HEMO_DENSITY_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                               {HEMO_DENSITY_BINDING_PARAMS, &paramsBuffer_},
                                               {HEMO_DENSITY_BINDING_STATE, &state_},
-                                              gpu::texelBinding(HEMO_DENSITY_BINDING_NCOUNT, &ncount_, gpu::texel::kUint),
-                                              gpu::texelBinding(HEMO_DENSITY_BINDING_NLIST, &nlist_[p], listFormat),
+                                              countsAt(HEMO_DENSITY_BINDING_NCOUNT, &ncount_),
+                                              listAt(HEMO_DENSITY_BINDING_NLIST, &nlist_[p]),
                                               {HEMO_DENSITY_BINDING_CLOCK, &clock_},
                                               {HEMO_DENSITY_BINDING_VISCOUS_VEL, &viscousVel_},
                                               gpu::texelBinding(HEMO_DENSITY_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
@@ -622,15 +684,15 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                               {HEMO_DENSITY_BINDING_PAIR_LIST, &pairList_[p]}}));
   }
   // The boundary-pressure pass and its cluster form share their bindings but for the lists.
-  auto boundarySetFor = [&](const gpu::ComputePipeline& pipeline, const gpu::Buffer* counts, const gpu::Buffer* list,
-                            VkFormat format, gpu::Binding active, gpu::Binding args) {
+  auto boundarySetFor = [&](const gpu::ComputePipeline& pipeline, gpu::Binding counts, gpu::Binding list,
+                            gpu::Binding active, gpu::Binding args) {
     return pipeline.makeSet({gpu::texelBinding(HEMO_BPRESSURE_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                              gpu::texelBinding(HEMO_BPRESSURE_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                              gpu::texelBinding(HEMO_BPRESSURE_BINDING_FLUID_STATE, &state_, gpu::texel::kVec4),
                              {HEMO_BPRESSURE_BINDING_PARAMS, &paramsBuffer_},
                              {HEMO_BPRESSURE_BINDING_STATE, &state_},
-                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NCOUNT, counts, gpu::texel::kUint),
-                             gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, list, format),
+                             counts,
+                             list,
                              {HEMO_BPRESSURE_BINDING_VISCOUS_VEL, &viscousVel_},
                              {HEMO_BPRESSURE_BINDING_CLOCK, &clock_},
                              {HEMO_BPRESSURE_BINDING_PAIR_POSITION, &pairPosition_},
@@ -638,20 +700,23 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                              at(args, HEMO_BPRESSURE_BINDING_ACTIVE_ARGS)});
   };
   for (std::uint32_t p = 0; p < pages; ++p) {
-    boundarySets_.push_back(boundarySetFor(*boundaryPressure_, &ncount_, &nlist_[p], listFormat, activeSlotsOf(p), activeArgsOf(p)));
+    boundarySets_.push_back(boundarySetFor(*boundaryPressure_, countsAt(HEMO_BPRESSURE_BINDING_NCOUNT, &ncount_),
+                                           listAt(HEMO_BPRESSURE_BINDING_NLIST, &nlist_[p]), activeSlotsOf(p),
+                                           activeArgsOf(p)));
   }
-  boundaryClustersSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4, {0, &activeSlots_},
-                                        {0, &activeArgs_});
+  const gpu::Binding clusterCounts = gpu::texelBinding(HEMO_BPRESSURE_BINDING_NCOUNT, &ccount_, gpu::texel::kUint);
+  const gpu::Binding clusterLists = gpu::texelBinding(HEMO_BPRESSURE_BINDING_NLIST, &clist_, gpu::texel::kUvec4);
+  boundaryClustersSet_ = boundarySetFor(*boundaryClusters_, clusterCounts, clusterLists, {0, &activeSlots_}, {0, &activeArgs_});
   // (the sorting mode appends to a list of its own, which sph/cluster_order.comp sorts)
-  boundaryClustersSortSet_ = boundarySetFor(*boundaryClusters_, &ccount_, &clist_, gpu::texel::kUvec4, {0, &activeAppended_},
+  boundaryClustersSortSet_ = boundarySetFor(*boundaryClusters_, clusterCounts, clusterLists, {0, &activeAppended_},
                                             {0, &activeArgs_});
   for (std::uint32_t p = 0; p < pages; ++p) {
     spsSets_.push_back(spsStress_->makeSet({gpu::texelBinding(HEMO_SPS_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                             gpu::texelBinding(HEMO_SPS_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
                                             {HEMO_SPS_BINDING_PARAMS, &paramsBuffer_},
                                             gpu::texelBinding(HEMO_SPS_BINDING_STATE, &state_, gpu::texel::kVec4),
-                                            gpu::texelBinding(HEMO_SPS_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
-                                            gpu::texelBinding(HEMO_SPS_BINDING_NLIST, &pairList_[p], listFormat),
+                                            countsAt(HEMO_SPS_BINDING_NCOUNT, &pairCount_),
+                                            listAt(HEMO_SPS_BINDING_NLIST, &pairList_[p]),
                                             {HEMO_SPS_BINDING_TAU_A, &tauA_},
                                             {HEMO_SPS_BINDING_TAU_B, &tauB_}}));
   }
@@ -664,8 +729,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                             gpu::texelBinding(HEMO_FORCES_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
                                             {HEMO_FORCES_BINDING_PARAMS, &paramsBuffer_},
                                             gpu::texelBinding(HEMO_FORCES_BINDING_STATE, &state_, gpu::texel::kVec4),
-                                            gpu::texelBinding(HEMO_FORCES_BINDING_NCOUNT, &pairCount_, gpu::texel::kUint),
-                                            gpu::texelBinding(HEMO_FORCES_BINDING_NLIST, &pairList_[p], listFormat),
+                                            countsAt(HEMO_FORCES_BINDING_NCOUNT, &pairCount_),
+                                            listAt(HEMO_FORCES_BINDING_NLIST, &pairList_[p]),
                                             {HEMO_FORCES_BINDING_ACCEL, &accel_},
                                             {HEMO_FORCES_BINDING_DT_LIMIT, &dtLimit_},
                                             {HEMO_FORCES_BINDING_DT_PARTIALS, &dtPartials_},
@@ -732,11 +797,15 @@ std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
 void SphSolver::attachWall(const SpringNetwork& network) {
+  // (walking cells: the grid's positions at build and its cellStart, common/cell_walk.glsl)
   std::vector<const gpu::Buffer*> pages;
-  for (const gpu::Buffer& page : nlist_) pages.push_back(&page);
+  for (const gpu::Buffer& page : nlist_) pages.push_back(cellWalk_ ? &grid_.cellStart() : &page);
+  const gpu::Buffer* counts = cellWalk_ ? &grid_.positionsAtBuild() : &ncount_;
+  const VkFormat countsFormat = cellWalk_ ? gpu::texel::kUvec4 : gpu::texel::kUint;
   const FluidBuffers fluid{&grid_.slotOfId(), &accel_,      &dtLimit_,      &paramsBuffer_, &state_,
-                           &ncount_,           pages,        pageSlots_,     &viscousVel_,   &pairPosition_, listWidth_,
-                           &dtPartials_,       &dtCounts_,   pairSpecialization({listWidth_})};
+                           counts,             countsFormat, pages,          pageSlots_,     &viscousVel_,
+                           &pairPosition_,     listWidth_,   &dtPartials_,   &dtCounts_,     pairSpecialization({listWidth_}),
+                           cellWalk_};
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }
@@ -810,7 +879,9 @@ void SphSolver::recordNeighbours(gpu::CommandRecorder& rec, std::uint32_t sorted
   const std::uint32_t fluid = particles_->fluidCount();
   if (!boundaryClusterPath()) {
     const std::uint32_t listFirst = clusterPath() ? fluid : 0u;
-    if (listPages() == 1) {  // (at least one workgroup: its invocation 0 empties the active list)
+    if (cellWalk_) {  // no list: one workgroup whose invocation 0 empties the active list
+      rec.dispatch(*buildList_, buildListSets_[0], BuildPush{grid_.push(n), 0u, 0u}, buildList_->groupsFor(1u));
+    } else if (listPages() == 1) {  // (at least one workgroup: its invocation 0 empties the active list)
       rec.dispatch(*buildList_, buildListSets_[0], BuildPush{grid_.push(n), listFirst, n},
                    buildList_->groupsFor(std::max(n - listFirst, 1u)));
     } else {

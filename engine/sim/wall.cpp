@@ -127,7 +127,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
       1u << HEMO_SPRINGF_BINDING_SPRINGS_OF | 1u << HEMO_SPRINGF_BINDING_WALL_INFO | 1u << HEMO_SPRINGF_BINDING_STATE |
       1u << HEMO_SPRINGF_BINDING_NCOUNT | 1u << HEMO_SPRINGF_BINDING_NLIST | 1u << HEMO_SPRINGF_BINDING_FRAMES |
       1u << HEMO_SPRINGF_BINDING_WALL_VEL | 1u << HEMO_SPRINGF_BINDING_PAIR_POSITION | 1u << HEMO_SPRINGF_BINDING_FLUID_ACCEL;
-  forces_ = &cache.get({"wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, fluid.reactionSpecialization,
+  forces_ = &cache.get({fluid.cellWalk ? "wall/spring_forces_cells" : "wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, fluid.reactionSpecialization,
                         1u << HEMO_SPRINGF_BINDING_PARAMS, springTexels});
   shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}, 1u << HEMO_SHADE_BINDING_PARAMS});
   const ParticleArrays& a = particles.live();
@@ -148,7 +148,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                             {HEMO_SPRINGF_BINDING_DT_LIMIT, fluid.dtLimit},
                                             {HEMO_SPRINGF_BINDING_PARAMS, fluid.params},
                                             texelBinding(HEMO_SPRINGF_BINDING_STATE, fluid.state, kVec4),
-                                            texelBinding(HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts, kUint),
+                                            texelBinding(HEMO_SPRINGF_BINDING_NCOUNT, fluid.neighbourCounts, fluid.neighbourCountsFormat),
                                             texelBinding(HEMO_SPRINGF_BINDING_NLIST, page, fluid.listReadWidth == 4u ? kUvec4 : kUint),
                                             {HEMO_SPRINGF_BINDING_NORMALS, &a.normals},
                                             texelBinding(HEMO_SPRINGF_BINDING_WALL_VEL, fluid.viscousVelocities, kVec4),

@@ -1,6 +1,6 @@
 // Scenes of a million particles and more: the path a large scene takes (the neighbour list in
-// pages where one buffer would pass a binding limit, the device memory hemo holds) on
-// whatever device runs the suite.
+// pages where one buffer would pass a binding limit, cell walks where the device's memory would
+// not hold the list, the device memory hemo holds) on whatever device runs the suite.
 #include "gpu_test.hpp"
 #include "hemo/gpu/context.hpp"
 #include "hemo/scene/scene.hpp"
@@ -30,6 +30,14 @@ constexpr const char* kMillion = R"({
   "time": { "integrator": "symplectic_euler", "cfl_acoustic": 0.3, "max_dt_s": 0.0005, "steps_per_batch": 4 },
   "domain": { "min_m": [-0.1, -0.1, -0.1], "max_m": [3.32, 1.1, 1.0] }
 })";
+
+// The scene above at another particle spacing (m).
+std::string damBreak3d(const char* spacing) {
+  std::string text = kMillion;
+  const std::string from = "\"spacing_m\": 0.0095";
+  text.replace(text.find(from), from.size(), std::string("\"spacing_m\": ") + spacing);
+  return text;
+}
 
 // A million particles run a few steps, finite and all inside the domain, their list in pages
 // where the device's buffer limits ask for it (lavapipe: 128 MiB a storage buffer, so about
@@ -65,11 +73,77 @@ TEST_F(ScaleTest, MillionParticleRunIsBitIdenticalWhenRerun) {
   EXPECT_EQ(0, std::memcmp(first.data(), second.data(), first.size() * sizeof(glm::vec4))) << "the rerun differs";
 }
 
-// A device whose memory holds three quarters of what the dam break needs (capped) refuses it
-// before its largest buffers are allocated, naming the lists and the memory the whole scene
-// needs, within a few percent of what it takes on a device that holds it.
+// The same dam break at 4.2M particles (dp = 5.8 mm) runs a few steps, finite and all inside
+// the domain, within the device's memory: on a device whose memory would not hold its
+// neighbour list (lavapipe: 2 GiB, where the list alone takes 4.6 GiB) the passes walk the
+// grid's cells instead, at about 300 bytes a particle.
+TEST_F(ScaleTest, FourMillionParticlesRunWithinTheDeviceMemory) {
+  const scene::Scene scene = scene::parseScene(damBreak3d("0.0058"), "scale test");
+  ASSERT_EQ(scene.sph.neighbourSearch, sim::NeighbourSearch::Auto);
+  const std::uint64_t before = ctx().deviceMemoryBytes();
+  sim::Simulation sim(ctx(), scene);
+  const std::uint64_t total = std::uint64_t(sim.fluidParticles()) + sim.boundaryParticles();
+  EXPECT_GE(total, 4000000u);
+  const std::uint64_t listBytes = total * scene.sph.neighbourCapacity * 8;  // the list and the pairs
+  if (listBytes > ctx().deviceMemoryCapacity()) {
+    EXPECT_TRUE(sim.solver().walksCells()) << listBytes << " bytes of lists";
+  }
+  const std::uint64_t takes = ctx().deviceMemoryBytes() - before;
+  EXPECT_LE(ctx().deviceMemoryBytes(), ctx().deviceMemoryCapacity());
+  if (sim.solver().walksCells()) {
+    EXPECT_LT(takes, total * 400) << double(takes) / double(total) << " bytes a particle";
+  }
+  sim::RunOptions opt;
+  opt.steps = 3;
+  sim.run(opt);
+  EXPECT_EQ(sim.lostParticles(), 0u);
+  EXPECT_EQ(sim.escapedParticles(), 0u);
+  EXPECT_GT(sim.time(), 0.0);
+  const auto s = sim.snapshot();
+  for (std::size_t i = 0; i < s.positions.size(); ++i) {
+    ASSERT_TRUE(std::isfinite(s.positions[i].x) && std::isfinite(s.positions[i].y) && std::isfinite(s.positions[i].z) &&
+                std::isfinite(s.velocities[i].x) && std::isfinite(s.velocities[i].y) && std::isfinite(s.velocities[i].z))
+        << "particle " << i;
+  }
+}
+
+// On a device whose memory holds the dam break but not its neighbour list, NeighbourSearch::Auto
+// walks cells, and the run is bit-identical to the list's on a device that holds both.
+TEST_F(ScaleTest, AutoWalksCellsWhereTheListWouldNotFit) {
+  scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  scene.sph.listLayout = sim::ListLayout::Contiguous;
+  const std::uint64_t before = ctx().deviceMemoryBytes();
+  std::uint64_t takes = 0;
+  auto run = [&](gpu::Context& context, bool cells) {
+    sim::Simulation sim(context, scene);
+    EXPECT_EQ(sim.solver().walksCells(), cells);
+    if (&context == &ctx()) takes = ctx().deviceMemoryBytes() - before;
+    sim::RunOptions opt;
+    opt.steps = 60;
+    sim.run(opt);
+    const auto s = sim.snapshot();
+    std::vector<glm::vec4> state = s.positions;
+    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
+    return state;
+  };
+  const auto list = run(ctx(), false);
+  gpu::ContextOptions options;
+  options.validation = true;
+  options.limits.deviceMemoryBytes = takes / 2;  // the list is most of it
+  gpu::Context small(options);
+  const auto cells = run(small, true);
+  ASSERT_EQ(list.size(), cells.size());
+  EXPECT_EQ(0, std::memcmp(list.data(), cells.data(), list.size() * sizeof(glm::vec4)));
+  for (const auto& m : small.takeValidationMessages()) ADD_FAILURE() << m;
+}
+
+// A scene that asks for the neighbour list, on a device whose memory holds three quarters of
+// what the dam break needs with it (capped), is refused before its largest buffers are
+// allocated, naming the lists and the memory the whole scene needs, within a few percent of
+// what it takes on a device that holds it.
 TEST_F(ScaleTest, SceneBeyondTheDeviceMemoryIsRefusedWithWhatItNeeds) {
-  const scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  scene.sph.neighbourSearch = sim::NeighbourSearch::List;  // (Auto would walk cells)
   const std::uint64_t before = ctx().deviceMemoryBytes();
   std::uint64_t takes = 0;
   {

@@ -525,6 +525,77 @@ TEST_F(SphPhysicsTest, VesselWithItsListInPagesGivesBitIdenticalRuns) {
   for (const auto& m : small.takeValidationMessages()) ADD_FAILURE() << m;
 }
 
+// Without a list (NeighbourSearch::Cells) every pair pass walks the grid cells around each
+// particle's position at the last build, in the order the list build takes them: the run is
+// bit-identical to the one that reads the list, with summation and continuity density, with
+// the SPS term, with RK2, and on both layouts of the list it replaces; and it allocates
+// neither the list nor the interacting pairs.
+TEST_F(SphPhysicsTest, CellWalkGivesTheListsRunsBitForBit) {
+  struct Case {
+    const char* name;
+    sim::ListLayout layout;
+    bool sps;
+    bool continuityRk2;
+  };
+  const Case cases[] = {{"summation, contiguous", sim::ListLayout::Contiguous, false, false},
+                        {"summation, interleaved", sim::ListLayout::Interleaved, false, false},
+                        {"SPS", sim::ListLayout::Contiguous, true, false},
+                        {"continuity density, RK2", sim::ListLayout::Contiguous, false, true}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+    scene.sph.listLayout = c.layout;
+    scene.sph.sps = c.sps;
+    scene.sph.listSkin = 0.03f;  // a thin skin: rebuilds within the few steps the test runs
+    if (c.continuityRk2) {
+      scene.sph.densityMethod = sim::DensityMethod::Continuity;
+      scene.sph.integrator = sim::Integrator::Rk2Midpoint;
+    }
+    auto run = [&](sim::NeighbourSearch search) {
+      scene.sph.neighbourSearch = search;
+      ctx().resetPeakDeviceMemoryBytes();
+      sim::Simulation sim(ctx(), scene);
+      EXPECT_EQ(sim.solver().walksCells(), search == sim::NeighbourSearch::Cells);
+      EXPECT_FALSE(sim.solver().usesClusters());
+      sim::RunOptions opt;
+      opt.steps = 100;
+      sim.run(opt);
+      EXPECT_GE(sim.solver().readRebuilds(), 2u) << "the grid was rebuilt";
+      return std::make_tuple(positionsAndVelocities(sim), sim.time(), ctx().peakDeviceMemoryBytes());
+    };
+    const auto [list, listTime, listBytes] = run(sim::NeighbourSearch::List);
+    const auto [cells, cellsTime, cellsBytes] = run(sim::NeighbourSearch::Cells);
+    ASSERT_EQ(list.size(), cells.size());
+    EXPECT_EQ(listTime, cellsTime) << "the same simulated time";
+    EXPECT_EQ(0, std::memcmp(list.data(), cells.data(), list.size() * sizeof(glm::vec4)))
+        << "the run that walks cells differs from the one that reads the list";
+    // The list and the pairs: 2 x 4 B x 128 entries a slot.
+    EXPECT_GE(listBytes - cellsBytes, std::uint64_t(list.size() / 2) * 1024u) << "no list allocated";
+  }
+}
+
+// The aneurysm without a list: the wall's reaction pass and the boundary pass's active list
+// walk cells too, and the run, springs and ruptures included, is bit-identical to the list's.
+TEST_F(SphPhysicsTest, VesselWalkingCellsGivesTheListsRunBitForBit) {
+  scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/aneurysm.json");
+  scene.sph.listLayout = sim::ListLayout::Contiguous;
+  auto run = [&](sim::NeighbourSearch search) {
+    scene.sph.neighbourSearch = search;
+    sim::Simulation sim(ctx(), scene);
+    EXPECT_EQ(sim.solver().walksCells(), search == sim::NeighbourSearch::Cells);
+    sim::RunOptions opt;
+    opt.steps = 150;
+    sim.run(opt);
+    return std::make_pair(positionsAndVelocities(sim), sim.time());
+  };
+  const auto [list, listTime] = run(sim::NeighbourSearch::List);
+  const auto [cells, cellsTime] = run(sim::NeighbourSearch::Cells);
+  EXPECT_EQ(listTime, cellsTime);
+  ASSERT_EQ(list.size(), cells.size());
+  EXPECT_EQ(0, std::memcmp(list.data(), cells.data(), list.size() * sizeof(glm::vec4)))
+      << "the vessel's run walking cells differs from the list's";
+}
+
 TEST_F(SphPhysicsTest, EndTimeIsHitExactlyAndStepsAfterItDoNothing) {
   const scene::Scene scene = scene::parseScene(kColumn, "column_test");
   sim::Simulation sim(ctx(), scene);

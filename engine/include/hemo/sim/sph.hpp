@@ -49,6 +49,16 @@ enum class DensityMethod { Summation, Continuity };
 // not depend on the layout beyond the order of the sums.
 enum class ListLayout { Auto, Interleaved, Contiguous, Clusters };
 
+// How the pair passes find a particle's neighbours (docs/architecture.md, "Neighbours").
+// List: a neighbour list built with the grid and reused while the skin holds, and the
+// interacting pairs the density pass keeps from it (2 x 4 bytes x neighbourCapacity per
+// particle). Cells: no list; each pass walks the grid cells around the particle's position
+// at the last build (common/cell_walk.glsl): every pass pays for the candidates, and nothing
+// per particle but the grid, so scenes several times larger fit the device; the sums are bit
+// for bit those of the list. Auto: the list when the device's memory holds it with the
+// solver's other buffers, else cells.
+enum class NeighbourSearch { Auto, List, Cells };
+
 // Physical and numerical settings (SI units).
 struct SphSettings {
   float spacing = 0.0f;             // initial particle spacing dp (m)
@@ -67,6 +77,7 @@ struct SphSettings {
   std::uint32_t neighbourCapacity = 128;
   float listSkin = 0.1f;            // neighbour-list radius = 2h (1 + skin)
   ListLayout listLayout = ListLayout::Auto;
+  NeighbourSearch neighbourSearch = NeighbourSearch::Auto;
   float dampingRate = 0.0f;         // settling phase: v <- v / (1 + rate dt) (1/s) ...
   float dampingUntil = 0.0f;        // ... while t < this (s)
   Integrator integrator = Integrator::SymplecticEuler;
@@ -118,8 +129,11 @@ struct SphParams {
   float gravityOnly[4];  // gravity without the body force (m/s^2): the diffusion term's hydrostatic part
   std::uint32_t listPageMask;  // set by the solver: slot i's index in its page of the list is i & mask
   std::uint32_t pad[3];
+  // set by the solver: its neighbour grid (NeighbourGrid::Push, n unused), for the cell walks
+  float gridOrigin[4], gridInvCell[4];
+  std::uint32_t gridDims[4], gridPeriodic[4];
 };
-static_assert(sizeof(SphParams) == 208);
+static_assert(sizeof(SphParams) == 272);
 
 SphParams makeParams(const SphSettings& s);
 
@@ -219,6 +233,9 @@ class SphSolver {
   // its own buffer, when one buffer for all slots would pass a binding limit of the device
   // (maxStorageBufferRange, maxTexelBufferElements, the largest allocation): the passes that
   // walk them run once per page (interface/sph.h, "pages").
+  // Whether the passes walk the grid's cells instead of a list (NeighbourSearch; the list's
+  // buffers are then placeholders, one page).
+  bool walksCells() const { return cellWalk_; }
   std::uint32_t listPages() const { return static_cast<std::uint32_t>(nlist_.size()); }
   std::uint32_t listPageSlots() const { return pageSlots_; }
   const gpu::Buffer& neighbourListPage(std::uint32_t page) const { return nlist_.at(page); }
@@ -308,6 +325,7 @@ class SphSolver {
   NeighbourGrid grid_;
   gpu::Buffer paramsBuffer_;
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
+  bool cellWalk_ = false;        // NeighbourSearch::Cells in effect (walksCells())
   std::uint32_t periodicAxes_ = 0;  // bit a: axis a is periodic (HEMO_SPEC_PERIODIC_AXES)
   gpu::Buffer state_, accel_, dtLimit_, ncount_, pairCount_, viscousVel_;
   // The lists' pages (listPages()) of pageSlots_ slots each.

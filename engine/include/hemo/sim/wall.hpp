@@ -73,6 +73,7 @@ struct FluidBuffers {
   const gpu::Buffer* params;
   const gpu::Buffer* state;
   const gpu::Buffer* neighbourCounts;
+  VkFormat neighbourCountsFormat;  // its texel format (walking cells: the positions at build, as RGBA32UI)
   // The fluid's neighbour list in pages of listPageSlots slots (SphSolver::listPages): the
   // reaction pass runs once per page over the wall slots in it.
   std::vector<const gpu::Buffer*> neighbourListPages;
@@ -85,6 +86,7 @@ struct FluidBuffers {
   const gpu::Buffer* dtPartials;
   const gpu::Buffer* dtCounts;
   std::vector<std::uint32_t> reactionSpecialization;  // of the spring pass (SphSolver::pairSpecialization)
+  bool cellWalk;  // the fluid keeps no list: the spring pass's variant that walks cells (interface/sph.h)
 };
 
 class MassSpring {
