@@ -4,6 +4,7 @@
 // speed (a whole scene, the dam break by default, run from start to end), scale (a 3D dam
 // break from 0.1M to 64M particles), device (what hemo reads from the device).
 #include "cli.hpp"
+#include "hemo/io/atomic_file.hpp"
 #include "hemo/gpu/pipeline_cache.hpp"
 #include "hemo/gpu/primitives.hpp"
 #include "hemo/reference/marching_cubes.hpp"
@@ -1070,10 +1071,14 @@ int main(int argc, char** argv) {
     if (suite == "speed") scene = hemo::scene::loadScene(scenePath);
     // The JSON file is opened before the benchmark runs (a suite takes minutes): a path that
     // cannot be written fails at once.
-    std::ofstream json;
+    // (under a temporary name until the suite ends: hemo/io/atomic_file.hpp)
+    std::unique_ptr<hemo::io::AtomicFile> json;
     if (args.has("--json")) {
-      json.open(args.text("--json"));
-      if (!json) throw std::runtime_error("cannot write --json file '" + args.text("--json") + "'");
+      try {
+        json = std::make_unique<hemo::io::AtomicFile>(args.text("--json"));
+      } catch (const hemo::io::WriteError& e) {
+        throw std::runtime_error("cannot write --json file '" + args.text("--json") + "'");
+      }
     }
     hemo::gpu::ContextOptions options;
     options.device = args.text("--device");
@@ -1091,9 +1096,9 @@ int main(int argc, char** argv) {
                       : suite == "speed"      ? speed(ctx, scene, scenePath, until, repeat)
                       : suite == "scale"      ? scale(ctx, repeat, maxParticles, ratio, search)
                                               : accuracy(ctx, only);
-    if (json.is_open()) {
-      json << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
-      if (!json) throw std::runtime_error("failed while writing --json file '" + args.text("--json") + "'");
+    if (json) {
+      json->stream() << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
+      json->commit();
     }
     if (hemo::cli::validationProblems(ctx, "hemo-bench")) return 3;
   } catch (const hemo::cli::UsageError& e) {

@@ -4,6 +4,7 @@
 // Exit codes: 0 success; 1 bad input; 2 the simulation became non-finite or unstable;
 // 3 no usable Vulkan device or a device error.
 #include "cli.hpp"
+#include "hemo/io/atomic_file.hpp"
 #include "hemo/io/output.hpp"
 #include "hemo/render/renderer.hpp"
 #include "hemo/scene/scene.hpp"
@@ -153,10 +154,11 @@ int main(int argc, char** argv) {
         hemo::io::writeParticlesVtk(out / name, snap, p.time);
       }
     };
-    std::ofstream csv;
+    // (written under a temporary name during the run, renamed when it ends: hemo/io/atomic_file.hpp)
+    std::unique_ptr<hemo::io::AtomicFile> csvFile;
     if (statsEvery) {
-      csv.open(out / "steps.csv");
-      if (!csv) throw std::runtime_error("cannot write " + (out / "steps.csv").string());
+      csvFile = std::make_unique<hemo::io::AtomicFile>(out / "steps.csv");
+      std::ostream& csv = csvFile->stream();
       csv << "step,time_s,dt_s,max_speed_m_s,max_density_error,broken_springs,detached_particles\n";
       csv.precision(9);
       sim.enableStepStats(statsEvery);
@@ -165,7 +167,7 @@ int main(int argc, char** argv) {
           csv << r.steps << ',' << r.time << ',' << r.dt << ',' << r.maxSpeed << ',' << r.maxDensityError << ','
               << r.brokenSprings << ',' << r.detachedParticles << '\n';
         }
-        if (!csv) throw std::runtime_error("failed while writing " + (out / "steps.csv").string());
+        if (!csv) csvFile->commit();  // (throws the write's error, naming the file)
       };
     }
     std::uint64_t surfaceFiles = 0;
@@ -238,6 +240,7 @@ int main(int argc, char** argv) {
       code = 2;
     }
     if (tty) std::fprintf(stderr, "\n");
+    if (csvFile) csvFile->commit();  // the steps up to the end, or up to the blow-up
     if (finite) {
       hemo::sim::Progress p;
       p.steps = sim.steps();
@@ -305,16 +308,21 @@ int main(int argc, char** argv) {
   } catch (const hemo::gpu::GpuError& e) {
     std::cerr << "hemo-run: GPU error: " << e.what() << "\n";
     return 3;
-  } catch (const std::exception& e) {  // e.g. an output file that cannot be written
+  } catch (const hemo::io::WriteError& e) {  // an output that cannot be written (a full disk...)
+    std::cerr << "hemo-run: " << e.what() << "\n";
+    return 4;
+  } catch (const std::exception& e) {
     std::cerr << "hemo-run: " << e.what() << "\n";
     return 1;
   }
 
-  std::ofstream file(out / "summary.json");
-  file << summary.dump(2) << "\n";
-  if (!file) {
-    std::cerr << "hemo-run: cannot write " << (out / "summary.json").string() << "\n";
-    return 1;
+  try {
+    hemo::io::AtomicFile file(out / "summary.json");
+    file.stream() << summary.dump(2) << "\n";
+    file.commit();
+  } catch (const hemo::io::WriteError& e) {
+    std::cerr << "hemo-run: " << e.what() << "\n";
+    return 4;
   }
   std::printf("%s\n", summary.dump(2).c_str());
   if (code == 2) std::cerr << "hemo-run: " << failure << "\n";

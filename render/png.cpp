@@ -1,8 +1,12 @@
 #include "hemo/render/renderer.hpp"
 
+#include "hemo/io/atomic_file.hpp"
+
 #include <png.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <memory>
 #include <stdexcept>
 
@@ -14,8 +18,7 @@ void writePng(const std::filesystem::path& path, std::uint32_t width, std::uint3
     throw std::invalid_argument("PNG '" + path.string() + "': " + std::to_string(rgba.size()) + " bytes for " +
                                 std::to_string(width) + "x" + std::to_string(height) + " RGBA pixels");
   }
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!file) throw std::runtime_error("cannot write PNG file '" + path.string() + "'");
+  io::AtomicFile file(path);
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info) {
@@ -24,10 +27,12 @@ void writePng(const std::filesystem::path& path, std::uint32_t width, std::uint3
   }
   // libpng reports errors by longjmp; nothing with a destructor lives between here and the end.
   if (setjmp(png_jmpbuf(png))) {
+    const int error = errno;  // (a failed fwrite's, where that is what stopped libpng)
     png_destroy_write_struct(&png, &info);
-    throw std::runtime_error("failed while writing PNG file '" + path.string() + "'");
+    throw io::WriteError("failed while writing PNG file '" + path.string() + "'" +
+                         (error ? std::string(": ") + std::strerror(error) : std::string()));
   }
-  png_init_io(png, file.get());
+  png_init_io(png, file.file());
   png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGBA, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
                PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
@@ -36,7 +41,7 @@ void writePng(const std::filesystem::path& path, std::uint32_t width, std::uint3
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  if (std::fflush(file.get()) != 0) throw std::runtime_error("failed while writing PNG file '" + path.string() + "'");
+  file.commit();
 }
 
 }  // namespace hemo::render

@@ -1,8 +1,10 @@
 #include "hemo/io/output.hpp"
 
+#include "hemo/io/atomic_file.hpp"
+
 #include <bit>
 #include <cstring>
-#include <fstream>
+#include <ostream>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -23,7 +25,7 @@ struct PositionHash {
 };
 
 template <class T>
-void put(std::ofstream& out, T value) {
+void put(std::ostream& out, T value) {
   static_assert(std::endian::native == std::endian::little, "PLY output assumes a little-endian host");
   out.write(reinterpret_cast<const char*>(&value), sizeof(T));
 }
@@ -50,8 +52,8 @@ IndexedMesh weld(const std::vector<surface::McVertex>& vertices) {
 
 void writeSurfacePly(const std::filesystem::path& path, const surface::SurfaceMesh& surface, double time) {
   const IndexedMesh mesh = weld(surface.vertices);
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw std::runtime_error("cannot write PLY file '" + path.string() + "'");
+  AtomicFile file(path);
+  std::ostream& out = file.stream();
   char timeText[64];
   std::snprintf(timeText, sizeof timeText, "%.9g", time);
   out << "ply\nformat binary_little_endian 1.0\n"
@@ -74,7 +76,7 @@ void writeSurfacePly(const std::filesystem::path& path, const surface::SurfaceMe
     put(out, std::uint8_t(3));
     for (int k = 0; k < 3; ++k) put(out, mesh.indices[3 * t + k]);
   }
-  if (!out) throw std::runtime_error("failed while writing PLY file '" + path.string() + "'");
+  file.commit();
 }
 
 }  // namespace hemo::io

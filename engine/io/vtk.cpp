@@ -1,10 +1,11 @@
 #include "hemo/io/output.hpp"
 
+#include "hemo/io/atomic_file.hpp"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <stdexcept>
 
 namespace hemo::io {
@@ -22,9 +23,8 @@ double springLength(const sim::Snapshot& s, const sim::GpuSpring& k, glm::vec3 p
   return glm::length(minImage(glm::dvec3(s.positions[k.b]) - glm::dvec3(s.positions[k.a]), period));
 }
 
-std::ofstream openVtk(const std::filesystem::path& path, const std::string& title, double time) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write VTK file '" + path.string() + "'");
+std::ostream& vtkHeader(AtomicFile& file, const std::string& title, double time) {
+  std::ostream& out = file.stream();
   out.precision(9);
   out << "# vtk DataFile Version 3.0\n" << title << ", t = " << time << " s\nASCII\nDATASET POLYDATA\n";
   out << "FIELD FieldData 1\nTIME 1 1 double\n" << time << "\n";
@@ -68,7 +68,8 @@ WallPointStats wallPointStats(const sim::Snapshot& s, const std::vector<sim::Gpu
 
 void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s, double time,
                        const std::vector<sim::GpuSpring>* springs, glm::vec3 period) {
-  std::ofstream out = openVtk(path, "hemo particles", time);
+  AtomicFile file(path);
+  std::ostream& out = vtkHeader(file, "hemo particles", time);
   const std::size_t n = s.positions.size();
   out << "POINTS " << n << " float\n";
   for (const auto& p : s.positions) out << p.x << ' ' << p.y << ' ' << p.z << '\n';
@@ -93,13 +94,14 @@ void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s
     out << "SCALARS broken_fraction float 1\nLOOKUP_TABLE default\n";
     for (float x : w.brokenFraction) out << x << '\n';
   }
-  if (!out) throw std::runtime_error("failed while writing VTK file '" + path.string() + "'");
+  file.commit();
 }
 
 void writeSpringsVtk(const std::filesystem::path& path, const sim::Snapshot& s, const std::vector<sim::GpuSpring>& springs,
                      double time, glm::vec3 period) {
   checkSprings(s, springs);
-  std::ofstream out = openVtk(path, "hemo springs", time);
+  AtomicFile file(path);
+  std::ostream& out = vtkHeader(file, "hemo springs", time);
   const std::size_t n = s.positions.size(), m = springs.size();
   out << "POINTS " << n << " float\n";
   for (const auto& p : s.positions) out << p.x << ' ' << p.y << ' ' << p.z << '\n';
@@ -111,7 +113,7 @@ void writeSpringsVtk(const std::filesystem::path& path, const sim::Snapshot& s, 
   for (const auto& k : springs) out << (k.broken ? 0.0f : float(k.stiffness * (springLength(s, k, period) - k.restLength))) << '\n';
   out << "SCALARS broken int 1\nLOOKUP_TABLE default\n";
   for (const auto& k : springs) out << (k.broken ? 1 : 0) << '\n';
-  if (!out) throw std::runtime_error("failed while writing VTK file '" + path.string() + "'");
+  file.commit();
 }
 
 }  // namespace hemo::io

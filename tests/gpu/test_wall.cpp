@@ -282,21 +282,27 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
   s.viscosity = 0.05f;  // large, so the viscous reaction is visible
   const CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.6f);
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  // the fluid's list read four entries per texel (capacity 128) and one (capacity 130), and
-  // the fluid's clusters (interface/sph.h)
+  // the fluid's list read four entries per texel (capacity 128) and one (capacity 130), the
+  // fluid's clusters (interface/sph.h), and no list (the passes walking cells)
   struct Variant {
     sim::ListLayout layout;
     std::uint32_t capacity;
+    sim::NeighbourSearch search = sim::NeighbourSearch::List;
   };
   for (const Variant variant : {Variant{sim::ListLayout::Contiguous, 128u}, Variant{sim::ListLayout::Contiguous, 130u},
-                                Variant{sim::ListLayout::Clusters, 128u}}) {
+                                Variant{sim::ListLayout::Clusters, 128u},
+                                Variant{sim::ListLayout::Contiguous, 128u, sim::NeighbourSearch::Cells}}) {
     const std::uint32_t capacity = variant.capacity;
+    const bool cells = variant.search == sim::NeighbourSearch::Cells;
     SCOPED_TRACE(testing::Message() << "capacity " << capacity
-                                    << (variant.layout == sim::ListLayout::Clusters ? ", clusters" : ""));
+                                    << (variant.layout == sim::ListLayout::Clusters ? ", clusters" : "")
+                                    << (cells ? ", walking cells" : ""));
     s.listLayout = variant.layout;
     s.neighbourCapacity = capacity;
+    s.neighbourSearch = variant.search;
     setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.05f), glm::vec3(0.15f));
-    ASSERT_EQ(solver_->listReadWidth(), capacity % 4u == 0u ? 4u : 1u);
+    ASSERT_EQ(solver_->walksCells(), cells);
+    ASSERT_EQ(solver_->listReadWidth(), cells || capacity % 4u != 0u ? 1u : 4u);
     evaluate();
     ASSERT_EQ(solver_->usesClusters(), variant.layout == sim::ListLayout::Clusters);
 
