@@ -1,15 +1,15 @@
-// Neighbour walks without a list (hemo::sim::NeighbourSearch::Cells: the pair passes' variants
-// compiled with HEMO_CELL_WALK = 1, interface/sph.h). A pass finds slot i's neighbours as the list build
-// (sph/build_list.comp) would have: the candidate ranges around i's position at the last grid
-// build (common/list_ranges.glsl), walked in the same order. A list entry is a candidate
-// within the list radius at that build, and the rebuild test guarantees that every pair
-// within the support now was one; so a pass that takes the candidates within its own range
-// now meets the pairs it would have read from the list that add anything, in the list's
-// order, and its sums come out bit for bit the same (a pair that adds an exact zero changes
-// no sum). What it costs is
-// the candidates the list's radius test would have dropped, whose positions each pass loads.
-// Compiled so, a pass binds, in place of its list's counts and entries (which the solver
-// then does not allocate), the grid's positions at build as RGBA32UI texels and the grid's
+// Neighbour walks without a list (hemo::sim::NeighbourSearch::Cells: the pair passes'
+// variants compiled with HEMO_CELL_WALK = 1, interface/sph.h). A pass finds slot i's
+// neighbours as the list build (sph/build_list.comp) would have: the candidate ranges around
+// i's position at the last grid build (common/list_ranges.glsl), walked in the same order. A
+// list entry is a candidate within the list radius at that build, and the rebuild test
+// guarantees that every pair within the support now was one; so a pass that takes the
+// candidates within its own range now meets, in the list's order, every pair of the list that
+// adds anything, and its sums come out bit for bit the same (a pair that adds an exact zero
+// changes no sum). What it costs is the candidates the list's radius test would have dropped,
+// whose positions each pass loads.
+// Compiled so, a pass binds, in place of its list's counts and entries (which the solver then
+// does not allocate), the grid's positions at build as RGBA32UI texels and the grid's
 // cellStart. The including shader defines before including this file
 //   HEMO_WALK_BUILD_POSITIONS  its usamplerBuffer at the counts' slot
 //   HEMO_WALK_CELL_START       its usamplerBuffer at the list's slot
