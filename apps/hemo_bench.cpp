@@ -39,6 +39,7 @@
 
 #include <malloc.h>
 #include <sys/resource.h>
+#include <unistd.h>
 
 namespace {
 
@@ -692,6 +693,69 @@ Json speed(Context& ctx, const hemo::scene::Scene& scene, const std::string& sce
   return rows;
 }
 
+// The process's resident host memory (bytes), from /proc/self/statm.
+std::uint64_t residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  std::uint64_t size = 0, resident = 0;
+  statm >> size >> resident;
+  return resident * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+}
+
+// Soak: `steps` steps of a scene (default the aneurysm) in 20 windows. After each window: the
+// host's resident memory, the device memory hemo's buffers hold, the particles lost (no
+// longer finite) and escaped, broken springs, the simulated time and the window's steps/s.
+// From the second window on (the first holds the pipelines' and the driver's one-off
+// allocations) the memory must stay flat: hemo's device memory exactly, the host's within 1%
+// or 4 MiB, whichever is larger; and no particle may be lost. `flat` reports the verdict.
+Json soak(Context& ctx, const hemo::scene::Scene& scene, const std::string& scenePath, std::uint64_t steps, bool& flat) {
+  Json rows = Json::array();
+  hemo::sim::Simulation sim(ctx, scene);
+  std::printf("scene %s (%s): %u fluid, %u boundary, %u wall particles, %u springs; %llu steps\n", scene.name.c_str(),
+              scenePath.c_str(), sim.fluidParticles(), sim.boundaryParticles(), sim.wallParticles(), sim.springs(),
+              static_cast<unsigned long long>(steps));
+  std::printf("%6s %10s %10s %9s %12s %12s %6s %8s %8s\n", "window", "steps", "sim s", "steps/s", "host MiB",
+              "device MiB", "lost", "escaped", "broken");
+  constexpr int kWindows = 20;
+  const std::uint64_t window = std::max<std::uint64_t>(steps / kWindows, 1);
+  std::uint64_t hostFirst = 0, deviceFirst = 0, hostMax = 0, deviceMax = 0;
+  std::uint32_t lost = 0;
+  for (int w = 0; w < kWindows && sim.steps() < steps; ++w) {
+    hemo::sim::RunOptions opt;
+    opt.steps = std::min(window, steps - sim.steps());
+    const hemo::sim::RunResult r = sim.run(opt);
+    const std::uint64_t host = residentBytes();
+    const std::uint64_t device = ctx.deviceMemoryBytes();
+    lost = sim.lostParticles();
+    const std::uint32_t broken = sim.solver().wall() ? sim.solver().wall()->readBrokenCount() : 0u;
+    const double rate = r.wallSeconds > 0 ? double(r.steps) / r.wallSeconds : 0.0;
+    if (w == 1) hostFirst = host, deviceFirst = device;
+    if (w >= 1) hostMax = std::max(hostMax, host), deviceMax = std::max(deviceMax, device);
+    std::printf("%6d %10llu %10.5f %9.1f %12.1f %12.1f %6u %8u %8u\n", w + 1, static_cast<unsigned long long>(sim.steps()),
+                sim.time(), rate, double(host) / (1 << 20), double(device) / (1 << 20), lost, sim.escapedParticles(),
+                broken);
+    std::fflush(stdout);
+    rows.push_back({{"window", w + 1},
+                    {"steps", sim.steps()},
+                    {"sim_time_s", sim.time()},
+                    {"steps_per_s", rate},
+                    {"host_resident_bytes", host},
+                    {"gpu_memory_bytes", device},
+                    {"lost_particles", lost},
+                    {"escaped_particles", sim.escapedParticles()},
+                    {"broken_springs", broken}});
+  }
+  const std::uint64_t hostAllowed = std::max<std::uint64_t>(hostFirst / 100, 4ull << 20);
+  const bool hostFlat = hostMax <= hostFirst + hostAllowed;
+  const bool deviceFlat = deviceMax == deviceFirst;
+  flat = hostFlat && deviceFlat && lost == 0;
+  std::printf("from window 2 on: host memory %.1f -> at most %.1f MiB (%s), device memory %.1f -> at most %.1f MiB (%s), "
+              "%u lost: %s\n",
+              double(hostFirst) / (1 << 20), double(hostMax) / (1 << 20), hostFlat ? "flat" : "grew",
+              double(deviceFirst) / (1 << 20), double(deviceMax) / (1 << 20), deviceFlat ? "flat" : "grew", lost,
+              flat ? "memory flat, nothing lost" : "FAILED");
+  return rows;
+}
+
 // The scale suite's scene: a 3D dam break in the geometry of SPHERIC's benchmark 2 (a column
 // of water 1.228 x 1 x 0.55 m at one end of a tank 3.22 x 1 m, here without the obstacle and
 // with walls 0.6 m high), at the spacing that gives about `target` particles in all (fluid
@@ -1011,13 +1075,15 @@ int main(int argc, char** argv) {
   const char* usage =
       "usage: hemo-bench SUITE [--json FILE] [--device SEL] [--repeat N] [--case NAME] [--scene FILE] [--until S]\n"
       "                  [--max-particles N] [--smoothing-ratio R] [--neighbour-search MODE]\n"
-      "  SUITE: primitives | accuracy | table1 | render | speed | scale | device\n"
+      "  SUITE: primitives | accuracy | table1 | render | speed | scale | soak | device\n"
+      "         (soak: a long run of --scene, default the aneurysm; exit 5 if memory grew or particles were lost)\n"
       "         (device: what hemo reads from the device: sizes, limits, timestamps, memory types)\n"
       "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
       "                speed: whole runs, default 3)\n"
       "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
-      "  --scene FILE  speed: the scene to run (default scenes/dam_break.json)\n"
+      "  --scene FILE  speed, soak: the scene to run (default scenes/dam_break.json; soak: scenes/aneurysm.json)\n"
       "  --until S     speed: simulated seconds per run (default: the scene's time.end_time_s)\n"
+      "  --steps N     soak: steps to run (default 100000), in 20 windows\n"
       "  --max-particles N    scale: the largest size to run (sizes of about 0.1M, 1M, 4M, 16M, 64M;\n"
       "                       default: up to what the device holds)\n"
       "  --smoothing-ratio R  scale: h/dp of the 3D dam break (default 1.3)\n"
@@ -1028,7 +1094,7 @@ int main(int argc, char** argv) {
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case", "--scene", "--until", "--max-particles",
-                                          "--smoothing-ratio", "--neighbour-search"});
+                                          "--smoothing-ratio", "--neighbour-search", "--steps"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SUITE");
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
@@ -1037,7 +1103,7 @@ int main(int argc, char** argv) {
   const std::string suite = args.positional[0];
   try {
     if (suite != "primitives" && suite != "accuracy" && suite != "table1" && suite != "render" && suite != "speed" &&
-        suite != "scale" && suite != "device") {
+        suite != "scale" && suite != "soak" && suite != "device") {
       std::cerr << "hemo-bench: unknown suite '" << suite << "'\n" << usage;
       return 1;
     }
@@ -1047,11 +1113,12 @@ int main(int argc, char** argv) {
     if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break") {
       throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille or dam_break)");
     }
-    for (const char* option : {"--scene", "--until"}) {
-      if (args.has(option) && suite != "speed") {
-        throw hemo::cli::UsageError(std::string(option) + " applies to the speed suite only");
-      }
+    if (args.has("--until") && suite != "speed") throw hemo::cli::UsageError("--until applies to the speed suite only");
+    if (args.has("--scene") && suite != "speed" && suite != "soak") {
+      throw hemo::cli::UsageError("--scene applies to the speed and soak suites only");
     }
+    if (args.has("--steps") && suite != "soak") throw hemo::cli::UsageError("--steps applies to the soak suite only");
+    const std::uint64_t soakSteps = args.count("--steps", 100000, 20, 100000000);
     for (const char* option : {"--max-particles", "--smoothing-ratio", "--neighbour-search"}) {
       if (args.has(option) && suite != "scale") {
         throw hemo::cli::UsageError(std::string(option) + " applies to the scale suite only");
@@ -1066,9 +1133,10 @@ int main(int argc, char** argv) {
     const double until = args.seconds("--until", 0.0);
     if (args.has("--until") && until <= 0) throw hemo::cli::UsageError("--until must be above 0 s");
     // The scene is read before any device is opened: a bad file fails at once.
-    const std::string scenePath = args.text("--scene", std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+    const std::string scenePath =
+        args.text("--scene", std::string(HEMO_SOURCE_DIR) + (suite == "soak" ? "/scenes/aneurysm.json" : "/scenes/dam_break.json"));
     hemo::scene::Scene scene;
-    if (suite == "speed") scene = hemo::scene::loadScene(scenePath);
+    if (suite == "speed" || suite == "soak") scene = hemo::scene::loadScene(scenePath);
     // The JSON file is opened before the benchmark runs (a suite takes minutes): a path that
     // cannot be written fails at once.
     // (under a temporary name until the suite ends: hemo/io/atomic_file.hpp)
@@ -1089,18 +1157,21 @@ int main(int argc, char** argv) {
       std::cerr << "hemo-bench: the device has no timestamp queries; GPU times are unavailable\n";
       return 3;
     }
+    bool soakFlat = true;
     const Json rows = suite == "device"     ? deviceFacts(ctx)
                       : suite == "primitives" ? primitives(ctx, repeat)
                       : suite == "table1"     ? table1(ctx, std::max(1, repeat / 3))
                       : suite == "render"     ? render(ctx, repeat, std::filesystem::path(HEMO_SOURCE_DIR) / "scenes")
                       : suite == "speed"      ? speed(ctx, scene, scenePath, until, repeat)
                       : suite == "scale"      ? scale(ctx, repeat, maxParticles, ratio, search)
+                      : suite == "soak"       ? soak(ctx, scene, scenePath, soakSteps, soakFlat)
                                               : accuracy(ctx, only);
     if (json) {
       json->stream() << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
       json->commit();
     }
     if (hemo::cli::validationProblems(ctx, "hemo-bench")) return 3;
+    if (!soakFlat) return 5;
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-bench: " << e.what() << "\n" << usage;
     return 1;
