@@ -2,6 +2,7 @@
 // pages where one buffer would pass a binding limit, cell walks where the device's memory would
 // not hold the list, the device memory hemo holds) on whatever device runs the suite.
 #include "gpu_test.hpp"
+#include "run_state.hpp"
 #include "hemo/gpu/context.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/sim/simulation.hpp"
@@ -59,10 +60,7 @@ TEST_F(ScaleTest, MillionParticleRunIsBitIdenticalWhenRerun) {
     EXPECT_EQ(sim.lostParticles(), 0u);
     EXPECT_EQ(sim.escapedParticles(), 0u);
     EXPECT_GT(sim.time(), 0.0);
-    const auto s = sim.snapshot();
-    std::vector<glm::vec4> state = s.positions;
-    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
-    return state;
+    return positionsAndVelocities(sim);
   };
   const auto first = run();
   const auto second = run();
@@ -121,10 +119,7 @@ TEST_F(ScaleTest, AutoWalksCellsWhereTheListWouldNotFit) {
     sim::RunOptions opt;
     opt.steps = 60;
     sim.run(opt);
-    const auto s = sim.snapshot();
-    std::vector<glm::vec4> state = s.positions;
-    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
-    return state;
+    return positionsAndVelocities(sim);
   };
   const auto list = run(ctx(), false);
   gpu::ContextOptions options;

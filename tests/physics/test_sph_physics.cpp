@@ -1,6 +1,7 @@
 // SPH physics: lattice stability, hydrostatics, Poiseuille flow, dam break, momentum
 // conservation, determinism, end time, hard cases (docs/physics.md has the measurements).
 #include "gpu_test.hpp"
+#include "run_state.hpp"
 #include "hemo/reference/analytic.hpp"
 #include "hemo/reference/published.hpp"
 #include "hemo/sim/probes.hpp"
@@ -24,14 +25,6 @@ namespace hemo::test {
 namespace {
 
 class SphPhysicsTest : public GpuTest {};
-
-// Every particle's position and velocity (in id order), for bit-for-bit comparisons of runs.
-std::vector<glm::vec4> positionsAndVelocities(const sim::Simulation& sim) {
-  const sim::Snapshot s = sim.snapshot();
-  std::vector<glm::vec4> state = s.positions;
-  state.insert(state.end(), s.velocities.begin(), s.velocities.end());
-  return state;
-}
 
 // A small column of fluid falling into place in a tank.
 const char* kColumn = R"({
