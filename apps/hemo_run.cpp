@@ -1,10 +1,13 @@
 // hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N] [--stats-every N]
-//          [--surface-every N] [--png-every N] [--png-size WxH] [--profile N]
+//          [--surface-every N] [--png-every N] [--png-size WxH] [--profile N] [--checkpoint-every N]
+//          [--resume FILE]
 // Runs a scene headless: a progress line, then a summary on screen and in DIR/summary.json.
-// Exit codes: 0 success; 1 bad input; 2 the simulation became non-finite or unstable;
-// 3 no usable Vulkan device or a device error.
+// Exit codes: 0 success; 1 bad input (a bad checkpoint too); 2 the simulation became
+// non-finite or unstable; 3 no usable Vulkan device or a device error; 4 an output that cannot
+// be written.
 #include "cli.hpp"
 #include "hemo/io/atomic_file.hpp"
+#include "hemo/io/checkpoint.hpp"
 #include "hemo/io/output.hpp"
 #include "hemo/render/renderer.hpp"
 #include "hemo/scene/scene.hpp"
@@ -18,6 +21,8 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <optional>
+#include <cstdlib>
 #include <tuple>
 #include <filesystem>
 #include <fstream>
@@ -31,8 +36,9 @@ using Json = nlohmann::json;
 const char* kUsage =
     "usage: hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N]\n"
     "                [--stats-every N] [--surface-every N] [--png-every N] [--png-size WxH] [--profile N]\n"
+    "                [--checkpoint-every N] [--resume FILE]\n"
     "  --out DIR        output directory (default: out/<scene name>)\n"
-    "  --steps N        run N steps\n"
+    "  --steps N        run until step N (N steps; a resumed run counts the checkpoint's steps)\n"
     "  --until SECONDS  run until this simulated time (default: the scene's time.end_time_s)\n"
     "  --device SEL     Vulkan device index or name part (default: HEMO_DEVICE, else the best)\n"
     "  --vtk-every N    write DIR/particles_<step>.vtk every N steps (and at the end); with a vessel\n"
@@ -46,6 +52,11 @@ const char* kUsage =
     "  --png-every N    render DIR/frame_<step>.png every N steps (and at the end): the blood\n"
     "                   surface, the vessel wall cut open on the camera's side, offscreen\n"
     "  --png-size WxH   frame size in pixels (default 960x540)\n"
+    "  --checkpoint-every N  write the whole state to DIR/checkpoint.hemo every N steps (and at the\n"
+    "                   end), replacing the last one\n"
+    "  --resume FILE    continue from a checkpoint of this scene written on this device and driver:\n"
+    "                   the run is bit-identical to the uninterrupted one; DIR/steps.csv keeps its\n"
+    "                   rows up to the checkpoint\n"
     "hemo-run --describe-scene   prints the scene-file parameter table\n"
     "hemo-run --help             prints this text\n";
 
@@ -54,7 +65,7 @@ void printProgress(const hemo::sim::Progress& p, bool tty) {
                                         : (p.targetSteps ? double(p.steps) / double(p.targetSteps) : 0.0);
   const int width = 30;
   const int filled = std::clamp(int(fraction * width + 0.5), 0, width);
-  const double rate = p.wallSeconds > 0 ? double(p.steps) / p.wallSeconds : 0.0;
+  const double rate = p.wallSeconds > 0 ? double(p.steps - p.firstStep) / p.wallSeconds : 0.0;
   std::fprintf(stderr, "%s[%.*s%*s] %5.1f%%  step %llu  t = %.4g s  %.0f steps/s%s", tty ? "\r" : "", filled,
                "##############################", width - filled, "", 100.0 * std::min(fraction, 1.0),
                static_cast<unsigned long long>(p.steps), p.time, rate, tty ? "" : "\n");
@@ -72,7 +83,8 @@ int main(int argc, char** argv) {
   hemo::cli::Args args;
   try {
     args = hemo::cli::parse(argc, argv, {"--out", "--steps", "--until", "--device", "--vtk-every", "--png-every",
-                                         "--surface-every", "--profile", "--stats-every", "--png-size"});
+                                         "--surface-every", "--profile", "--stats-every", "--png-size",
+                                         "--checkpoint-every", "--resume"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SCENE.json");
     if (args.has("--steps") && args.has("--until")) throw hemo::cli::UsageError("give --steps or --until, not both");
 
@@ -88,9 +100,11 @@ int main(int argc, char** argv) {
   std::uint32_t pngWidth = 960, pngHeight = 540;
   std::uint64_t profileSteps = 0;
   std::uint32_t statsEvery = 0;
+  std::uint32_t checkpointEvery = 0;
+  std::optional<std::uint64_t> stepsTotal;
   hemo::scene::Scene scene;
   try {
-    if (args.has("--steps")) options.steps = args.count("--steps", 0, 1, 4000000000ull);
+    if (args.has("--steps")) stepsTotal = args.count("--steps", 0, 1, 4000000000ull);
     if (args.has("--until")) options.until = args.seconds("--until", 0.0);
     vtkEvery = static_cast<std::uint32_t>(args.count("--vtk-every", 0, 1, 1000000000));
     surfaceEvery = static_cast<std::uint32_t>(args.count("--surface-every", 0, 1, 1000000000));
@@ -98,6 +112,8 @@ int main(int argc, char** argv) {
     std::tie(pngWidth, pngHeight) = args.size("--png-size", {960, 540});
     profileSteps = args.count("--profile", 0, 1, 1000);
     statsEvery = static_cast<std::uint32_t>(args.count("--stats-every", 0, 1, 1000000000));
+    checkpointEvery = static_cast<std::uint32_t>(args.count("--checkpoint-every", 0, 1, 1000000000));
+    if (args.has("--resume") && args.text("--resume").empty()) throw hemo::cli::UsageError("--resume expects a FILE");
     scene = hemo::scene::loadScene(args.positional[0]);
   } catch (const hemo::cli::UsageError& e) {
     std::cerr << "hemo-run: " << e.what() << "\n" << kUsage;
@@ -125,6 +141,14 @@ int main(int argc, char** argv) {
     hemo::sim::Simulation sim(ctx, scene);
     std::fprintf(stderr, "hemo-run: %s on %s: %u fluid + %u boundary + %u wall particles, %u springs\n", scene.name.c_str(),
                  ctx.info().name.c_str(), sim.fluidParticles(), sim.boundaryParticles(), sim.wallParticles(), sim.springs());
+    const bool resumed = args.has("--resume");
+    if (resumed) {
+      sim.resume(args.text("--resume"));
+      std::fprintf(stderr, "hemo-run: resumed from %s at step %llu (t = %.6g s)\n", args.text("--resume").c_str(),
+                   static_cast<unsigned long long>(sim.steps()), sim.time());
+    }
+    const std::uint64_t firstStep = sim.steps();
+    if (stepsTotal) options.steps = *stepsTotal > firstStep ? *stepsTotal - firstStep : 0;
     const std::optional<hemo::scene::RuptureEstimate> rupture = hemo::scene::ruptureEstimate(scene);
     if (rupture) {
       std::fprintf(stderr,
@@ -157,9 +181,25 @@ int main(int argc, char** argv) {
     // (written under a temporary name during the run, renamed when it ends: hemo/io/atomic_file.hpp)
     std::unique_ptr<hemo::io::AtomicFile> csvFile;
     if (statsEvery) {
+      // A resumed run keeps the rows of the run it continues, up to the checkpoint's step.
+      std::vector<std::string> kept;
+      const char* header = "step,time_s,dt_s,max_speed_m_s,max_density_error,broken_springs,detached_particles";
+      if (resumed) {
+        std::ifstream old(out / "steps.csv");
+        std::string line;
+        if (std::getline(old, line) && line == header) {
+          while (std::getline(old, line)) {
+            char* end = nullptr;
+            const unsigned long long step = std::strtoull(line.c_str(), &end, 10);
+            if (end == line.c_str() || *end != ',' || step > firstStep) break;
+            kept.push_back(line);
+          }
+        }
+      }
       csvFile = std::make_unique<hemo::io::AtomicFile>(out / "steps.csv");
       std::ostream& csv = csvFile->stream();
-      csv << "step,time_s,dt_s,max_speed_m_s,max_density_error,broken_springs,detached_particles\n";
+      csv << header << "\n";
+      for (const std::string& line : kept) csv << line << "\n";
       csv.precision(9);
       sim.enableStepStats(statsEvery);
       options.onStepStats = [&](const std::vector<hemo::sim::StepStatsRow>& rows) {
@@ -216,19 +256,34 @@ int main(int argc, char** argv) {
       hemo::render::writePng(out / name, pngWidth, pngHeight, renderer->readPixels());
       ++pngFiles;
     };
+    // The checkpoint, replaced each time (written whole under a temporary name, then renamed).
+    std::uint64_t checkpointStep = 0;
+    bool checkpointWritten = false;
+    auto writeCheckpoint = [&]() {
+      sim.writeCheckpoint(out / "checkpoint.hemo");
+      checkpointStep = sim.steps();
+      checkpointWritten = true;
+    };
     auto writeOutputs = [&](const hemo::sim::Progress& p) {
       if (vtkEvery && p.steps % vtkEvery == 0) writeVtk(p);
       if (surfaceEvery && p.steps % surfaceEvery == 0) writeSurface(p);
       if (pngEvery && p.steps % pngEvery == 0) writePng(p);
+      // (after the files above: a checkpoint holds the state after their passes, which change
+      // nothing a later step reads)
+      if (checkpointEvery && p.steps % checkpointEvery == 0 && p.steps > firstStep) writeCheckpoint();
     };
-    if (vtkEvery || surfaceEvery || pngEvery) {
+    if (vtkEvery || surfaceEvery || pngEvery || checkpointEvery) {
       std::uint32_t every = 0;
-      for (std::uint32_t e : {vtkEvery, surfaceEvery, pngEvery}) {
+      for (std::uint32_t e : {vtkEvery, surfaceEvery, pngEvery, checkpointEvery}) {
         if (e) every = every ? std::gcd(every, e) : e;
       }
       options.outputEvery = every;
       options.onOutput = writeOutputs;
-      writeOutputs(hemo::sim::Progress{});
+      hemo::sim::Progress start;
+      start.steps = firstStep;
+      start.firstStep = firstStep;
+      start.time = sim.time();
+      writeOutputs(start);
     }
     hemo::sim::RunResult result;
     bool finite = true;
@@ -248,6 +303,7 @@ int main(int argc, char** argv) {
       if (vtkEvery && sim.steps() % vtkEvery != 0) writeVtk(p);
       if (surfaceEvery && sim.steps() % surfaceEvery != 0) writeSurface(p);
       if (pngEvery && sim.steps() % pngEvery != 0) writePng(p);
+      if (checkpointEvery && (sim.steps() % checkpointEvery != 0 || sim.steps() == firstStep)) writeCheckpoint();
     }
     const double wall = result.wallSeconds;
     const std::uint32_t rebuilds = sim.solver().readRebuilds();
@@ -288,6 +344,11 @@ int main(int argc, char** argv) {
                                           std::max(1u, sim.fluidParticles() + sim.boundaryParticles() + sim.wallParticles())},
                {"finite", finite}};
     if (rupture) summary["rupture_pressure_estimate_Pa"] = rupture->pressure;
+    if (resumed) summary["resumed_from_step"] = firstStep;
+    if (checkpointWritten) {
+      summary["checkpoint_file"] = (out / "checkpoint.hemo").string();
+      summary["checkpoint_step"] = checkpointStep;
+    }
     if (profileSteps > 0) {
       summary["stage_ms"] = stageMs;
       summary["rebuild_stage_ms"] = rebuildMs;
@@ -300,6 +361,9 @@ int main(int argc, char** argv) {
     if (!finite) summary["error"] = failure;
     if (hemo::cli::validationProblems(ctx, "hemo-run")) return 3;
   } catch (const hemo::scene::SceneError& e) {
+    std::cerr << "hemo-run: " << e.what() << "\n";
+    return 1;
+  } catch (const hemo::io::CheckpointError& e) {
     std::cerr << "hemo-run: " << e.what() << "\n";
     return 1;
   } catch (const hemo::gpu::OutOfDeviceMemory& e) {

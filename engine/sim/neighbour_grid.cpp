@@ -242,6 +242,11 @@ void NeighbourGrid::record(gpu::CommandRecorder& rec, std::uint32_t n, std::uint
   mark("reorder");
 }
 
+void NeighbourGrid::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
+  out.insert(out.end(), {&pairs_, &order_, &keyCounts_, &keyLocal_, &blocks_, &finished_, &cellStart_, &counters_,
+                         &slotOfId_, &posAtBuild_});
+}
+
 GridCounters NeighbourGrid::readCounters() const {
   const auto c = counters_.readback<std::uint32_t>(HEMO_COUNTER_COUNT);
   return GridCounters{c[HEMO_COUNTER_OUTSIDE], c[HEMO_COUNTER_NONFINITE]};

@@ -19,6 +19,12 @@ ParticleStore::ParticleStore(gpu::Context& context, std::uint32_t capacity) : ca
   }
 }
 
+void ParticleStore::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
+  for (ParticleArrays* a : {&live_, &scratch_}) {
+    for (gpu::Buffer* b : {&a->positions, &a->velocities, &a->normals, &a->ids}) out.push_back(b);
+  }
+}
+
 void ParticleStore::upload(const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities,
                            const std::vector<std::uint32_t>& ids, const std::vector<glm::vec4>& normals) {
   if (positions.size() > capacity_) {

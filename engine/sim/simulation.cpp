@@ -1,11 +1,72 @@
 #include "hemo/sim/simulation.hpp"
 
+#include "hemo/io/checkpoint.hpp"
+#include "hemo/io/hash.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
 
 namespace hemo::sim {
+
+namespace {
+
+// What the physics of a run depends on, as built: a checkpoint of another scene (or another
+// version of this one) does not match it.
+std::uint64_t fingerprintOf(const scene::Scene& scene, const scene::SceneBuild& build) {
+  io::Hash64 h;
+  const scene::ParticleSet& set = build.particles;
+  auto addVectors = [&](const auto& v) {
+    h.addValue(std::uint64_t(v.size()));
+    h.add(v.data(), v.size() * sizeof v[0]);
+  };
+  addVectors(set.positions);
+  addVectors(set.velocities);
+  addVectors(set.normals);
+  addVectors(set.ids);
+  h.addValue(set.fluid);
+  h.addValue(set.boundary);
+  const SphParams params = makeParams(scene.sph);
+  h.add(&params, sizeof params);
+  for (int a = 0; a < 3; ++a) {
+    h.addValue(scene.domain.min[a]);
+    h.addValue(scene.domain.max[a]);
+    h.addValue(std::uint32_t(scene.sph.periodic[a] ? 1 : 0));
+  }
+  h.addValue(std::uint32_t(scene.sph.integrator));
+  h.addValue(std::uint32_t(scene.sph.densityMethod));
+  h.addValue(std::uint32_t(scene.sph.neighbourSearch));
+  h.addValue(std::uint32_t(scene.sph.listLayout));
+  if (build.network) {
+    const SpringNetwork& net = *build.network;
+    h.addValue(net.timeStepFactor);
+    h.addValue(std::uint64_t(net.springs.size()));
+    for (const Spring& s : net.springs) {
+      h.addValue(s.a);
+      h.addValue(s.b);
+      h.addValue(s.restLength);
+      h.addValue(s.stiffness);
+      h.addValue(s.damping);
+      h.addValue(s.maxForce);
+    }
+    h.addValue(std::uint64_t(net.points.size()));
+    for (const WallPoint& p : net.points) {
+      h.addValue(p.mass);
+      h.addValue(std::uint32_t(p.anchored ? 1 : 0));
+      h.addValue(p.frameA);
+      h.addValue(p.frameB);
+    }
+  }
+  if (scene.vessel && scene.vessel->inflow) {
+    const InflowParams inflow =
+        makeInflowParams(*scene.vessel->inflow, scene.sph.restDensity, scene.sph.particleMass());
+    h.add(&inflow, sizeof inflow);
+  }
+  return h.value();
+}
+
+}  // namespace
 
 Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : context_(&context), scene_(scene) {
   // Before building anything: slots are 32-bit indices, with a bit of list entries to spare.
@@ -20,6 +81,7 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
   const scene::ParticleSet& set = build.particles;
   if (set.fluid == 0) throw scene::SceneError(scene.name + ": fluid.blocks: the scene holds no fluid particles");
   fluid_ = set.fluid;
+  fingerprint_ = fingerprintOf(scene, build);
   boundary_ = set.boundary;
   wall_ = build.wall;
   springs_ = build.network ? static_cast<std::uint32_t>(build.network->springs.size()) : 0;
@@ -47,6 +109,7 @@ RunResult Simulation::run(const RunOptions& options) {
   auto progress = [&]() {
     Progress p;
     p.steps = steps_;
+    p.firstStep = firstStep;
     p.time = clock.time;
     p.endTime = options.steps ? 0.0 : endTime;
     p.targetSteps = options.steps ? firstStep + *options.steps : 0;
@@ -218,6 +281,63 @@ Snapshot Simulation::snapshot() const {
     s.ids[id] = id;
   }
   return s;
+}
+
+std::vector<gpu::Buffer*> Simulation::checkpointBuffers() {
+  std::vector<gpu::Buffer*> all;
+  solver_->checkpointBuffers(all);
+  std::vector<gpu::Buffer*> buffers;
+  for (gpu::Buffer* b : all) {
+    if (b->valid()) buffers.push_back(b);
+  }
+  return buffers;
+}
+
+void Simulation::writeCheckpoint(const std::filesystem::path& path) {
+  io::CheckpointHeader h;
+  h.scene = scene_.name;
+  h.sceneFingerprint = fingerprint_;
+  const VkPhysicalDeviceProperties& device = context_->properties();
+  h.device = context_->info().name;
+  h.driver = context_->driver();
+  h.vendorId = device.vendorID;
+  h.deviceId = device.deviceID;
+  std::copy(std::begin(device.pipelineCacheUUID), std::end(device.pipelineCacheUUID), h.pipelineCacheUuid.begin());
+  h.steps = steps_;
+  h.time = time();
+  h.host = {static_cast<std::uint32_t>(steps_), static_cast<std::uint32_t>(steps_ >> 32)};
+  const std::vector<std::uint32_t> solver = solver_->hostState();
+  h.host.insert(h.host.end(), solver.begin(), solver.end());
+  std::vector<io::CheckpointPayload> payloads;
+  for (const gpu::Buffer* b : checkpointBuffers()) payloads.push_back(io::payloadOf(*b));
+  io::writeCheckpoint(path, h, payloads);
+}
+
+void Simulation::resume(const std::filesystem::path& path) {
+  const io::CheckpointFile file = io::readCheckpoint(path);
+  const io::CheckpointHeader& h = file.header;
+  const std::string name = "checkpoint '" + path.string() + "'";
+  if (h.sceneFingerprint != fingerprint_) {
+    throw io::CheckpointError(name + " was written for scene '" + h.scene + "'" +
+                              (h.scene == scene_.name ? " as it was then" : "") + ": the particles, springs or settings of scene '" +
+                              scene_.name + "' differ from it");
+  }
+  const VkPhysicalDeviceProperties& device = context_->properties();
+  if (h.device != context_->info().name || h.driver != context_->driver() || h.vendorId != device.vendorID ||
+      h.deviceId != device.deviceID ||
+      !std::equal(h.pipelineCacheUuid.begin(), h.pipelineCacheUuid.end(), std::begin(device.pipelineCacheUUID))) {
+    throw io::CheckpointError(name + " was written on " + h.device + " (" + h.driver + "), this run is on " +
+                              context_->info().name + " (" + context_->driver() +
+                              "): a checkpoint resumes on the device and driver that wrote it");
+  }
+  const std::vector<std::uint32_t> solverState(h.host.begin() + std::min<std::size_t>(2, h.host.size()), h.host.end());
+  if (h.host.size() < 2 || solverState.size() != solver_->hostState().size()) {
+    throw io::CheckpointError(name + " does not fit this simulation (written by another build of hemo): " +
+                              std::to_string(h.host.size()) + " words of host state");
+  }
+  io::loadCheckpointBuffers(path, file, checkpointBuffers());
+  solver_->restoreHostState(solverState);
+  steps_ = std::uint64_t(h.host[0]) | std::uint64_t(h.host[1]) << 32;
 }
 
 std::uint32_t Simulation::escapedParticles() const {

@@ -1179,4 +1179,60 @@ SphClock SphSolver::readClock() const {
   return SphClock{double(r.time) - double(r.compensation), r.lastDt, r.steps};
 }
 
+void SphSolver::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
+  particles_->checkpointBuffers(out);
+  grid_.checkpointBuffers(out);
+  rebuildGate_.checkpointBuffers(out);
+  out.insert(out.end(), {&paramsBuffer_, &state_, &accel_, &dtLimit_, &ncount_, &pairCount_, &viscousVel_});
+  for (auto* pages : {&nlist_, &pairList_}) {
+    for (gpu::Buffer& b : *pages) out.push_back(&b);
+  }
+  out.insert(out.end(), {&ccount_, &clist_, &corder_, &pairPosition_, &activeSlots_, &activeArgs_, &activeAppended_,
+                         &integrateArgs_, &clock_, &status_, &log_, &inflow_, &savedPos_, &savedVel_, &stepDt_, &tauA_,
+                         &tauB_, &dtPartials_, &dtCounts_, &dtResult_, &checkPartials_, &checkCount_, &checkResult_,
+                         &tileGrid_, &tileBoxes_, &tileResult_, &tileOccupied_});
+  if (wall_) wall_->checkpointBuffers(out);
+}
+
+namespace {
+enum HostWord : std::uint32_t {
+  kClockParity,
+  kBoundaryClockIn,
+  kIntegrateArgsValid,
+  kIntegrateGroupsX,
+  kIntegrateGroupsY,
+  kArmPending,
+  kInGridOrder,   // the last whole build sorted the slots of this upload
+  kTilesMarked,   // the rigid boundary's tiles are marked for this upload
+  kHostWords
+};
+}  // namespace
+
+std::vector<std::uint32_t> SphSolver::hostState() const {
+  std::vector<std::uint32_t> s(kHostWords);
+  s[kClockParity] = clockParity_;
+  s[kBoundaryClockIn] = boundaryClockIn_;
+  s[kIntegrateArgsValid] = integrateArgsValid_ ? 1u : 0u;
+  s[kIntegrateGroupsX] = integrateArgsGroups_.x;
+  s[kIntegrateGroupsY] = integrateArgsGroups_.y;
+  s[kArmPending] = armPending_ ? 1u : 0u;
+  s[kInGridOrder] = inGridOrder() ? 1u : 0u;
+  s[kTilesMarked] = tileUpload_ == particles_->uploads() ? 1u : 0u;
+  return s;
+}
+
+void SphSolver::restoreHostState(const std::vector<std::uint32_t>& s) {
+  if (s.size() != kHostWords) {
+    throw std::invalid_argument("solver state of " + std::to_string(s.size()) + " words, expected " +
+                                std::to_string(kHostWords));
+  }
+  clockParity_ = s[kClockParity] & 1u;
+  boundaryClockIn_ = s[kBoundaryClockIn] == ~0u ? ~0u : s[kBoundaryClockIn] & 1u;
+  integrateArgsValid_ = s[kIntegrateArgsValid] != 0;
+  integrateArgsGroups_ = gpu::Groups{s[kIntegrateGroupsX], s[kIntegrateGroupsY]};
+  armPending_ = s[kArmPending] != 0;
+  sortedUpload_ = s[kInGridOrder] != 0 ? particles_->uploads() : ~std::uint64_t(0);
+  tileUpload_ = s[kTilesMarked] != 0 ? particles_->uploads() : ~std::uint64_t(0);
+}
+
 }  // namespace hemo::sim

@@ -129,6 +129,8 @@ class Context {
   bool queueDraws() const { return queueDraws_; }  // the queue family has graphics
   const DeviceInfo& info() const { return info_; }
   const VkPhysicalDeviceLimits& limits() const { return properties_.limits; }
+  // The device's properties (its limits as lowered by LimitOverrides).
+  const VkPhysicalDeviceProperties& properties() const { return properties_; }
   // The driver as it names itself (VkPhysicalDeviceDriverProperties: name and version text,
   // e.g. "llvmpipe Mesa 22.3.6 (LLVM 15.0.6)" or "NVIDIA 580.159").
   const std::string& driver() const { return driver_; }

@@ -45,6 +45,9 @@ class DispatchGate {
   const Buffer& arguments() const { return args_; }
   const Buffer& openings() const { return opened_; }
   std::uint32_t slots() const { return maxSlots_; }
+  // Its buffers, for a checkpoint (hemo/io/checkpoint.hpp): the arguments the last arming
+  // wrote, the openings, and the counts (which the next recording of a region writes again).
+  void checkpointBuffers(std::vector<Buffer*>& out) { out.insert(out.end(), {&armed_, &args_, &opened_}); }
 
  private:
   friend class CommandRecorder;

@@ -20,6 +20,7 @@
 
 #include <array>
 #include <cstdint>
+#include <vector>
 
 namespace hemo::sim {
 
@@ -82,6 +83,8 @@ class NeighbourGrid {
   const gpu::Buffer& counters() const { return counters_; }
   const gpu::Buffer& positionsAtBuild() const { return posAtBuild_; }  // vec4 per slot: (x, kind)
   GridCounters readCounters() const;
+  // Its buffers, for a checkpoint (hemo/io/checkpoint.hpp).
+  void checkpointBuffers(std::vector<gpu::Buffer*>& out);
 
   struct Push {  // mirrors HemoGrid in common/grid.glsl
     float origin[4];

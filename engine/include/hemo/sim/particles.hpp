@@ -45,6 +45,8 @@ class ParticleStore {
   std::vector<glm::vec4> readVelocities() const;
   std::vector<glm::vec4> readNormals() const;
   std::vector<std::uint32_t> readIds() const;
+  // Its buffers, for a checkpoint (hemo/io/checkpoint.hpp): the live arrays and the scratch.
+  void checkpointBuffers(std::vector<gpu::Buffer*>& out);
 
  private:
   std::uint32_t capacity_;

@@ -9,6 +9,7 @@
 
 #include <glm/vec2.hpp>
 
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -24,6 +25,7 @@ class SimulationError : public std::runtime_error {
 
 struct Progress {
   std::uint64_t steps = 0;
+  std::uint64_t firstStep = 0;  // the step count when this run began (a resumed run's checkpoint)
   double time = 0.0;       // simulated s
   double endTime = 0.0;    // s (0 when running a fixed number of steps)
   std::uint64_t targetSteps = 0;
@@ -64,6 +66,20 @@ class Simulation {
   RunResult run(const RunOptions& options);
 
   Snapshot snapshot() const;
+
+  // Checkpoints (hemo/io/checkpoint.hpp). writeCheckpoint writes the whole state between runs
+  // (atomically; throws io::WriteError naming the file). resume replaces the state of a
+  // simulation built from the same scene, on the same device and driver, with a checkpoint's:
+  // the steps that follow are bit for bit those of the run that wrote it. It throws
+  // io::CheckpointError naming the file and the problem (not a checkpoint, another format
+  // version, truncated, damaged, another scene, device or build) before changing anything,
+  // except for a read failure while uploading (the state is then undefined: build anew).
+  void writeCheckpoint(const std::filesystem::path& path);
+  void resume(const std::filesystem::path& path);
+  // A hash of what the scene built (particles, springs, settings, inflow, domain): what a
+  // checkpoint must have been written for.
+  std::uint64_t sceneFingerprint() const { return fingerprint_; }
+
   // Records per-step statistics (hemo/sim/stats.hpp) of every `every`-th step from now on,
   // delivered through RunOptions::onStepStats once per batch.
   void enableStepStats(std::uint32_t every = 1);
@@ -119,6 +135,8 @@ class Simulation {
   std::unique_ptr<surface::ParticleField> field_;
   std::uint32_t statsEvery_ = 0;
   std::uint64_t steps_ = 0;
+  std::uint64_t fingerprint_ = 0;
+  std::vector<gpu::Buffer*> checkpointBuffers();
 };
 
 }  // namespace hemo::sim

@@ -297,6 +297,16 @@ class SphSolver {
 
   SphStatus readStatus() const;
   SphClock readClock() const;
+
+  // Checkpoints (hemo/io/checkpoint.hpp): every buffer of the solver, its grid, its rebuild
+  // gate and its wall, in a fixed order (those of a path the scene does not take are
+  // placeholders, listed as well); and the host's recording state (which clock record is
+  // current, what the last build left in order, whether the gate must be armed, ...), which
+  // restoreHostState takes back. Between batches only.
+  void checkpointBuffers(std::vector<gpu::Buffer*>& out);
+  std::vector<std::uint32_t> hostState() const;
+  // Throws std::invalid_argument for a state of another length.
+  void restoreHostState(const std::vector<std::uint32_t>& state);
   // Neighbour-list rebuilds since the last reset (a readback).
   std::uint32_t readRebuilds() const;
 

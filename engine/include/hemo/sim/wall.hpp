@@ -118,6 +118,10 @@ class MassSpring {
   void recordShade(gpu::CommandRecorder& rec, std::uint32_t n);
   const gpu::Buffer& shade() const { return shade_; }
   const gpu::Buffer& springs() const { return springs_; }  // GpuSpring records, broken flags live
+  // Its buffers, for a checkpoint (hemo/io/checkpoint.hpp).
+  void checkpointBuffers(std::vector<gpu::Buffer*>& out) {
+    out.insert(out.end(), {&springs_, &first_, &springsOf_, &wallInfo_, &frames_, &counters_, &shade_});
+  }
 
  private:
   const ParticleStore* particles_;
