@@ -1,5 +1,6 @@
 // Context settings read from the environment: the worker-thread count hemo asks lavapipe for
-// (gpu::cpuDriverThreads) and the validation level (gpu::validationFromText).
+// (gpu::cpuDriverThreads) and the validation level (gpu::validationFromText); and how Vulkan
+// failures are named (gpu::check).
 #include "hemo/gpu/context.hpp"
 
 #include <gtest/gtest.h>
@@ -33,4 +34,29 @@ TEST(ValidationLevel, ReadFromHemoValidation) {
 }
 
 }  // namespace
+}  // namespace hemo::test
+
+namespace hemo::test {
+
+// A lost device is named as such, with what the user can do; other failures name the result.
+TEST(VulkanErrors, LostDeviceIsNamedWithTheWayOut) {
+  try {
+    gpu::check(VK_ERROR_DEVICE_LOST, "vkQueueSubmit");
+    FAIL() << "no exception";
+  } catch (const gpu::DeviceLost& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("vkQueueSubmit failed: VK_ERROR_DEVICE_LOST: the device was lost"), std::string::npos) << m;
+    EXPECT_NE(m.find("--resume"), std::string::npos) << m;
+  }
+  try {
+    gpu::check(VK_ERROR_OUT_OF_DEVICE_MEMORY, "vkAllocateMemory");
+    FAIL() << "no exception";
+  } catch (const gpu::DeviceLost&) {
+    FAIL() << "not a lost device";
+  } catch (const gpu::GpuError& e) {
+    EXPECT_NE(std::string(e.what()).find("vkAllocateMemory failed: VK_ERROR_OUT_OF_DEVICE_MEMORY"), std::string::npos);
+  }
+  EXPECT_NO_THROW(gpu::check(VK_SUCCESS, "vkQueueWaitIdle"));
+}
+
 }  // namespace hemo::test

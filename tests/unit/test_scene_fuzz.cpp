@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -113,7 +114,8 @@ TEST(SceneFuzz, MutatedScenesLoadOrAreRefusedWithASceneError) {
   std::sort(texts.begin(), texts.end());
   ASSERT_GE(texts.size(), 5u);
   std::mt19937 rng(20261128u);
-  constexpr int kMutants = 3000;
+  // HEMO_FUZZ_MUTANTS sets a shorter budget (the sanitizer run in `make test`).
+  const int kMutants = std::getenv("HEMO_FUZZ_MUTANTS") ? std::max(50, std::atoi(std::getenv("HEMO_FUZZ_MUTANTS"))) : 3000;
   // Scenes small enough to build here (a mutant may ask for billions of particles, which is
   // the simulation's fit check's business: hemo-run refuses it before building).
   constexpr std::uint64_t kBuildLimit = 60000;

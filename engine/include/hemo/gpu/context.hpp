@@ -32,7 +32,15 @@ class OutOfDeviceMemory : public GpuError {
   std::uint64_t available;  // bytes of the heap (or the cap)
 };
 
-// Throws GpuError naming `what` when `result` is not VK_SUCCESS.
+// The device stopped answering (VK_ERROR_DEVICE_LOST: a GPU fault, a driver reset, a
+// watchdog's timeout). Nothing on it can go on; the message says so and points to checkpoints.
+class DeviceLost : public GpuError {
+ public:
+  using GpuError::GpuError;
+};
+
+// Throws GpuError naming `what` when `result` is not VK_SUCCESS (DeviceLost for
+// VK_ERROR_DEVICE_LOST).
 void check(VkResult result, const char* what);
 const char* resultName(VkResult result);
 
