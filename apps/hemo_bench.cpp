@@ -639,6 +639,7 @@ Json speed(Context& ctx, const hemo::scene::Scene& scene, const std::string& sce
   Json rows = Json::array();
   std::vector<double> rates;
   std::vector<std::pair<std::string, double>> calm, rebuild;  // the last run's stage times
+  std::pair<double, double> perStep;  // the last run's dispatches and barriers per step
   for (int r = 0; r < runs; ++r) {
     hemo::sim::Simulation sim(ctx, scene);
     if (r == 0) {
@@ -655,6 +656,7 @@ Json speed(Context& ctx, const hemo::scene::Scene& scene, const std::string& sce
     const std::uint32_t rebuilds = sim.solver().readRebuilds();
     const double rate = result.wallSeconds > 0 ? double(result.steps) / result.wallSeconds : 0.0;
     rates.push_back(rate);
+    perStep = {sim.dispatchesPerStep(), sim.barriersPerStep()};
     calm = sim.profileStep(20);
     rebuild = sim.profileStep(20, true);
     Json stageMs = Json::object(), rebuildMs = Json::object();
@@ -675,11 +677,14 @@ Json speed(Context& ctx, const hemo::scene::Scene& scene, const std::string& sce
                     {"steps_per_s", rate},
                     {"fluid_particle_steps_per_s", rate * sim.fluidParticles()},
                     {"cpu_s", cpu},
+                    {"dispatches_per_step", sim.dispatchesPerStep()},
+                    {"barriers_per_step", sim.barriersPerStep()},
                     {"stage_ms", stageMs},
                     {"rebuild_stage_ms", rebuildMs}});
   }
   const double mid = median(rates);
   std::printf("median %.1f steps/s over %d run%s\n", mid, runs, runs == 1 ? "" : "s");
+  std::printf("recorded per step: %.2f dispatches, %.2f barriers\n", perStep.first, perStep.second);
   for (const auto* stages : {&calm, &rebuild}) {
     std::printf("%s (run %d, GPU ms, median of 20 steps%s):", stages == &calm ? "stage_ms" : "rebuild_stage_ms", runs,
                 stages == &calm ? "" : " forced to rebuild");

@@ -329,6 +329,9 @@ int main(int argc, char** argv) {
                {"lost_particles", sim.lostParticles()},
                {"steps", sim.steps()},
                {"neighbour_rebuilds", rebuilds},
+               // commands the solver recorded per step (a step's latency on a GPU at small N)
+               {"dispatches_per_step", sim.dispatchesPerStep()},
+               {"barriers_per_step", sim.barriersPerStep()},
                {"sim_time_s", sim.time()},
                {"wall_time_s", wall},
                {"steps_per_s", wall > 0 ? double(result.steps) / wall : 0.0},

@@ -92,6 +92,7 @@ void CommandRecorder::begin() {
   info.flags = VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT;
   check(vkBeginCommandBuffer(cmd_, &info), "vkBeginCommandBuffer");
   dispatches_ = 0;
+  barriers_ = 0;
   gate_ = nullptr;
   pendingTransfer_.clear();
   boundPipeline_ = VK_NULL_HANDLE;
@@ -205,6 +206,7 @@ void recordStagingCopyToHost(VkCommandBuffer cmd) { recordBarrier(cmd, kTransfer
 
 void CommandRecorder::barrier(const Scope& producer, const Scope& consumer) {
   recordBarrier(cmd_, producer, consumer);
+  ++barriers_;
   if (producer.access & VK_ACCESS_TRANSFER_WRITE_BIT) pendingTransfer_.clear();
 }
 

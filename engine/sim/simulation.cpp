@@ -131,8 +131,12 @@ RunResult Simulation::run(const RunOptions& options) {
     recorder_->begin();
     std::uint32_t statsRows = 0;
     for (std::uint64_t k = 0; k < batch; ++k) {
+      const std::uint64_t dispatches = recorder_->dispatchCount(), barriers = recorder_->barrierCount();
       solver_->recordStep(*recorder_, static_cast<std::uint32_t>(steps_ + k), static_cast<std::uint32_t>(k),
                           static_cast<float>(endTime));
+      recordedDispatches_ += recorder_->dispatchCount() - dispatches;
+      recordedBarriers_ += recorder_->barrierCount() - barriers;
+      ++recordedSteps_;
       if (stats_ && (steps_ + k) % statsEvery_ == 0) stats_->record(*recorder_, statsRows++);
     }
     recorder_->end();

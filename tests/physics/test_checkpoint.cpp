@@ -4,11 +4,11 @@
 // continuity density and RK2, the cell walk, the wall with its inflow, the list in pages); a
 // simulation can be rewound to a checkpoint it wrote; and a checkpoint of another scene,
 // device or build is refused before anything changes.
+#include "file_bytes.hpp"
 #include "gpu_test.hpp"
 #include "run_state.hpp"
 
 #include "hemo/io/checkpoint.hpp"
-#include "hemo/io/hash.hpp"
 #include "hemo/scene/scene.hpp"
 #include "hemo/sim/simulation.hpp"
 
@@ -68,23 +68,6 @@ void expectSame(const State& a, const State& b, const char* what) {
   ASSERT_EQ(a.particles.size(), b.particles.size());
   EXPECT_EQ(0, std::memcmp(a.particles.data(), b.particles.data(), a.particles.size() * sizeof(glm::vec4)))
       << "the resumed run's particles differ from the uninterrupted run's";
-}
-
-std::vector<char> readAll(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<char>(std::istreambuf_iterator<char>(in), {});
-}
-
-void writeAll(const fs::path& path, const std::vector<char>& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
-
-void reseal(std::vector<char>& bytes) {
-  io::Hash64 h;
-  h.add(bytes.data(), bytes.size() - 8);
-  const std::uint64_t sum = h.value();
-  std::memcpy(bytes.data() + bytes.size() - 8, &sum, 8);
 }
 
 std::string refusal(sim::Simulation& sim, const fs::path& path) {

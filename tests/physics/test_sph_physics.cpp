@@ -810,5 +810,50 @@ TEST_P(SphIntegratorTest, DamBreakAtTheLargestAcceptedCfl) {
   EXPECT_EQ(sim.escapedParticles(), 0u);
 }
 
+// What a step records, the latency a GPU pays at small N: every step after the first records
+// the same dispatches and barriers, whether or not the GPU rebuilds the neighbour list in it
+// (the rebuild is gated, recorded every step); the RK2 midpoint records the density and force
+// passes twice, and a wall adds its stage to each force evaluation.
+TEST_F(SphPhysicsTest, EveryStepRecordsTheSameCommands) {
+  struct Counts {
+    double dispatches, barriers;
+  };
+  // per step over steps 2-11 and 12-71 (the first step also arms the gate and marks tiles)
+  auto steady = [&](const scene::Scene& scene) {
+    sim::Simulation sim(ctx(), scene);
+    // the totals recorded after `steps` steps in all
+    auto runTo = [&](std::uint64_t steps) {
+      sim::RunOptions opt;
+      opt.steps = steps - sim.steps();
+      sim.run(opt);
+      return Counts{std::round(sim.dispatchesPerStep() * double(steps)), std::round(sim.barriersPerStep() * double(steps))};
+    };
+    const Counts first = runTo(1), t11 = runTo(11), t71 = runTo(71);
+    const Counts a{(t11.dispatches - first.dispatches) / 10, (t11.barriers - first.barriers) / 10};
+    const Counts b{(t71.dispatches - t11.dispatches) / 60, (t71.barriers - t11.barriers) / 60};
+    EXPECT_GE(sim.solver().readRebuilds(), 2u) << "steps with and without a rebuild";
+    EXPECT_EQ(a.dispatches, b.dispatches);
+    EXPECT_EQ(a.barriers, b.barriers);
+    EXPECT_EQ(a.dispatches, std::round(a.dispatches)) << "the same whole number every step";
+    EXPECT_GE(first.dispatches, a.dispatches);
+    return a;
+  };
+  scene::Scene dam = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  dam.sph.listSkin = 0.01f;
+  dam.sph.listLayout = sim::ListLayout::Contiguous;
+  const Counts euler = steady(dam);
+  dam.sph.integrator = sim::Integrator::Rk2Midpoint;
+  const Counts rk2 = steady(dam);
+  EXPECT_GE(rk2.dispatches, euler.dispatches + 4) << "density, boundary pressure, forces and dt again";
+  EXPECT_GT(rk2.barriers, euler.barriers);
+  scene::Scene vessel = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/aneurysm.json");
+  vessel.sph.listLayout = sim::ListLayout::Contiguous;
+  vessel.sph.listSkin = 0.01f;
+  const Counts wall = steady(vessel);
+  EXPECT_GE(wall.dispatches, euler.dispatches + 1) << "the wall stage";
+  std::printf("per step: symplectic Euler %.0f dispatches %.0f barriers, RK2 %.0f %.0f, with a wall %.0f %.0f\n",
+              euler.dispatches, euler.barriers, rk2.dispatches, rk2.barriers, wall.dispatches, wall.barriers);
+}
+
 }  // namespace
 }  // namespace hemo::test

@@ -6,6 +6,8 @@
 // deliberate edit would), each either reads or is refused with a CheckpointError, never another
 // exception, a crash, a hang or a huge allocation. Under the asan preset every mutant also
 // runs without a memory or undefined-behaviour error. The seed is fixed.
+#include "file_bytes.hpp"
+
 #include "hemo/io/checkpoint.hpp"
 #include "hemo/io/hash.hpp"
 
@@ -32,15 +34,6 @@ fs::path tempDir() {
   return dir;
 }
 
-std::vector<char> readAll(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  return std::vector<char>(std::istreambuf_iterator<char>(in), {});
-}
-
-void writeAll(const fs::path& path, const std::vector<char>& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-}
 
 // A checkpoint with three payloads of known bytes (one empty).
 struct Sample {
@@ -80,15 +73,6 @@ void write(const fs::path& path, const Sample& s) {
                         }});
   }
   io::writeCheckpoint(path, s.header, payloads);
-}
-
-// The checksum (the last 8 bytes) made to match the bytes before it again.
-void reseal(std::vector<char>& bytes) {
-  if (bytes.size() < 8) return;
-  io::Hash64 h;
-  h.add(bytes.data(), bytes.size() - 8);
-  const std::uint64_t sum = h.value();
-  std::memcpy(bytes.data() + bytes.size() - 8, &sum, 8);
 }
 
 // The declared size (bytes 16-23) made to match the file's.

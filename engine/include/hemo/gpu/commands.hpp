@@ -94,7 +94,10 @@ class CommandRecorder {
   void copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, VkDeviceSize srcOffset = 0,
             VkDeviceSize dstOffset = 0);
 
+  // Dispatches (direct, indirect and gated, whether or not the GPU opens them) and barriers
+  // recorded since begin().
   std::uint64_t dispatchCount() const { return dispatches_; }
+  std::uint64_t barrierCount() const { return barriers_; }
 
  private:
   void bind(const ComputePipeline& pipeline, const DescriptorSet& set, const void* push, std::uint32_t pushBytes);
@@ -118,6 +121,7 @@ class CommandRecorder {
   VkPipeline boundPipeline_ = VK_NULL_HANDLE;
   VkDescriptorSet boundSet_ = VK_NULL_HANDLE;
   std::uint64_t dispatches_ = 0;
+  std::uint64_t barriers_ = 0;
   DispatchGate* gate_ = nullptr;
   std::vector<Range> pendingTransfer_;
 };

@@ -66,6 +66,12 @@ class Simulation {
   RunResult run(const RunOptions& options);
 
   Snapshot snapshot() const;
+  // What the solver recorded per step, on average over every step run() has recorded so far:
+  // dispatches (the gated neighbour rebuild's included, which the GPU runs with no workgroups
+  // when it stays closed) and barriers. On a GPU each costs a few microseconds whatever the
+  // particle count, so at small N they set the step time. 0 before the first step.
+  double dispatchesPerStep() const { return recordedSteps_ ? double(recordedDispatches_) / double(recordedSteps_) : 0.0; }
+  double barriersPerStep() const { return recordedSteps_ ? double(recordedBarriers_) / double(recordedSteps_) : 0.0; }
 
   // Checkpoints (hemo/io/checkpoint.hpp). writeCheckpoint writes the whole state between runs
   // (atomically; throws io::WriteError naming the file). resume replaces the state of a
@@ -136,6 +142,7 @@ class Simulation {
   std::uint32_t statsEvery_ = 0;
   std::uint64_t steps_ = 0;
   std::uint64_t fingerprint_ = 0;
+  std::uint64_t recordedDispatches_ = 0, recordedBarriers_ = 0, recordedSteps_ = 0;
   std::vector<gpu::Buffer*> checkpointBuffers();
 };
 
