@@ -399,8 +399,8 @@ double gpuStepMs(hemo::sim::Simulation& sim) {
 Json accuracy(Context& ctx, const std::string& only) {
   using hemo::sim::Integrator;
   Json rows = Json::array();
-  std::printf("%-12s %10s %5s %-17s %-11s %10s %-28s %10s %8s %12s\n", "case", "spacing_m", "h/dp", "integrator", "density", "error",
-              "metric", "ms/step", "steps", "wall s/sim s");
+  std::printf("%-12s %10s %5s %-17s %-11s %10s %-28s %10s %8s %12s %11s\n", "case", "spacing_m", "h/dp", "integrator", "density",
+              "error", "metric", "ms/step", "steps", "wall s/sim s", "x real time");
   // One row per run; the scene supplies spacing, smoothing ratio and integrator.
   auto row = [&](const std::string& name, const hemo::scene::Scene& scene, double error, const std::string& metric,
                  hemo::sim::Simulation& sim, double wall) {
@@ -409,13 +409,16 @@ Json accuracy(Context& ctx, const std::string& only) {
     const std::uint64_t steps = sim.steps();
     const double wallPerSim = wall / sim.time();
     const double msPerStep = gpuStepMs(sim);
-    std::printf("%-12s %10.6f %5.2f %-17s %-11s %10.4f %-28s %10.2f %8llu %12.1f\n", name.c_str(), scene.sph.spacing,
+    std::printf("%-12s %10.6f %5.2f %-17s %-11s %10.4f %-28s %10.2f %8llu %12.1f %11.4f\n", name.c_str(), scene.sph.spacing,
                 scene.sph.smoothingRatio, integ, density, error, metric.c_str(), msPerStep,
-                static_cast<unsigned long long>(steps), wallPerSim);
+                static_cast<unsigned long long>(steps), wallPerSim, 1.0 / wallPerSim);
     std::fflush(stdout);
     rows.push_back({{"case", name}, {"spacing_m", scene.sph.spacing}, {"smoothing_ratio", scene.sph.smoothingRatio},
                     {"integrator", integ}, {"density", density}, {"error", error}, {"error_metric", metric}, {"ms_per_step", msPerStep},
-                    {"steps", steps}, {"wall_s_per_sim_s", wallPerSim}});
+                    {"steps", steps}, {"wall_s_per_sim_s", wallPerSim},
+                    // the fluid's solver (weakly compressible SPH, the only one so far), and
+                    // simulated seconds per wall-clock second (1: keeps up with the clock)
+                    {"solver", "wcsph"}, {"real_time_factor", 1.0 / wallPerSim}});
   };
   const Integrator integrators[] = {Integrator::SymplecticEuler, Integrator::Rk2Midpoint};
 
