@@ -399,8 +399,8 @@ double gpuStepMs(hemo::sim::Simulation& sim) {
 Json accuracy(Context& ctx, const std::string& only) {
   using hemo::sim::Integrator;
   Json rows = Json::array();
-  std::printf("%-12s %10s %5s %-17s %-11s %10s %-28s %10s %8s %12s %11s\n", "case", "spacing_m", "h/dp", "integrator", "density",
-              "error", "metric", "ms/step", "steps", "wall s/sim s", "x real time");
+  std::printf("%-12s %-6s %10s %5s %-17s %-11s %10s %-28s %10s %8s %12s %11s\n", "case", "solver", "spacing_m", "h/dp", "integrator",
+              "density", "error", "metric", "ms/step", "steps", "wall s/sim s", "x real time");
   // One row per run; the scene supplies spacing, smoothing ratio and integrator.
   auto row = [&](const std::string& name, const hemo::scene::Scene& scene, double error, const std::string& metric,
                  hemo::sim::Simulation& sim, double wall) {
@@ -409,16 +409,23 @@ Json accuracy(Context& ctx, const std::string& only) {
     const std::uint64_t steps = sim.steps();
     const double wallPerSim = wall / sim.time();
     const double msPerStep = gpuStepMs(sim);
-    std::printf("%-12s %10.6f %5.2f %-17s %-11s %10.4f %-28s %10.2f %8llu %12.1f %11.4f\n", name.c_str(), scene.sph.spacing,
-                scene.sph.smoothingRatio, integ, density, error, metric.c_str(), msPerStep,
+    const char* solver = scene.sph.pressureSolver == hemo::sim::PressureSolver::Dfsph ? "dfsph" : "wcsph";
+    std::printf("%-12s %-6s %10.6f %5.2f %-17s %-11s %10.4f %-28s %10.2f %8llu %12.1f %11.4f\n", name.c_str(), solver,
+                scene.sph.spacing, scene.sph.smoothingRatio, integ, density, error, metric.c_str(), msPerStep,
                 static_cast<unsigned long long>(steps), wallPerSim, 1.0 / wallPerSim);
     std::fflush(stdout);
     rows.push_back({{"case", name}, {"spacing_m", scene.sph.spacing}, {"smoothing_ratio", scene.sph.smoothingRatio},
                     {"integrator", integ}, {"density", density}, {"error", error}, {"error_metric", metric}, {"ms_per_step", msPerStep},
                     {"steps", steps}, {"wall_s_per_sim_s", wallPerSim},
-                    // the fluid's solver (weakly compressible SPH, the only one so far), and
-                    // simulated seconds per wall-clock second (1: keeps up with the clock)
-                    {"solver", "wcsph"}, {"real_time_factor", 1.0 / wallPerSim}});
+                    // the fluid's pressure solver (wcsph or dfsph), and simulated seconds per
+                    // wall-clock second (1: keeps up with the clock)
+                    {"solver", solver}, {"real_time_factor", 1.0 / wallPerSim}});
+    if (scene.sph.pressureSolver == hemo::sim::PressureSolver::Dfsph) {
+      const hemo::sim::PressureSolveStats st = sim.solver().readPressureSolveStats();
+      rows.back()["solver_iterations_mean"] = st.meanIterations();
+      rows.back()["solver_iterations_max"] = st.maxIterations;
+      rows.back()["solver_cap_hits"] = st.capHits;
+    }
   };
   const Integrator integrators[] = {Integrator::SymplecticEuler, Integrator::Rk2Midpoint};
 
@@ -431,11 +438,13 @@ Json accuracy(Context& ctx, const std::string& only) {
       struct Variant {
         Integrator integrator;
         hemo::sim::DensityMethod density;
+        bool dfsph = false;
       };
       for (const Variant v : {Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Summation},
                               Variant{Integrator::Rk2Midpoint, hemo::sim::DensityMethod::Summation},
                               Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Continuity},
-                              Variant{Integrator::Rk2Midpoint, hemo::sim::DensityMethod::Continuity}}) {
+                              Variant{Integrator::Rk2Midpoint, hemo::sim::DensityMethod::Continuity},
+                              Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Summation, true}}) {
         const Integrator integrator = v.integrator;
         const std::string text = R"({"scene": "hydrostatic_bench", "particles": {"spacing_m": )" + std::to_string(dp) +
                                  R"(}, "fluid": {"viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.5,
@@ -446,17 +455,40 @@ Json accuracy(Context& ctx, const std::string& only) {
         hemo::scene::Scene scene = hemo::scene::parseScene(text, "hydrostatic_bench");
         scene.sph.integrator = integrator;
         scene.sph.densityMethod = v.density;
+        if (v.dfsph) {
+          scene.sph.pressureSolver = hemo::sim::PressureSolver::Dfsph;
+          scene.sph.maxTimeStep = 0.004f;
+        }
         hemo::sim::Simulation sim(ctx, scene);
         double wall = runTo(sim, 0.8), load = 0.0;
         const hemo::sim::Snapshot settled = sim.snapshot();
         double top = -1e30;
         for (std::uint32_t i = 0; i < sim.fluidParticles(); ++i) top = std::max(top, double(settled.positions[i].z));
-        for (double t : {0.9, 1.0}) {
-          wall += runTo(sim, t);
-          load += hemo::sim::floorLoad(sim.snapshot(), sim.fluidParticles(), scene.sph.h()) / (0.08 * 0.08) / 2.0;
+        if (v.dfsph) {
+          // DFSPH's pressure is each step's impulse over its dt: the load on the whole tank
+          // (the side walls' mirrored pressure pushes the floor's corners down), averaged over
+          // every step from 0.9 to 1.0 s weighted by its dt (DfsphTest.ColumnLoadsTheFloorWithRhoGH)
+          wall += runTo(sim, 0.9);
+          double span = 0.0;
+          while (sim.time() < 1.0) {
+            const double before = sim.time();
+            hemo::sim::RunOptions one;
+            one.steps = 1;
+            wall += sim.run(one).wallSeconds;
+            const double dt = sim.time() - before;
+            load += hemo::sim::floorLoad(sim.snapshot(), sim.fluidParticles(), scene.sph.h(), 1.0e9f) / (0.08 * 0.08) * dt;
+            span += dt;
+          }
+          load /= span;
+        } else {
+          for (double t : {0.9, 1.0}) {
+            wall += runTo(sim, t);
+            load += hemo::sim::floorLoad(sim.snapshot(), sim.fluidParticles(), scene.sph.h()) / (0.08 * 0.08) / 2.0;
+          }
         }
         const double expect = 1000.0 * 9.81 * 0.12;
-        row("hydrostatic", scene, std::abs(load - expect) / expect, "rel_error_floor_pressure", sim, wall);
+        row("hydrostatic", scene, std::abs(load - expect) / expect,
+            v.dfsph ? "rel_error_tank_load_step_mean" : "rel_error_floor_pressure", sim, wall);
         const hemo::sim::Snapshot last = sim.snapshot();
         rows.back()["drift_dp"] = hemo::sim::largestDisplacement(settled, last) / dp;
         rows.back()["deep_drift_dp"] = hemo::sim::largestDisplacement(settled, last, top - 2.0 * scene.sph.h()) / dp;
@@ -470,12 +502,13 @@ Json accuracy(Context& ctx, const std::string& only) {
     // velocity against the start-up series at t = 1 s (steady), relative to the peak.
     const double L = 1e-3, F = 2e-4, nu = 1e-6, t = 1.0;
     for (int across : {10, 20, 40}) {
-      for (Integrator integrator : integrators) {
+      for (int variant = 0; variant < 3; ++variant) {  // symplectic Euler, RK2, DFSPH (symplectic Euler)
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/poiseuille.json");
         scene.sph.spacing = float(L / across);
         scene = hemo::scene::withSlabThickness(scene, 0, 9);  // periodic extents of 9 dp (three list radii)
         scene = hemo::scene::withSlabThickness(scene, 1, 9);
-        scene.sph.integrator = integrator;
+        scene.sph.integrator = integrators[variant == 1 ? 1 : 0];
+        if (variant == 2) scene.sph.pressureSolver = hemo::sim::PressureSolver::Dfsph;
         hemo::sim::Simulation sim(ctx, scene);
         const double wall = runTo(sim, t);
         const double error = hemo::sim::poiseuilleProfileError(sim.snapshot(), sim.fluidParticles(), scene.sph.spacing, L,
@@ -494,11 +527,13 @@ Json accuracy(Context& ctx, const std::string& only) {
       Integrator integrator;
       float smoothingRatio;
       hemo::sim::DensityMethod density = hemo::sim::DensityMethod::Summation;
+      bool dfsph = false;
     };
     const Variant variants[] = {{Integrator::SymplecticEuler, 1.3f}, {Integrator::Rk2Midpoint, 1.3f},
                                 {Integrator::SymplecticEuler, 1.15f}, {Integrator::SymplecticEuler, 1.0f},
                                 {Integrator::SymplecticEuler, 1.3f, hemo::sim::DensityMethod::Continuity},
-                                {Integrator::Rk2Midpoint, 1.3f, hemo::sim::DensityMethod::Continuity}};
+                                {Integrator::Rk2Midpoint, 1.3f, hemo::sim::DensityMethod::Continuity},
+                                {Integrator::SymplecticEuler, 1.3f, hemo::sim::DensityMethod::Summation, true}};
     for (double fraction : {8.0, 10.0, 16.0}) {
       for (const Variant& v : variants) {
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
@@ -508,6 +543,10 @@ Json accuracy(Context& ctx, const std::string& only) {
         scene = hemo::scene::withSlabThickness(scene, 1, std::max(9, int(std::lround(0.6 * fraction))));
         scene.sph.integrator = v.integrator;
         scene.sph.densityMethod = v.density;
+        if (v.dfsph) {
+          scene.sph.pressureSolver = hemo::sim::PressureSolver::Dfsph;
+          scene.sph.maxTimeStep = 0.002f;
+        }
         hemo::sim::Simulation sim(ctx, scene);
         const auto& table = hemo::reference::martinMoyceN2();
         double sum = 0.0, wall = 0.0;

@@ -346,6 +346,22 @@ int main(int argc, char** argv) {
                {"bytes_per_particle", double(ctx.peakDeviceMemoryBytes()) /
                                           std::max(1u, sim.fluidParticles() + sim.boundaryParticles() + sim.wallParticles())},
                {"finite", finite}};
+    summary["solver"] = sim.solver().solvesPressure() ? "dfsph" : "wcsph";
+    if (sim.solver().solvesPressure()) {
+      // what the pressure solves did (sph/dfsph_reduce.comp's counts, this run and its resumed part)
+      const hemo::sim::PressureSolveStats st = sim.solver().readPressureSolveStats();
+      summary["solver_tolerance"] = scene.sph.solverTolerance;
+      summary["solver_max_iterations"] = scene.sph.solverMaxIterations;
+      summary["solver_iterations_mean"] = st.meanIterations();
+      summary["solver_iterations_max"] = st.maxIterations;
+      summary["solver_cap_hits"] = st.capHits;
+      summary["solver_final_error_max"] = st.worstError;
+      if (st.capHits > 0) {
+        std::cerr << "hemo-run: warning: in " << st.capHits << " of " << st.solves << " steps the pressure solve stopped at its cap of "
+                  << scene.sph.solverMaxIterations << " iterations above the tolerance " << scene.sph.solverTolerance
+                  << " (largest mean compression left: " << st.worstError << "; raise fluid.solver_max_iterations or lower time.cfl_acoustic)\n";
+      }
+    }
     if (rupture) summary["rupture_pressure_estimate_Pa"] = rupture->pressure;
     if (resumed) summary["resumed_from_step"] = firstStep;
     if (checkpointWritten) {

@@ -3,7 +3,8 @@
 //   sumW = sum_f W_bf, sumP = sum_f p_f W_bf, sumRhoR = sum_f rho_f (x_b - x_f) W_bf,
 //   sumV = sum_f v_f W_bf,
 // all zero for a particle without fluid within the support, which keeps (rho0, p_bg) and its
-// own velocity. Writes its state, pair position and viscous velocity (interface/sph.h). The
+// own velocity. Under DFSPH (params.pressureSolver 1) every boundary particle takes (rho0, 0):
+// the solve holds the fluid off the wall through its own boundary term. Writes its state, pair position and viscous velocity (interface/sph.h). The
 // including shader declares the params block and the buffers state, pairPosition and
 // viscousVel.
 void hemo_boundary_store(uint b, vec4 xb4, vec3 vb, float sumW, float sumP, vec3 sumRhoR, vec3 sumV,
@@ -11,7 +12,12 @@ void hemo_boundary_store(uint b, vec4 xb4, vec3 vb, float sumW, float sumP, vec3
   float rho = params.rho0;
   float p = background;
   vec3 v = vb;
-  if (sumW > 0.0) {
+  if (params.pressureSolver != 0u) {
+    p = 0.0;
+    if (sumW > 0.0) {
+      v = 2.0 * vb - sumV / sumW;
+    }
+  } else if (sumW > 0.0) {
     v = 2.0 * vb - sumV / sumW;
     p = (sumP + dot(params.gravity.xyz, sumRhoR)) / sumW;
     if (params.clampNegativePressure != 0u) {

@@ -35,7 +35,9 @@ struct SphParams {
   float deltaSph;  // delta of the continuity density's diffusion term
   vec4 gravityOnly;  // xyz: gravity without the body force (m/s^2)
   uint listPageMask;  // the list's pages (interface/sph.h): a slot's index in its page is slot & mask
-  uint pad0, pad1, pad2;
+  uint pressureSolver;  // 0: Tait equation of state (WCSPH); 1: DFSPH's solve (interface/sph.h)
+  float solveFloor;  // DFSPH: the least denominator of the stiffness (kg^2 m^-8; interface/sph.h)
+  uint pad2;
   // The neighbour grid (common/grid.glsl, HemoGrid; dims.w unused), for the cell walks
   // (common/cell_walk.glsl).
   vec4 gridOrigin;

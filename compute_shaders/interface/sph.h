@@ -89,7 +89,16 @@
 //                            ([first, n) in their push constants), with that page's buffers
 //                            bound, and the boundary pass over each page's own active list and
 //                            indirect arguments.
-//   uint  pad[3]
+//   uint  pressureSolver     0: the Tait equation of state gives the pressure (WCSPH); 1: the
+//                            DFSPH solve does (see "The pressure solver" below): the density
+//                            pass writes p = 0 and boundary particles (rho0, 0)
+//   float solveFloor         DFSPH: the least denominator |sum_j m_j gradW_ij|^2 + sum_j |m_j gradW_ij|^2
+//                            the stiffness divides by (kg^2 m^-8): a quarter of a full
+//                            neighbourhood's on the fill's lattice. A particle the wall's
+//                            boundary particles surround (none of it fluid) has a sum that
+//                            nearly cancels, and its stiffness, unbounded, threw it out at
+//                            10^13 m/s (the dam break without repulsion)
+//   uint  pad
 //   vec4  gridOrigin         the neighbour grid (common/grid.glsl, HemoGrid), fixed for a solver:
 //   vec4  gridInvCell        origin (m), cells per m, cells per axis, periodic axes and parts;
 //   uvec4 gridDims           what the cell walks (common/cell_walk.glsl) find a slot's
@@ -414,6 +423,76 @@
 // Clock buffer (std430): two records of {float time; float compensation (Kahan); float lastDt;
 // uint steps}, read and written alternately (see sph/integrate.comp).
 // Step log: vec2 (time after the step, dt) per step of the current batch.
+
+// The pressure solver (hemo::sim::PressureSolver::Dfsph): divergence-free SPH (Bender &
+// Koschier 2015, 2017) in place of the Tait equation of state. The density pass then writes
+// p = 0 and the boundary pass (rho0, 0), so the force pass gives the non-pressure acceleration
+// a_np. Two solves per step, each a relaxed Jacobi iteration of two pair passes with the
+// stiffness denominator D_i = max(|sum_j m_j gradW_ij|^2 + sum_{j fluid} |m_j gradW_ij|^2, floor)
+// (j over fluid and boundary neighbours; a boundary neighbour moves with its own velocity and
+// mirrors i's stiffness, as in Akinci et al. 2012):
+//  divergence (mode 1), after the density pass and before the boundary pass: the velocities
+//    at the new positions lose their compressive divergence,
+//      predict  d_i = max(sum_j m_j (v_i - v_j) . gradW_ij, 0),  k_i = d_i / D_i
+//      correct  v_i -= sum_{j fluid} m_j (k_i + k_j) gradW_ij + sum_b m_b k_i gradW_ib
+//    (velocities and the pair data's copy of them, viscousVel), to a mean d_i dt' / rho0 at
+//    most the tolerance, dt' the last step's dt. This is what takes out the velocities the
+//    last density solve left behind: without it the dam break and a column at rest gained
+//    energy every step until they blew up.
+//  density (mode 0), after the force pass: the predicted velocities v*_i = v_i + dt a_i lose
+//    the compression they would cause over the step dt,
+//      predict  rho*_i = rho_i + dt sum_j m_j (v*_i - v*_j) . gradW_ij,
+//               e_i = max(rho*_i - rho0, 0),  k_i = kappa_i / rho_i = e_i / (dt^2 D_i)
+//      correct  a_i -= sum_{j fluid} m_j (k_i + k_j) gradW_ij + sum_b m_b k_i gradW_ib
+//    to a mean e_i / rho0 at most the tolerance. The integrator's symplectic Euler step with
+//    a = a_np + a_p is then the solver's v = v*, x += dt v. state.y shows the pressure of the
+//    step's impulses over dt: the divergence solve's (sum of k_i) rho_i^2 / dt plus the density
+//    solve's sum of k_i rho_i^2, so its time average is the pressure that carries the fluid's
+//    weight (a single step's is not: a solve corrects the error left by earlier steps whenever
+//    the mean passes the tolerance, and a short step, such as one that ends at the end time,
+//    shows that correction over its short dt).
+// Each prediction sums its error per workgroup in fixed point (2^-20 of rho0 per particle,
+// integers: the order of the sum cannot change a bit) and one workgroup reduces the sums
+// (sph/dfsph_reduce.comp): the first prediction of a solve and every reduction always run;
+// each later (correction, prediction) pair is a gated region (hemo::gpu::DispatchGate) that
+// the reduction before it opens or closes, so the host records the cap's worth and the GPU
+// decides how many run.
+#define HEMO_DFSPH_ERROR_SCALE 1048576.0
+#define HEMO_DFSPH_MODE_DENSITY 0u
+#define HEMO_DFSPH_MODE_DIVERGENCE 1u
+#define HEMO_DFSPH_BINDING_POSITIONS 0   // texel vec4 (x, m)
+#define HEMO_DFSPH_BINDING_VELOCITIES 1  // predict: texel vec4 (v, kind); correct: storage (its own record)
+#define HEMO_DFSPH_BINDING_ACCEL 2       // predict: texel vec4; correct: storage (its own record)
+#define HEMO_DFSPH_BINDING_PARAMS 3
+#define HEMO_DFSPH_BINDING_STATE 4       // predict: storage vec4 (rho, p), its own record; correct: unused
+#define HEMO_DFSPH_BINDING_PAIR_COUNT 5  // the density pass's interacting pairs (HEMO_DENSITY_BINDING_PAIR_*)
+#define HEMO_DFSPH_BINDING_PAIR_LIST 6
+#define HEMO_DFSPH_BINDING_KAPPA 7       // vec4 (k_i, p_i, divergence sum of k_i, 0): predict's own record; correct reads (texel)
+#define HEMO_DFSPH_BINDING_VISCOUS_VEL 8  // correct: storage, its own record (the divergence solve's v)
+#define HEMO_DFSPH_CORRECT_BINDING_COUNT 9
+#define HEMO_DFSPH_BINDING_PARTIALS 9    // predict: uint per workgroup, sum of the errors in fixed point
+#define HEMO_DFSPH_BINDING_DT 10         // uniform vec2: the time step's reduction (sph/dt_reduce.comp)
+#define HEMO_DFSPH_BINDING_CLOCK 11      // uniform: the clock's two records
+#define HEMO_DFSPH_BINDING_COUNT 12
+// sph/dfsph_reduce.comp: the stats (uint words, hemo::sim::PressureSolveStats) and the gate.
+#define HEMO_DFSPH_REDUCE_BINDING_PARTIALS 0
+#define HEMO_DFSPH_REDUCE_BINDING_STATS 1
+#define HEMO_DFSPH_REDUCE_BINDING_ARMED 2   // hemo::gpu::DispatchGate::armedCounts
+#define HEMO_DFSPH_REDUCE_BINDING_ARGS 3    // ... arguments
+#define HEMO_DFSPH_REDUCE_BINDING_OPENED 4  // ... openings
+#define HEMO_DFSPH_REDUCE_BINDING_COUNT 5
+// The stats: HEMO_DFSPH_STAT_COUNT words per solve, the density solve's first, then the
+// divergence solve's.
+#define HEMO_DFSPH_STAT_ACTIVE 0        // 1 while the current step's solve iterates
+#define HEMO_DFSPH_STAT_ITERATIONS 1    // corrections of the current (last) step's solve
+#define HEMO_DFSPH_STAT_ERROR 2         // float bits: the last mean error measured, / rho0
+#define HEMO_DFSPH_STAT_CAP_HITS 3      // solves that ended at the cap above the tolerance
+#define HEMO_DFSPH_STAT_SOLVES 4        // solves since the reset
+#define HEMO_DFSPH_STAT_TOTAL 5         // corrections since the reset
+#define HEMO_DFSPH_STAT_MAX 6           // most corrections of one solve since the reset
+#define HEMO_DFSPH_STAT_WORST_ERROR 7   // float bits: the largest final error of a solve since the reset
+#define HEMO_DFSPH_STAT_COUNT 8
+
 
 // Status buffer (uint[8]).
 #define HEMO_STATUS_FIRST_BAD_STEP 0      // first step with a non-finite particle (init ~0u)

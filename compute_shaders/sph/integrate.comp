@@ -24,6 +24,7 @@
 #include "common/index.glsl"
 #include "common/sph_params.glsl"
 #include "common/clock.glsl"
+#include "common/step_dt.glsl"
 #include "common/inflow.glsl"
 #include "common/tiles.glsl"
 #include "common/rebuild_test.glsl"
@@ -328,8 +329,7 @@ void main() {
   if (kMode == HEMO_INTEGRATE_RK2_FULL) {
     dt = stepDt;
   } else {
-    const float remaining = pc.endTime - (clock.time - clock.compensation);
-    dt = min(min(dtMinMax.x, params.dtMax), max(remaining, 0.0));
+    dt = hemo_step_dt(clock, pc.endTime, dtMinMax.x, params.dtMax);
   }
   const bool running = dt > 0.0 || isnan(dt);  // false once the end time is reached
   if (kMode == HEMO_INTEGRATE_RK2_HALF) {

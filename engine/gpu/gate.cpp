@@ -51,7 +51,15 @@ void DispatchGate::recordReset(CommandRecorder& rec) {
 
 std::uint32_t DispatchGate::readOpened() const { return opened_.readback<std::uint32_t>(1)[0]; }
 
-bool DispatchGate::readIsOpen() const { return args_.readback<std::uint32_t>(1)[0] != 0u; }
+bool DispatchGate::readIsOpen() const {
+  // Any slot: the regions this host has recorded may be of another variant than slot 0's (a
+  // simulation resumed from a checkpoint records only the variants it still takes).
+  const auto args = args_.readback<std::uint32_t>(std::size_t(maxSlots_) * 4);
+  for (std::uint32_t s = 0; s < maxSlots_; ++s) {
+    if (args[std::size_t(s) * 4] != 0u) return true;
+  }
+  return false;
+}
 
 void DispatchGate::beginRegion(std::uint32_t variant) {
   if (variant >= variants_) {

@@ -213,6 +213,112 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
   return out;
 }
 
+namespace {
+// One DFSPH solve on velocities u (fluid particles; boundary particles keep their own): each
+// prediction finds the source s_i = u-divergence term and the stiffness k_i = scale s_i / D_i,
+// each correction u_i -= du * sum_j m_j (k_i + k_j) gradW_ij (boundary: k_j = 0).
+struct Pair {
+  std::size_t j;
+  glm::dvec3 mGradW;  // m_j gradW_ij
+  bool fluid;
+};
+std::vector<std::vector<Pair>> dfsphPairs(const std::vector<SphParticle>& particles, const SphModel& m) {
+  std::vector<std::vector<Pair>> pairs(particles.size());
+  const double support = 2.0 * m.h;
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (particles[i].kind != 0) continue;
+    for (std::size_t j = 0; j < particles.size(); ++j) {
+      const glm::dvec3 d = separation(m, particles[i].x, particles[j].x);
+      const double r = glm::length(d);
+      if (j == i || r >= support || r == 0.0) continue;
+      pairs[i].push_back({j, particles[j].mass * d * (kernelDwdr(r, m.h) / r), particles[j].kind == 0});
+    }
+  }
+  return pairs;
+}
+double dfsphDenominator(const std::vector<Pair>& pairs, double floor) {
+  glm::dvec3 sum(0.0);
+  double sq = 0.0;
+  for (const Pair& p : pairs) {
+    sum += p.mGradW;
+    if (p.fluid) sq += glm::dot(p.mGradW, p.mGradW);
+  }
+  return std::max(glm::dot(sum, sum) + sq, floor);
+}
+}  // namespace
+
+DfsphSolve dfsphDensitySolve(const std::vector<SphParticle>& particles, const std::vector<double>& rho,
+                             const std::vector<glm::dvec3>& aNp, double dt, const SphModel& m, double floor,
+                             int corrections) {
+  const auto pairs = dfsphPairs(particles, m);
+  const std::size_t n = particles.size();
+  DfsphSolve out;
+  out.values = aNp;
+  out.pressure.assign(n, 0.0);
+  std::vector<double> k(n, 0.0);
+  std::size_t fluid = 0;
+  for (const auto& p : particles) fluid += p.kind == 0;
+  auto vStar = [&](std::size_t j) { return particles[j].kind == 0 ? particles[j].v + dt * out.values[j] : particles[j].v; };
+  for (int it = 0; it <= corrections; ++it) {
+    double error = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (particles[i].kind != 0) continue;
+      double div = 0.0;
+      for (const Pair& p : pairs[i]) div += glm::dot(vStar(i) - vStar(p.j), p.mGradW);
+      const double compression = std::max(rho[i] + dt * div - m.rho0, 0.0);
+      k[i] = compression / (dt * dt * dfsphDenominator(pairs[i], floor));
+      error += std::min(compression / m.rho0, 1.0);
+    }
+    out.errors.push_back(error / double(std::max<std::size_t>(fluid, 1)));
+    if (it == corrections) break;
+    std::vector<glm::dvec3> next = out.values;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (particles[i].kind != 0) continue;
+      glm::dvec3 sum(0.0);
+      for (const Pair& p : pairs[i]) sum += (k[i] + (p.fluid ? k[p.j] : 0.0)) * p.mGradW;
+      next[i] -= sum;
+      out.pressure[i] += k[i] * rho[i] * rho[i];
+    }
+    out.values = next;
+  }
+  return out;
+}
+
+DfsphSolve dfsphDivergenceSolve(const std::vector<SphParticle>& particles, const SphModel& m, double floor,
+                                double lastDt, int corrections) {
+  const auto pairs = dfsphPairs(particles, m);
+  const std::size_t n = particles.size();
+  DfsphSolve out;
+  for (const auto& p : particles) out.values.push_back(p.v);
+  out.pressure.assign(n, 0.0);
+  std::vector<double> k(n, 0.0);
+  std::size_t fluid = 0;
+  for (const auto& p : particles) fluid += p.kind == 0;
+  for (int it = 0; it <= corrections; ++it) {
+    double error = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (particles[i].kind != 0) continue;
+      double div = 0.0;
+      for (const Pair& p : pairs[i]) div += glm::dot(out.values[i] - out.values[p.j], p.mGradW);
+      const double rate = std::max(div, 0.0);
+      k[i] = rate / dfsphDenominator(pairs[i], floor);
+      error += std::min(rate * lastDt / m.rho0, 1.0);
+    }
+    out.errors.push_back(error / double(std::max<std::size_t>(fluid, 1)));
+    if (it == corrections) break;
+    std::vector<glm::dvec3> next = out.values;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (particles[i].kind != 0) continue;
+      glm::dvec3 sum(0.0);
+      for (const Pair& p : pairs[i]) sum += (k[i] + (p.fluid ? k[p.j] : 0.0)) * p.mGradW;
+      next[i] -= sum;
+      out.pressure[i] += k[i];
+    }
+    out.values = next;
+  }
+  return out;
+}
+
 glm::dvec3 fluidMomentum(const std::vector<SphParticle>& particles) {
   glm::dvec3 p(0.0);
   for (const auto& q : particles) {

@@ -38,6 +38,9 @@ std::uint64_t fingerprintOf(const scene::Scene& scene, const scene::SceneBuild& 
   h.addValue(std::uint32_t(scene.sph.densityMethod));
   h.addValue(std::uint32_t(scene.sph.neighbourSearch));
   h.addValue(std::uint32_t(scene.sph.listLayout));
+  h.addValue(std::uint32_t(scene.sph.pressureSolver));
+  h.addValue(scene.sph.solverTolerance);
+  h.addValue(scene.sph.solverMaxIterations);
   if (build.network) {
     const SpringNetwork& net = *build.network;
     h.addValue(net.timeStepFactor);

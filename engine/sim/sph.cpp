@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -56,6 +57,20 @@ struct BoundaryClusterPush {  // sph/boundary_clusters.comp
 struct ForcesPush {  // sph/forces.comp: the slots [first, n), in one page of the list
   std::uint32_t n, first;
   std::uint32_t last;  // 1: the pass's last dispatch (it writes the time-step partials' count)
+};
+struct DfsphPredictPush {  // sph/dfsph_predict.comp: the slots [0, n)
+  std::uint32_t n, clockIn;
+  float endTime;
+  std::uint32_t iteration;  // 0: the solve's first prediction
+  std::uint32_t mode;       // HEMO_DFSPH_MODE_*
+};
+struct DfsphCorrectPush {  // sph/dfsph_correct.comp
+  std::uint32_t n, mode;
+};
+struct DfsphReducePush {  // sph/dfsph_reduce.comp
+  std::uint32_t partialCount, fluid, iteration, maxIterations;
+  float tolerance;
+  std::uint32_t slots, statBase;
 };
 struct DtReducePush {  // sph/dt_reduce.comp
   std::uint32_t wallBase;  // the wall stage's first partial
@@ -164,6 +179,10 @@ constexpr std::uint64_t kSolverBytesPerSlot = 256;
 // it with the solver's other buffers (and its pages would not be absurdly small), else cells.
 SphSettings resolveNeighbourSearch(const gpu::Context& context, const ParticleStore& particles, SphSettings s) {
   if (s.neighbourSearch != NeighbourSearch::Auto) return s;
+  if (s.pressureSolver == PressureSolver::Dfsph) {  // (the solve's passes read the list)
+    s.neighbourSearch = NeighbourSearch::List;
+    return s;
+  }
   const std::uint32_t slots = std::max(particles.capacity(), 1u);
   s.neighbourSearch = NeighbourSearch::List;
   try {
@@ -189,6 +208,7 @@ std::uint64_t activeArgsBytes(const gpu::Context& context, const SphSettings& s,
 bool clusterLayout(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
   const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
   const bool clusterable = s.neighbourSearch != NeighbourSearch::Cells && !s.sps && s.densityMethod == DensityMethod::Summation &&
+                           s.pressureSolver == PressureSolver::Wcsph &&
                            particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS && listPagesFor(context, s, particles) == 1;
   return clusterable && (s.listLayout == ListLayout::Clusters || (s.listLayout == ListLayout::Auto && cpu));
 }
@@ -232,6 +252,16 @@ void SphSettings::validate() const {
   require(std::isfinite(backgroundPressureRamp) && backgroundPressureRamp >= 0.0f,
           "background pressure ramp must be >= 0 (s)");
   require(std::isfinite(deltaSph) && deltaSph >= 0.0f && deltaSph <= 1.0f, "delta-SPH coefficient must be in [0, 1]");
+  require(std::isfinite(solverTolerance) && solverTolerance > 0.0f && solverTolerance <= 0.1f,
+          "pressure solver tolerance must be in (0, 0.1] (mean compression / rest density)");
+  require(solverMaxIterations >= 1 && solverMaxIterations <= 1000, "pressure solver iterations must be in [1, 1000]");
+  if (pressureSolver == PressureSolver::Dfsph) {
+    require(densityMethod == DensityMethod::Summation, "the DFSPH pressure solver needs summation density");
+    require(integrator == Integrator::SymplecticEuler, "the DFSPH pressure solver steps with symplectic Euler");
+    require(backgroundPressure == 0.0f, "the DFSPH pressure solver finds the pressure itself: no background pressure");
+    require(neighbourSearch != NeighbourSearch::Cells, "the DFSPH pressure solver needs the neighbour list");
+    require(listLayout != ListLayout::Clusters, "the DFSPH pressure solver does not walk clusters");
+  }
 }
 
 float SphSettings::particleMass() const {
@@ -260,6 +290,20 @@ double SphSettings::viscousLatticeFactor() const {
         if (r > 0.0) sum -= 2.0 * r * reference::kernelDwdr(r, hh) / (r * r + etaSq) * (dp * c) * (dp * c);
       }
   return sum / sumW / 2.0;
+}
+
+double SphSettings::stiffnessDenominatorAtRest() const {
+  // sum_j |m gradW_ij|^2 over the cubic lattice's neighbours (sum_j m gradW_ij cancels there)
+  const double dp = spacing, hh = h(), m = particleMass();
+  const int reach = int(std::ceil(2.0 * hh / dp)) + 1;
+  double sum = 0.0;
+  for (int a = -reach; a <= reach; ++a)
+    for (int b = -reach; b <= reach; ++b)
+      for (int c = -reach; c <= reach; ++c) {
+        const double g = m * reference::kernelDwdr(dp * std::sqrt(double(a * a + b * b + c * c)), hh);
+        sum += g * g;
+      }
+  return sum;
 }
 
 SphParams makeParams(const SphSettings& s) {
@@ -297,6 +341,14 @@ SphParams makeParams(const SphSettings& s) {
   p.backgroundPressure = s.backgroundPressure;
   p.backgroundRamp = s.backgroundPressureRamp;
   p.deltaSph = s.densityMethod == DensityMethod::Continuity ? s.deltaSph : 0.0f;
+  if (s.pressureSolver == PressureSolver::Dfsph) {
+    // No equation of state: the solve gives the pressure, and the step is limited by the
+    // flow's speed (C_a h / |v|), not by sound (the repulsion keeps its strength from c0).
+    p.pressureSolver = 1u;
+    p.taitB = 0.0f;
+    p.c0 = 0.0f;
+    p.solveFloor = float(0.25 * s.stiffnessDenominatorAtRest());
+  }
   for (int a = 0; a < 3; ++a) p.gravityOnly[a] = s.gravity[a];
   return p;
 }
@@ -448,7 +500,13 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                  "rebuild tile boxes"),
       tileResult_(context, 4, gpu::MemoryUse::Device, "rebuild tile result"),
       tileOccupied_(context, (std::uint64_t(tileSpec_.tiles()) + 2) * 4, gpu::MemoryUse::Device, "rebuild tiles occupied"),
-      rebuildGate_(context, checkResult_, 64, "neighbour rebuild", 2) {
+      rebuildGate_(context, checkResult_, 64, "neighbour rebuild", 2),
+      kappa_(context, settings_.pressureSolver == PressureSolver::Dfsph ? perParticle(particles, 16) : 16,
+             gpu::MemoryUse::Device, "dfsph stiffness and pressure (k, p, divergence sum of k)"),
+      solvePartials_(context, 16, gpu::MemoryUse::Device, "dfsph error partials"),
+      solveStats_(context, 2 * HEMO_DFSPH_STAT_COUNT * 4, gpu::MemoryUse::Device, "dfsph stats"),
+      // (a correction and a prediction per region; the density solve's regions, the divergence solve's)
+      pressureGate_(context, solveStats_, 4, "pressure solve", 2) {
   const SphSettings& settings = settings_;  // (Auto resolved)
   cellWalk_ = settings.neighbourSearch == NeighbourSearch::Cells;
   const bool contiguous = contiguousList(context, settings);
@@ -778,6 +836,55 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                                   {HEMO_DECIDE_BINDING_CHECK_COUNT, &checkCount_},
                                                   {HEMO_DECIDE_BINDING_INTEGRATE_ARGS, &integrateArgs_},
                                                   gpu::texelBinding(HEMO_DECIDE_BINDING_TILE_BOXES_IN, &tileBoxes_, gpu::texel::kUvec4)});
+  if (settings.pressureSolver == PressureSolver::Dfsph) {
+    if (pages > 1) {
+      throw std::invalid_argument("the DFSPH pressure solver needs the neighbour list in one buffer; the list of " +
+                                  std::to_string(slots) + " particles needs " + std::to_string(pages) +
+                                  " pages on this device (use the WCSPH solver, or fewer particles)");
+    }
+    dfsphPredict_ = &cache.get({"sph/dfsph_predict", HEMO_DFSPH_BINDING_COUNT, sizeof(DfsphPredictPush), kWorkgroup,
+                                pairSpecialization({listWidth_}),
+                                1u << HEMO_DFSPH_BINDING_PARAMS | 1u << HEMO_DFSPH_BINDING_DT | 1u << HEMO_DFSPH_BINDING_CLOCK,
+                                1u << HEMO_DFSPH_BINDING_POSITIONS | 1u << HEMO_DFSPH_BINDING_VELOCITIES |
+                                    1u << HEMO_DFSPH_BINDING_ACCEL | 1u << HEMO_DFSPH_BINDING_PAIR_COUNT |
+                                    1u << HEMO_DFSPH_BINDING_PAIR_LIST});
+    dfsphCorrect_ = &cache.get({"sph/dfsph_correct", HEMO_DFSPH_CORRECT_BINDING_COUNT, sizeof(DfsphCorrectPush), kWorkgroup,
+                                pairSpecialization({listWidth_}), 1u << HEMO_DFSPH_BINDING_PARAMS,
+                                1u << HEMO_DFSPH_BINDING_POSITIONS | 1u << HEMO_DFSPH_BINDING_PAIR_COUNT |
+                                    1u << HEMO_DFSPH_BINDING_PAIR_LIST | 1u << HEMO_DFSPH_BINDING_KAPPA});
+    dfsphReduce_ = &cache.get({"sph/dfsph_reduce", HEMO_DFSPH_REDUCE_BINDING_COUNT, sizeof(DfsphReducePush), kWorkgroup,
+                               {}, 0u, 0u});
+    // one partial per workgroup of a prediction over every slot
+    solvePartials_ = gpu::Buffer(context, dfsphPredict_->groupsFor(slots).total() * 4, gpu::MemoryUse::Device,
+                                 "dfsph error partials");
+    dfsphPredictSet_ = dfsphPredict_->makeSet({gpu::texelBinding(HEMO_DFSPH_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                               gpu::texelBinding(HEMO_DFSPH_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
+                                               gpu::texelBinding(HEMO_DFSPH_BINDING_ACCEL, &accel_, gpu::texel::kVec4),
+                                               {HEMO_DFSPH_BINDING_PARAMS, &paramsBuffer_},
+                                               {HEMO_DFSPH_BINDING_STATE, &state_},
+                                               countsAt(HEMO_DFSPH_BINDING_PAIR_COUNT, &pairCount_),
+                                               listAt(HEMO_DFSPH_BINDING_PAIR_LIST, &pairList_[0]),
+                                               {HEMO_DFSPH_BINDING_KAPPA, &kappa_},
+                                               {HEMO_DFSPH_BINDING_VISCOUS_VEL, &viscousVel_},  // (unused: the correction's)
+                                               {HEMO_DFSPH_BINDING_PARTIALS, &solvePartials_},
+                                               {HEMO_DFSPH_BINDING_DT, &dtResult_},
+                                               {HEMO_DFSPH_BINDING_CLOCK, &clock_}});
+    dfsphCorrectSet_ = dfsphCorrect_->makeSet({gpu::texelBinding(HEMO_DFSPH_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
+                                               {HEMO_DFSPH_BINDING_VELOCITIES, &a.velocities},
+                                               {HEMO_DFSPH_BINDING_VISCOUS_VEL, &viscousVel_},
+                                               {HEMO_DFSPH_BINDING_ACCEL, &accel_},
+                                               {HEMO_DFSPH_BINDING_PARAMS, &paramsBuffer_},
+                                               {HEMO_DFSPH_BINDING_STATE, &state_},
+                                               countsAt(HEMO_DFSPH_BINDING_PAIR_COUNT, &pairCount_),
+                                               listAt(HEMO_DFSPH_BINDING_PAIR_LIST, &pairList_[0]),
+                                               gpu::texelBinding(HEMO_DFSPH_BINDING_KAPPA, &kappa_, gpu::texel::kVec4)});
+    dfsphReduceSet_ = dfsphReduce_->makeSet({{HEMO_DFSPH_REDUCE_BINDING_PARTIALS, &solvePartials_},
+                                             {HEMO_DFSPH_REDUCE_BINDING_STATS, &solveStats_},
+                                             {HEMO_DFSPH_REDUCE_BINDING_ARMED, &pressureGate_.armedCounts()},
+                                             {HEMO_DFSPH_REDUCE_BINDING_ARGS, &pressureGate_.arguments()},
+                                             {HEMO_DFSPH_REDUCE_BINDING_OPENED, &pressureGate_.openings()}});
+  }
+  solveStats_.upload(std::vector<std::uint32_t>(2 * HEMO_DFSPH_STAT_COUNT, 0u));
   checkCount_.upload(std::vector<std::uint32_t>{0u});
   dtCounts_.upload(std::vector<std::uint32_t>{0u, 0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
@@ -797,6 +904,9 @@ std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
 void SphSolver::attachWall(const SpringNetwork& network) {
+  if (solvesPressure()) {
+    throw std::invalid_argument("the DFSPH pressure solver does not couple to a vessel wall (use the WCSPH solver)");
+  }
   // (walking cells: the grid's positions at build and its cellStart, common/cell_walk.glsl)
   std::vector<const gpu::Buffer*> pages;
   for (const gpu::Buffer& page : nlist_) pages.push_back(cellWalk_ ? &grid_.cellStart() : &page);
@@ -826,6 +936,9 @@ const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, boo
 
 void SphSolver::setInflow(const Inflow& inflow) {
   const InflowParams p = makeInflowParams(inflow, settings_.restDensity, settings_.particleMass());
+  if (p.enabled != 0u && solvesPressure()) {
+    throw std::invalid_argument("the DFSPH pressure solver does not drive a vessel inflow (use the WCSPH solver)");
+  }
   inflow_.upload(std::vector<InflowParams>{p});
   inflowOn_ = p.enabled != 0u;
   if (inflowOn_) {
@@ -851,6 +964,9 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   integrateArgsValid_ = false;  // (and the next integrator collects: the reach is +inf)
   grid_.resetCounters(rec);
   rebuildGate_.recordReset(rec);
+  rec.fill(solveStats_, 0u);
+  rec.fill(kappa_, 0u);  // (the pressure a step past the end time keeps)
+  pressureGate_.recordReset(rec);
   armPending_ = true;
 }
 
@@ -962,6 +1078,9 @@ void SphSolver::recordDensityOver(gpu::CommandRecorder& rec, std::uint32_t fluid
   }
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "density");
+  // DFSPH: the velocities at the new positions lose their compressive divergence before the
+  // boundary pass extrapolates them to the wall (interface/sph.h, "The pressure solver").
+  if (solvesPressure()) recordPressureSolveOver(rec, fluidSlots, 3.0e38f, timestamps, HEMO_DFSPH_MODE_DIVERGENCE);
   // Over the active list of the last build (recordNeighbours), as many workgroups as it counted.
   if (boundaryClusterPath()) {
     rec.dispatchIndirect(*boundaryClusters_, boundaryClustersSet_,
@@ -1075,6 +1194,61 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   }
 }
 
+void SphSolver::recordPressureSolve(gpu::CommandRecorder& rec, float endTime, gpu::TimestampQueries* timestamps) {
+  recordPressureSolveOver(rec, particles_->count(), endTime, timestamps, HEMO_DFSPH_MODE_DENSITY);
+}
+
+void SphSolver::recordPressureSolveOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots, float endTime,
+                                        gpu::TimestampQueries* timestamps, std::uint32_t mode) {
+  if (!solvesPressure()) throw std::logic_error("recordPressureSolve: the scene's solver is WCSPH");
+  const gpu::Groups groups = dfsphPredict_->groupsFor(std::max(fluidSlots, 1u));
+  const auto partials = static_cast<std::uint32_t>(groups.total());
+  auto predict = [&](std::uint32_t iteration) { return DfsphPredictPush{fluidSlots, clockParity_, endTime, iteration, mode}; };
+  const std::uint32_t statBase = mode == HEMO_DFSPH_MODE_DIVERGENCE ? HEMO_DFSPH_STAT_COUNT : 0u;
+  const std::uint32_t cap = settings_.solverMaxIterations;
+  auto reduce = [&](std::uint32_t iteration) {
+    rec.dispatch(*dfsphReduce_, dfsphReduceSet_,
+                 DfsphReducePush{partials, particles_->fluidCount(), iteration, cap, settings_.solverTolerance,
+                                 pressureGate_.slots(), statBase},
+                 dfsphReduce_->groupsFor(1u));
+    rec.computeToCompute();  // the stats; the gate's arguments before the region's indirect reads
+  };
+  // (the force pass's barrier has ordered the accelerations and the dt reduction before this)
+  rec.dispatch(*dfsphPredict_, dfsphPredictSet_, predict(0), groups);
+  rec.computeToCompute();
+  reduce(0);
+  for (std::uint32_t k = 1; k <= cap; ++k) {
+    rec.beginGate(pressureGate_, mode == HEMO_DFSPH_MODE_DIVERGENCE ? 1u : 0u);
+    rec.dispatch(*dfsphCorrect_, dfsphCorrectSet_, DfsphCorrectPush{fluidSlots, mode},
+                 dfsphCorrect_->groupsFor(std::max(fluidSlots, 1u)));
+    rec.computeToCompute();
+    rec.dispatch(*dfsphPredict_, dfsphPredictSet_, predict(k), groups);
+    rec.endGate();
+    rec.computeToCompute();
+    reduce(k);
+  }
+  if (timestamps) timestamps->mark(rec, mode == HEMO_DFSPH_MODE_DIVERGENCE ? "divergence solve" : "pressure solve");
+}
+
+PressureSolveStats SphSolver::readPressureSolveStats(bool divergence) const {
+  const auto all = solveStats_.readback<std::uint32_t>(2 * HEMO_DFSPH_STAT_COUNT);
+  const std::uint32_t* w = all.data() + (divergence ? HEMO_DFSPH_STAT_COUNT : 0);
+  auto asFloat = [](std::uint32_t bits) {
+    float f;
+    std::memcpy(&f, &bits, 4);
+    return f;
+  };
+  PressureSolveStats s;
+  s.lastIterations = w[HEMO_DFSPH_STAT_ITERATIONS];
+  s.lastError = asFloat(w[HEMO_DFSPH_STAT_ERROR]);
+  s.capHits = w[HEMO_DFSPH_STAT_CAP_HITS];
+  s.solves = w[HEMO_DFSPH_STAT_SOLVES];
+  s.totalIterations = w[HEMO_DFSPH_STAT_TOTAL];
+  s.maxIterations = w[HEMO_DFSPH_STAT_MAX];
+  s.worstError = asFloat(w[HEMO_DFSPH_STAT_WORST_ERROR]);
+  return s;
+}
+
 bool SphSolver::clusterPath() const { return clusters_ && inGridOrder(); }
 
 std::uint32_t SphSolver::boundaryClusterCount() const {
@@ -1145,6 +1319,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   const std::uint32_t moving = movingSlots();
   recordDensityOver(rec, moving, timestamps);
   recordForcesOver(rec, moving, timestamps);
+  if (solvesPressure()) recordPressureSolveOver(rec, moving, endTime, timestamps, HEMO_DFSPH_MODE_DENSITY);
   if (settings_.integrator == Integrator::Rk2Midpoint) {
     recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_HALF, moving);
     recordDensityOver(rec, moving);
@@ -1190,7 +1365,8 @@ void SphSolver::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
   out.insert(out.end(), {&ccount_, &clist_, &corder_, &pairPosition_, &activeSlots_, &activeArgs_, &activeAppended_,
                          &integrateArgs_, &clock_, &status_, &log_, &inflow_, &savedPos_, &savedVel_, &stepDt_, &tauA_,
                          &tauB_, &dtPartials_, &dtCounts_, &dtResult_, &checkPartials_, &checkCount_, &checkResult_,
-                         &tileGrid_, &tileBoxes_, &tileResult_, &tileOccupied_});
+                         &tileGrid_, &tileBoxes_, &tileResult_, &tileOccupied_, &kappa_, &solvePartials_, &solveStats_});
+  pressureGate_.checkpointBuffers(out);
   if (wall_) wall_->checkpointBuffers(out);
 }
 

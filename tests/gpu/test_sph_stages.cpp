@@ -912,6 +912,104 @@ TEST_F(SphStageTest, SpsTurbulenceMatchesReference) {
   }
 }
 
+// DFSPH (interface/sph.h, "The pressure solver"): the divergence solve in the density pass
+// (after a last step of 2e-4 s) and the density solve after the force pass, three corrections
+// each (a tolerance no prediction meets, so both stop at the cap), against the reference's
+// solves: the velocities, the accelerations a_np + a_p, the pressures and each solve's last
+// mean error. The list read four entries per texel and one.
+TEST_F(SphStageTest, DfsphSolvesMatchReference) {
+  auto rng = rngFor();
+  for (const std::uint32_t capacity : {128u, 130u}) {
+    SCOPED_TRACE(testing::Message() << "capacity " << capacity);
+    sim::SphSettings s = settings();
+    s.pressureSolver = sim::PressureSolver::Dfsph;
+    s.solverTolerance = 1.0e-7f;
+    s.solverMaxIterations = 3;
+    s.neighbourCapacity = capacity;
+    s.listLayout = sim::ListLayout::Contiguous;
+    const Case c = makeCase(rng, s, 9, 8, 7);
+    const auto n = static_cast<std::uint32_t>(c.pos.size());
+    const float lastDt = 2.0e-4f;
+    Stages st = runStages(c, s, glm::vec3(0.15f), glm::vec3(-0.05f), false, lastDt);
+    sim::SphSolver& solver = *st.solver;
+    ASSERT_TRUE(solver.solvesPressure());
+    ASSERT_FALSE(solver.usesClusters());
+    ASSERT_EQ(solver.listReadWidth(), capacity % 4u == 0u ? 4u : 1u);
+    const auto slotIds = st.store->readIds();
+    const auto velAfterDivergence = st.store->readVelocities();
+    {
+      gpu::CommandRecorder rec(ctx());
+      rec.begin();
+      solver.recordPressureSolve(rec);
+      rec.end();
+      rec.submitAndWait();
+    }
+    const auto accel = solver.accel().readback<glm::vec4>(n);
+    const auto state = solver.state().readback<glm::vec4>(n);
+    const glm::vec2 limits = solver.stepLimits().readback<glm::vec2>(1)[0];
+    const double dt = std::min(limits.x, solver.params().dtMax);
+    ASSERT_GT(dt, 0.0);
+    const auto model = modelOf(solver.params());
+    const double floor = solver.params().solveFloor;
+    ASSERT_GT(floor, 0.0);
+
+    // the divergence solve
+    const auto div = reference::dfsphDivergenceSolve(c.ref, model, floor, lastDt, 3);
+    double speedScale = 0.0, divergenceChange = 0.0;
+    for (std::size_t i = 0; i < c.ref.size(); ++i) {
+      speedScale = std::max(speedScale, glm::length(div.values[i]));
+      divergenceChange = std::max(divergenceChange, glm::length(div.values[i] - c.ref[i].v));
+    }
+    EXPECT_GT(divergenceChange, 0.05 * speedScale) << "the divergence solve should matter in this case";
+    std::vector<reference::SphParticle> moved = c.ref;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = slotIds[slot];
+      if (c.ref[i].kind != 0) continue;
+      EXPECT_LT(glm::length(glm::dvec3(glm::vec3(velAfterDivergence[slot])) - div.values[i]), 2e-4 * speedScale)
+          << "velocity of particle " << i << " after the divergence solve";
+      moved[i].v = div.values[i];
+    }
+    const sim::PressureSolveStats divStats = solver.readPressureSolveStats(true);
+    EXPECT_EQ(divStats.solves, 1u);
+    EXPECT_EQ(divStats.lastIterations, 3u);
+    EXPECT_EQ(divStats.capHits, 1u);
+    EXPECT_NEAR(divStats.lastError, div.errors.back(), 2e-6 + 1e-3 * div.errors.back());
+
+    // the density solve, from the non-pressure accelerations of the reference's forces
+    // (p = 0 everywhere, boundary particles at rho0)
+    auto rp = reference::densityPressure(moved, model);
+    std::vector<double> rho(n);
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+      rho[i] = rp[i].x;
+      rp[i] = moved[i].kind == 0 ? glm::dvec2(rp[i].x, 0.0) : glm::dvec2(model.rho0, 0.0);
+    }
+    const auto aNp = reference::accelerations(moved, rp, model);
+    const auto dens = reference::dfsphDensitySolve(moved, rho, aNp, dt, model, floor, 3);
+    double accelScale = 0.0, pressureScale = 0.0, pressureChange = 0.0;
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+      if (moved[i].kind != 0) continue;
+      accelScale = std::max(accelScale, glm::length(dens.values[i]));
+      pressureScale = std::max(pressureScale, div.pressure[i] * rho[i] * rho[i] / dt + dens.pressure[i]);
+      pressureChange = std::max(pressureChange, glm::length(dens.values[i] - aNp[i]));
+    }
+    EXPECT_GT(pressureChange, 0.5 * accelScale) << "the pressure should dominate in this compressed case";
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = slotIds[slot];
+      if (moved[i].kind != 0) continue;
+      EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - dens.values[i]), 5e-4 * accelScale) << "acceleration of particle " << i;
+      // the divergence solve's impulse over dt, then the density solve's corrections
+      const double pressure = div.pressure[i] * rho[i] * rho[i] / dt + dens.pressure[i];
+      EXPECT_NEAR(state[slot].y, pressure, 5e-4 * pressureScale) << "pressure of particle " << i;
+    }
+    const sim::PressureSolveStats st2 = solver.readPressureSolveStats();
+    EXPECT_EQ(st2.solves, 1u);
+    EXPECT_EQ(st2.lastIterations, 3u);
+    EXPECT_EQ(st2.capHits, 1u);
+    EXPECT_NEAR(st2.lastError, dens.errors.back(), 2e-6 + 1e-3 * dens.errors.back());
+    EXPECT_LT(dens.errors.back(), 0.5 * dens.errors.front()) << "three corrections should reduce the compression";
+  }
+}
+
 TEST_F(SphStageTest, TimeStepLimitIsTheMinimumOfTheConditions) {
   auto rng = rngFor();
   const sim::SphSettings s = settings();

@@ -129,6 +129,49 @@ TEST(Scene, OutOfRangeValuesAreNamed) {
   expectError(j, {"fluid.density_kg_m3"});
 }
 
+// The DFSPH solver's settings, and what it does not run yet, are named.
+TEST(Scene, PressureSolverSettingsAreCheckedAndItsLimitsNamed) {
+  Json j = validScene();
+  j["fluid"]["solver"] = "dfsph";
+  j["fluid"]["solver_tolerance"] = 1e-4;
+  j["fluid"]["solver_max_iterations"] = 40;
+  const Scene s = parseScene(j.dump(), "ok.json");
+  EXPECT_EQ(s.sph.pressureSolver, sim::PressureSolver::Dfsph);
+  EXPECT_FLOAT_EQ(s.sph.solverTolerance, 1e-4f);
+  EXPECT_EQ(s.sph.solverMaxIterations, 40u);
+  EXPECT_EQ(parseScene(validScene().dump(), "ok.json").sph.pressureSolver, sim::PressureSolver::Wcsph);
+  j = validScene();
+  j["fluid"]["solver"] = "iisph";
+  expectError(j, {"fluid.solver", "wcsph", "dfsph"});
+  j = validScene();
+  j["fluid"]["solver_tolerance"] = 0;
+  expectError(j, {"fluid.solver_tolerance"});
+  j = validScene();
+  j["fluid"]["solver_max_iterations"] = 0;
+  expectError(j, {"fluid.solver_max_iterations"});
+  j = validScene();
+  j["fluid"]["solver"] = "dfsph";
+  j["fluid"]["density"] = "continuity";
+  expectError(j, {"fluid.solver", "summation"});
+  j = validScene();
+  j["fluid"]["solver"] = "dfsph";
+  j["time"]["integrator"] = "rk2_midpoint";
+  expectError(j, {"fluid.solver", "symplectic_euler"});
+  j = validScene();
+  j["fluid"]["solver"] = "dfsph";
+  j["fluid"]["background_pressure_Pa"] = 100;
+  expectError(j, {"fluid.solver", "background_pressure_Pa"});
+  j = validScene();
+  j["fluid"]["solver"] = "dfsph";
+  j["particles"]["neighbour_search"] = "cells";
+  expectError(j, {"fluid.solver", "neighbour_search"});
+  // a vessel: its wall and inflow need WCSPH so far
+  std::ifstream in(std::string(HEMO_SOURCE_DIR) + "/scenes/aneurysm.json");
+  Json v = Json::parse(in);
+  v["fluid"]["solver"] = "dfsph";
+  expectError(v, {"fluid.solver", "vessel"});
+}
+
 TEST(Scene, BoxesWithMinAboveMaxAreNamed) {
   Json j = validScene();
   j["fluid"]["blocks"][0]["min_m"] = Json::array({0.2, 0, 0});

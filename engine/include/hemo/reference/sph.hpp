@@ -70,6 +70,23 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
                                       const std::vector<glm::dvec2>& densityPressure, const SphModel& model,
                                       std::vector<glm::dvec3>* reactions = nullptr);
 
+// DFSPH's two solves (sph/dfsph_*.comp; interface/sph.h, "The pressure solver"), a fixed
+// number of corrections each (the GPU's tolerance test aside). `rho`: the summed density per
+// particle (fluid); `floor`: SphParams::solveFloor.
+struct DfsphSolve {
+  std::vector<glm::dvec3> values;  // density solve: a_np + a_p; divergence solve: the velocities
+  std::vector<double> pressure;    // density solve: sum of k_i rho_i^2 over the corrections (Pa);
+                                   // divergence solve: sum of k_i (m^5 kg^-1 s^-1)
+  std::vector<double> errors;      // the mean error / rho0 of each prediction (corrections + 1)
+};
+// The density solve: accelerations a_np (fluid) with the step dt.
+DfsphSolve dfsphDensitySolve(const std::vector<SphParticle>& particles, const std::vector<double>& rho,
+                             const std::vector<glm::dvec3>& aNp, double dt, const SphModel& model, double floor,
+                             int corrections);
+// The divergence solve of the particles' velocities; the errors scaled by the last step's dt.
+DfsphSolve dfsphDivergenceSolve(const std::vector<SphParticle>& particles, const SphModel& model, double floor,
+                                double lastDt, int corrections);
+
 // Total linear momentum of the fluid particles.
 glm::dvec3 fluidMomentum(const std::vector<SphParticle>& particles);
 

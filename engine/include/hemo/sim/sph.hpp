@@ -59,6 +59,14 @@ enum class ListLayout { Auto, Interleaved, Contiguous, Clusters };
 // solver's other buffers, else cells.
 enum class NeighbourSearch { Auto, List, Cells };
 
+// How the fluid's pressure is found (docs/physics.md, "The pressure solver"): the Tait
+// equation of state of weakly compressible SPH, whose sound speed limits the step to
+// C_a h / (c0 + |v|); or DFSPH's constant-density solve (Bender & Koschier 2015, 2017), which
+// iterates each step until the fluid's mean compression is within a tolerance, so the step is
+// limited by the flow's speed alone (C_a h / |v|). DFSPH runs with summation density,
+// symplectic Euler, the neighbour list in one buffer (not in clusters), and without a vessel.
+enum class PressureSolver { Wcsph, Dfsph };
+
 // Physical and numerical settings (SI units).
 struct SphSettings {
   float spacing = 0.0f;             // initial particle spacing dp (m)
@@ -92,6 +100,9 @@ struct SphSettings {
   // continuity equation with the density-diffusion term of delta-SPH (docs/physics.md).
   DensityMethod densityMethod = DensityMethod::Summation;
   float deltaSph = 0.1f;            // delta of the diffusion term (continuity only)
+  PressureSolver pressureSolver = PressureSolver::Wcsph;
+  float solverTolerance = 1.0e-3f;  // DFSPH: the mean compression (rho* - rho0)+ / rho0 it iterates to
+  std::uint32_t solverMaxIterations = 100;  // DFSPH: the cap on corrections per step
 
   float h() const { return smoothingRatio * spacing; }
   float supportRadius() const { return 2.0f * h(); }
@@ -105,6 +116,9 @@ struct SphSettings {
   // second moment); the solver divides the viscosity by it, as the mass is calibrated, so the
   // fluid has the viscosity the scene asks for (measured with plane Poiseuille flow).
   double viscousLatticeFactor() const;
+  // DFSPH: sum_j |m gradW_ij|^2 over a particle's neighbours on that lattice (kg^2 m^-8), the
+  // denominator of its stiffness in the bulk at rest (interface/sph.h, solveFloor).
+  double stiffnessDenominatorAtRest() const;
   // Throws std::invalid_argument naming the offending setting.
   void validate() const;
 };
@@ -128,7 +142,9 @@ struct SphParams {
   float deltaSph;  // delta of the continuity density's diffusion term (0 with summation density)
   float gravityOnly[4];  // gravity without the body force (m/s^2): the diffusion term's hydrostatic part
   std::uint32_t listPageMask;  // set by the solver: slot i's index in its page of the list is i & mask
-  std::uint32_t pad[3];
+  std::uint32_t pressureSolver;  // 0: Tait (WCSPH), 1: DFSPH's solve (interface/sph.h)
+  float solveFloor;  // DFSPH: the least denominator of the stiffness, kg^2 m^-8 (interface/sph.h)
+  std::uint32_t pad;
   // set by the solver: its neighbour grid (NeighbourGrid::Push, n unused), for the cell walks
   float gridOrigin[4], gridInvCell[4];
   std::uint32_t gridDims[4], gridPeriodic[4];
@@ -166,6 +182,18 @@ struct SphStatus {
   std::uint32_t badForceId = 0xffffffffu;  // lowest id whose forces turned non-finite
 };
 
+// What DFSPH's solves did since the last reset (sph/dfsph_reduce.comp's stats).
+struct PressureSolveStats {
+  std::uint32_t lastIterations = 0;  // corrections of the last step's solve
+  float lastError = 0.0f;            // its final mean error / rho0 (compression; divergence: d dt / rho0)
+  std::uint32_t capHits = 0;         // solves that stopped at the cap above the tolerance
+  std::uint32_t solves = 0;
+  std::uint32_t totalIterations = 0;
+  std::uint32_t maxIterations = 0;   // most corrections of one solve
+  float worstError = 0.0f;           // the largest final mean compression of a solve
+  double meanIterations() const { return solves > 0 ? double(totalIterations) / solves : 0.0; }
+};
+
 struct SphClock {
   double time = 0.0;  // s
   float lastDt = 0.0f;
@@ -194,6 +222,19 @@ class SphSolver {
   void recordDensity(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   void recordForces(gpu::CommandRecorder& rec);  // with the SPS stress pass first when enabled
   void recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime = 3.0e38f);
+  // DFSPH (PressureSolver::Dfsph only; the density passes run its divergence solve): after the
+  // force pass, the solve that adds the pressure
+  // acceleration for the step the integrator will take (interface/sph.h, "The pressure
+  // solver"): the first prediction, then the cap's worth of gated (correction, prediction)
+  // pairs, each followed by the reduction that decides on the next. `endTime` as the integrator's.
+  void recordPressureSolve(gpu::CommandRecorder& rec, float endTime = 3.0e38f,
+                           gpu::TimestampQueries* timestamps = nullptr);
+  bool solvesPressure() const { return settings_.pressureSolver == PressureSolver::Dfsph; }
+  // (a readback; zeros under WCSPH): the density solve's, or the divergence solve's
+  PressureSolveStats readPressureSolveStats(bool divergence = false) const;
+  // vec4 per slot: k_i = kappa_i / rho_i of the last prediction (m^5 kg^-1 s^-2), the pressure
+  // of the step's impulses (Pa, also in state().y), the divergence solve's sum of k_i, 0.
+  const gpu::Buffer& solveStiffness() const { return kappa_; }
   // Between list builds the force evaluations update only the boundary and wall particles
   // with fluid in their list; the others keep the state the last build gave them. This sets
   // those to the last force evaluation's time (its background pressure), for output. It
@@ -404,6 +445,17 @@ class SphSolver {
   std::uint64_t tileUpload_ = ~std::uint64_t(0);
   std::unique_ptr<MassSpring> wall_;
   gpu::DispatchGate rebuildGate_;
+  // DFSPH (a texel's worth each under WCSPH): kappa_i / rho_i per slot, the prediction's
+  // partials (uint per workgroup), the stats (HEMO_DFSPH_STAT_*), the gate of the iterations.
+  gpu::Buffer kappa_, solvePartials_, solveStats_;
+  gpu::DispatchGate pressureGate_;
+  const gpu::ComputePipeline* dfsphPredict_ = nullptr;
+  const gpu::ComputePipeline* dfsphCorrect_ = nullptr;
+  const gpu::ComputePipeline* dfsphReduce_ = nullptr;
+  gpu::DescriptorSet dfsphPredictSet_, dfsphCorrectSet_, dfsphReduceSet_;
+  // mode: HEMO_DFSPH_MODE_DENSITY or _DIVERGENCE (interface/sph.h)
+  void recordPressureSolveOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots, float endTime,
+                               gpu::TimestampQueries* timestamps, std::uint32_t mode);
   const gpu::ComputePipeline* buildList_;
   const gpu::ComputePipeline* density_;
   const gpu::ComputePipeline* boundaryPressure_;

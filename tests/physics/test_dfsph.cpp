@@ -1,0 +1,202 @@
+// DFSPH, the large-step pressure solver (interface/sph.h, "The pressure solver";
+// docs/physics.md): the dam break against Martin & Moyce at a step several times WCSPH's,
+// a column's floor load, hard cases at the large step, the tolerance met, reruns bit-identical.
+#include "gpu_test.hpp"
+#include "hemo/reference/published.hpp"
+#include "hemo/scene/builders.hpp"
+#include "hemo/scene/scene.hpp"
+#include "hemo/sim/probes.hpp"
+#include "hemo/sim/simulation.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+
+namespace hemo::test {
+namespace {
+
+class DfsphTest : public GpuTest {};
+
+void useDfsph(scene::Scene& scene, float tolerance = 1.0e-3f, std::uint32_t iterations = 100) {
+  scene.sph.pressureSolver = sim::PressureSolver::Dfsph;
+  scene.sph.solverTolerance = tolerance;
+  scene.sph.solverMaxIterations = iterations;
+}
+
+// The solves met their tolerance: no solve stopped at the cap, and the largest final mean
+// error is within the tolerance.
+void expectConverged(sim::Simulation& sim) {
+  const float tolerance = sim.scene().sph.solverTolerance;
+  for (const bool divergence : {false, true}) {
+    SCOPED_TRACE(divergence ? "divergence solve" : "density solve");
+    const sim::PressureSolveStats st = sim.solver().readPressureSolveStats(divergence);
+    EXPECT_GT(st.solves, 0u);
+    EXPECT_EQ(st.capHits, 0u);
+    EXPECT_LE(st.worstError, tolerance);
+    EXPECT_LE(st.maxIterations, sim.scene().sph.solverMaxIterations);
+  }
+}
+
+void expectHealthy(sim::Simulation& sim, float speedBound) {
+  const sim::Snapshot s = sim.snapshot();
+  for (std::uint32_t i = 0; i < sim.fluidParticles(); ++i) {
+    const glm::vec3 x(s.positions[i]), v(s.velocities[i]);
+    ASSERT_TRUE(std::isfinite(x.x) && std::isfinite(x.y) && std::isfinite(x.z)) << "particle " << i;
+    ASSERT_LT(glm::length(v), speedBound) << "particle " << i << " at speed " << glm::length(v);
+  }
+  EXPECT_EQ(sim.escapedParticles(), 0u);
+  EXPECT_EQ(sim.lostParticles(), 0u);
+}
+
+// scenes/dam_break.json at half its resolution (dp = a/10, 1,800 fluid particles), as
+// SphPhysicsTest.DamBreakFrontFollowsMartinAndMoyce runs it with WCSPH (the same gate-release
+// offset, the same bound on the mean |dZ|).
+TEST_F(DfsphTest, DamBreakFrontFollowsMartinAndMoyceAtALargerStep) {
+  scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
+  scene.sph.spacing = float(0.05715 / 10.0);
+  scene = scene::withSlabThickness(scene, 1, 9);
+  useDfsph(scene);
+  scene.sph.maxTimeStep = 0.002f;
+  const double a = 0.05715, g = 9.81, offset = 0.15;
+  sim::Simulation sim(ctx(), scene);
+  const auto& reference = reference::martinMoyceN2();
+  const double timeScale = std::sqrt(a / (2.0 * g));
+  double sumError = 0.0;
+  int samples = 0;
+  for (double T = 0.25; T <= 3.0 - offset + 1e-9; T += 0.25) {
+    sim::RunOptions opt;
+    opt.until = T * timeScale;
+    sim.run(opt);
+    const sim::Snapshot s = sim.snapshot();
+    sumError += std::abs(sim::surgeFront(s, sim.fluidParticles(), 2.0f * scene.sph.spacing) / a -
+                         reference::interpolateTable(reference, T + offset));
+    ++samples;
+  }
+  const double mean = sumError / samples;
+  // WCSPH's step is at most C_a h / c0 (c0 = 20 m/s here)
+  const double meanDt = sim.time() / double(sim.steps());
+  const double acoustic = scene.sph.cflAcoustic * scene.sph.h() / scene.sph.soundSpeed;
+  RecordProperty("mean_abs_dZ", std::to_string(mean));
+  RecordProperty("mean_dt_s", std::to_string(meanDt));
+  std::printf("dfsph dam break: mean |dZ| %.4f over %d samples, %llu steps, mean dt %.3g s (%.1f x the acoustic limit %.3g s)\n",
+              mean, samples, static_cast<unsigned long long>(sim.steps()), meanDt, meanDt / acoustic, acoustic);
+  EXPECT_LT(mean, 0.15) << "mean |dZ| against Martin & Moyce over " << samples << " samples";
+  EXPECT_GT(meanDt, 3.0 * acoustic) << "the step should not be limited by sound";
+  expectHealthy(sim, 6.0f);
+  expectConverged(sim);
+}
+
+// A column of 0.1 m (body-centred, settled with damping to 0.8 s, as WCSPH's
+// SphPhysicsTest.HydrostaticColumnLoadsTheFloorWithRhoGH): the fluid's load on the tank from
+// the pressure of each step's impulses, averaged over the steps from 0.8 s to 1.0 s weighted by
+// their dt (a single step's is not the hydrostatic pressure: interface/sph.h), carries the
+// fluid's weight within 2% and is rho0 g H within 5% (per floor area).
+TEST_F(DfsphTest, ColumnLoadsTheFloorWithRhoGH) {
+  scene::Scene scene = scene::parseScene(R"({
+    "scene": "hydrostatic_dfsph",
+    "particles": { "spacing_m": 0.01 },
+    "fluid": { "density_kg_m3": 1000, "viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.4, "solver": "dfsph",
+               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.1], "lattice": "bcc" } ] },
+    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.11], "layers": 3 } ] },
+    "time": { "max_dt_s": 0.004, "steps_per_batch": 64, "settle_damping_1_s": 30, "settle_until_s": 0.8 },
+    "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.12, 0.12, 0.15] }
+  })", "hydrostatic_dfsph");
+  sim::Simulation sim(ctx(), scene);
+  const double g = 9.81, rho0 = 1000.0, H = 0.1, area = 0.08 * 0.08, h = scene.sph.h();
+  sim::RunOptions settle;
+  settle.until = 0.8;
+  sim.run(settle);
+  double impulse = 0.0, span = 0.0;
+  while (sim.time() < 1.0) {
+    const double before = sim.time();
+    sim::RunOptions one;
+    one.steps = 1;
+    sim.run(one);
+    const double dt = sim.time() - before;
+    // (every boundary particle: the side walls' mirrored pressure pushes the particles in the
+    // floor's corners down, which a load on the floor alone leaves out)
+    impulse += sim::floorLoad(sim.snapshot(), sim.fluidParticles(), h, 1.0e9f) / area * dt;
+    span += dt;
+  }
+  const double load = impulse / span;
+  RecordProperty("floor_pressure_pa", std::to_string(load));
+  double mass = 0.0;
+  const sim::Snapshot last = sim.snapshot();
+  for (std::size_t i = 0; i < last.positions.size(); ++i) {
+    if (last.velocities[i].w == float(sim::ParticleKind::Fluid)) mass += last.positions[i].w;
+  }
+  const double weight = mass * g / area;
+  std::printf("dfsph column: boundary load %.1f Pa against the weight %.1f Pa (rho g H = %.1f Pa), %llu steps to 1 s\n",
+              load, weight, rho0 * g * H, static_cast<unsigned long long>(sim.steps()));
+  EXPECT_NEAR(load, weight, 0.02 * weight);
+  EXPECT_NEAR(load, rho0 * g * H, 0.05 * rho0 * g * H);
+  expectHealthy(sim, 0.5f);
+  expectConverged(sim);
+}
+
+// The hard cases of SphPhysicsTest at the large step (a closed tank, dp = 1 cm).
+const char* kBox = R"({
+  "scene": "hard_case_dfsph",
+  "particles": { "spacing_m": 0.01 },
+  "fluid": { "expected_max_speed_m_s": 1.0, "solver": "dfsph",
+             "blocks": [ { "min_m": [0.02, 0.02, 0.0], "max_m": [0.08, 0.06, 0.06], "velocity_m_s": [0, 0, 0] } ] },
+  "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.2, 0.08, 0.12], "layers": 3, "open_top": false } ] },
+  "time": { "steps_per_batch": 50, "max_dt_s": 0.005 },
+  "domain": { "min_m": [-0.05, -0.05, -0.05], "max_m": [0.25, 0.13, 0.17] }
+})";
+
+TEST_F(DfsphTest, FluidStartedTwentyPercentCompressed) {
+  sim::Simulation sim(ctx(), scene::parseScene(kBox, "hard_case_dfsph"));
+  auto pos = sim.store().readPositions();
+  const auto vel = sim.store().readVelocities();
+  const float s = std::cbrt(0.8f);  // 20% less volume
+  const glm::vec3 centre(0.05f, 0.04f, 0.0f);
+  for (std::size_t i = 0; i < pos.size(); ++i) {
+    if (vel[i].w == 0.0f) pos[i] = glm::vec4(centre + (glm::vec3(pos[i]) - centre) * s, pos[i].w);
+  }
+  sim.store().live().positions.upload(pos);
+  sim::RunOptions opt;
+  opt.until = 0.3;
+  EXPECT_NO_THROW(sim.run(opt));
+  expectHealthy(sim, 5.0f);
+}
+
+TEST_F(DfsphTest, JetAtThreeTimesTheDesignSpeedHitsAWall) {
+  scene::Scene scene = scene::parseScene(kBox, "hard_case_dfsph");
+  scene.blocks[0].velocity = glm::vec3(3.0f * scene.expectedMaxSpeed, 0.0f, 0.0f);  // 3 m/s into the +x wall
+  sim::Simulation sim(ctx(), scene);
+  sim::RunOptions opt;
+  opt.until = 0.1;  // reaches the wall at 0.04 s
+  EXPECT_NO_THROW(sim.run(opt));
+  expectHealthy(sim, 15.0f);
+}
+
+// The same scene twice: bit for bit (the solves' sums are in integers and fixed orders).
+TEST_F(DfsphTest, TwoRunsAreBitIdentical) {
+  scene::Scene scene = scene::parseScene(kBox, "hard_case_dfsph");
+  scene.blocks[0].velocity = glm::vec3(2.0f, 0.0f, 0.0f);
+  std::vector<glm::vec4> first;
+  for (int run = 0; run < 2; ++run) {
+    sim::Simulation sim(ctx(), scene);
+    sim::RunOptions opt;
+    opt.steps = 120;
+    sim.run(opt);
+    const auto s = sim.snapshot();
+    std::vector<glm::vec4> state = s.positions;
+    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
+    for (const glm::vec2& dp : s.densityPressure) state.emplace_back(dp, 0.0f, 0.0f);
+    if (run == 0) {
+      first = state;
+      EXPECT_GT(sim.solver().readPressureSolveStats().totalIterations, 0u) << "the case should make the solve iterate";
+    } else {
+      ASSERT_EQ(state.size(), first.size());
+      EXPECT_EQ(0, std::memcmp(state.data(), first.data(), state.size() * sizeof(glm::vec4)));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace hemo::test
