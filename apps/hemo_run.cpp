@@ -349,17 +349,24 @@ int main(int argc, char** argv) {
     summary["solver"] = sim.solver().solvesPressure() ? "dfsph" : "wcsph";
     if (sim.solver().solvesPressure()) {
       // what the pressure solves did (sph/dfsph_reduce.comp's counts, this run and its resumed part)
+      // the density solve's, and the divergence solve's as solver_divergence_*
       const hemo::sim::PressureSolveStats st = sim.solver().readPressureSolveStats();
+      const hemo::sim::PressureSolveStats div = sim.solver().readPressureSolveStats(true);
       summary["solver_tolerance"] = scene.sph.solverTolerance;
       summary["solver_max_iterations"] = scene.sph.solverMaxIterations;
       summary["solver_iterations_mean"] = st.meanIterations();
       summary["solver_iterations_max"] = st.maxIterations;
       summary["solver_cap_hits"] = st.capHits;
       summary["solver_final_error_max"] = st.worstError;
-      if (st.capHits > 0) {
-        std::cerr << "hemo-run: warning: in " << st.capHits << " of " << st.solves << " steps the pressure solve stopped at its cap of "
-                  << scene.sph.solverMaxIterations << " iterations above the tolerance " << scene.sph.solverTolerance
-                  << " (largest mean compression left: " << st.worstError << "; raise fluid.solver_max_iterations or lower time.cfl_acoustic)\n";
+      summary["solver_divergence_iterations_mean"] = div.meanIterations();
+      summary["solver_divergence_iterations_max"] = div.maxIterations;
+      summary["solver_divergence_cap_hits"] = div.capHits;
+      for (const auto& [name, s] : {std::pair{"pressure", st}, std::pair{"divergence", div}}) {
+        if (s.capHits == 0) continue;
+        std::cerr << "hemo-run: warning: in " << s.capHits << " of " << s.solves << " steps the " << name
+                  << " solve stopped at its cap of " << scene.sph.solverMaxIterations << " iterations above the tolerance "
+                  << scene.sph.solverTolerance << " (largest mean error left: " << s.worstError
+                  << "; raise fluid.solver_max_iterations or lower time.cfl_acoustic)\n";
       }
     }
     if (rupture) summary["rupture_pressure_estimate_Pa"] = rupture->pressure;

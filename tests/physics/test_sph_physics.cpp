@@ -851,8 +851,16 @@ TEST_F(SphPhysicsTest, EveryStepRecordsTheSameCommands) {
   vessel.sph.listSkin = 0.01f;
   const Counts wall = steady(vessel);
   EXPECT_GE(wall.dispatches, euler.dispatches + 1) << "the wall stage";
-  std::printf("per step: symplectic Euler %.0f dispatches %.0f barriers, RK2 %.0f %.0f, with a wall %.0f %.0f\n",
-              euler.dispatches, euler.barriers, rk2.dispatches, rk2.barriers, wall.dispatches, wall.barriers);
+  // DFSPH records each solve's first prediction and reduction and the cap's worth of gated
+  // (correction, prediction) pairs with their reductions, for both solves (interface/sph.h)
+  dam.sph.integrator = sim::Integrator::SymplecticEuler;
+  dam.sph.pressureSolver = sim::PressureSolver::Dfsph;
+  dam.sph.solverMaxIterations = 5;
+  const Counts dfsph = steady(dam);
+  EXPECT_EQ(dfsph.dispatches, euler.dispatches + 2 * (2 + 3 * 5));
+  std::printf("per step: symplectic Euler %.0f dispatches %.0f barriers, RK2 %.0f %.0f, with a wall %.0f %.0f, DFSPH capped at 5 %.0f %.0f\n",
+              euler.dispatches, euler.barriers, rk2.dispatches, rk2.barriers, wall.dispatches, wall.barriers,
+              dfsph.dispatches, dfsph.barriers);
 }
 
 }  // namespace

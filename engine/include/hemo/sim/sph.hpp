@@ -102,7 +102,7 @@ struct SphSettings {
   float deltaSph = 0.1f;            // delta of the diffusion term (continuity only)
   PressureSolver pressureSolver = PressureSolver::Wcsph;
   float solverTolerance = 1.0e-3f;  // DFSPH: the mean compression (rho* - rho0)+ / rho0 it iterates to
-  std::uint32_t solverMaxIterations = 100;  // DFSPH: the cap on corrections per step
+  std::uint32_t solverMaxIterations = 50;  // DFSPH: the cap on each solve's corrections per step
 
   float h() const { return smoothingRatio * spacing; }
   float supportRadius() const { return 2.0f * h(); }
