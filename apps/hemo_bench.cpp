@@ -396,7 +396,9 @@ double gpuStepMs(hemo::sim::Simulation& sim) {
   return ms;
 }
 
-Json accuracy(Context& ctx, const std::string& only) {
+Json accuracy(Context& ctx, const std::string& only, const std::string& solverOnly) {
+  // (--solver: only the runs of that pressure solver)
+  auto skip = [&](bool dfsph) { return !solverOnly.empty() && solverOnly != (dfsph ? "dfsph" : "wcsph"); };
   using hemo::sim::Integrator;
   Json rows = Json::array();
   std::printf("%-12s %-6s %10s %5s %-17s %-11s %10s %-28s %10s %8s %12s %11s\n", "case", "solver", "spacing_m", "h/dp", "integrator",
@@ -445,6 +447,7 @@ Json accuracy(Context& ctx, const std::string& only) {
                               Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Continuity},
                               Variant{Integrator::Rk2Midpoint, hemo::sim::DensityMethod::Continuity},
                               Variant{Integrator::SymplecticEuler, hemo::sim::DensityMethod::Summation, true}}) {
+        if (skip(v.dfsph)) continue;
         const Integrator integrator = v.integrator;
         const std::string text = R"({"scene": "hydrostatic_bench", "particles": {"spacing_m": )" + std::to_string(dp) +
                                  R"(}, "fluid": {"viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.5,
@@ -503,6 +506,7 @@ Json accuracy(Context& ctx, const std::string& only) {
     const double L = 1e-3, F = 2e-4, nu = 1e-6, t = 1.0;
     for (int across : {10, 20, 40}) {
       for (int variant = 0; variant < 3; ++variant) {  // symplectic Euler, RK2, DFSPH (symplectic Euler)
+        if (skip(variant == 2)) continue;
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/poiseuille.json");
         scene.sph.spacing = float(L / across);
         scene = hemo::scene::withSlabThickness(scene, 0, 9);  // periodic extents of 9 dp (three list radii)
@@ -536,6 +540,7 @@ Json accuracy(Context& ctx, const std::string& only) {
                                 {Integrator::SymplecticEuler, 1.3f, hemo::sim::DensityMethod::Summation, true}};
     for (double fraction : {8.0, 10.0, 16.0}) {
       for (const Variant& v : variants) {
+        if (skip(v.dfsph)) continue;
         hemo::scene::Scene scene = hemo::scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
         scene.sph.spacing = float(a / fraction);
         scene.sph.smoothingRatio = v.smoothingRatio;
@@ -1128,6 +1133,7 @@ int main(int argc, char** argv) {
       "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
       "                speed: whole runs, default 3)\n"
       "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
+      "  --solver NAME accuracy: only the runs of this pressure solver (wcsph, dfsph)\n"
       "  --scene FILE  speed, soak: the scene to run (default scenes/dam_break.json; soak: scenes/aneurysm.json)\n"
       "  --until S     speed: simulated seconds per run (default: the scene's time.end_time_s)\n"
       "  --steps N     soak: steps to run (default 100000), in 20 windows\n"
@@ -1140,7 +1146,7 @@ int main(int argc, char** argv) {
   if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
   hemo::cli::Args args;
   try {
-    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case", "--scene", "--until", "--max-particles",
+    args = hemo::cli::parse(argc, argv, {"--json", "--device", "--repeat", "--case", "--solver", "--scene", "--until", "--max-particles",
                                           "--smoothing-ratio", "--neighbour-search", "--steps"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SUITE");
   } catch (const hemo::cli::UsageError& e) {
@@ -1157,6 +1163,11 @@ int main(int argc, char** argv) {
     const int repeat = static_cast<int>(args.count("--repeat", suite == "speed" || suite == "scale" ? 3 : 9, 1, 1000));
     const std::string only = args.text("--case");
     if (args.has("--case") && suite != "accuracy") throw hemo::cli::UsageError("--case applies to the accuracy suite only");
+    const std::string solverOnly = args.text("--solver");
+    if (args.has("--solver") && suite != "accuracy") throw hemo::cli::UsageError("--solver applies to the accuracy suite only");
+    if (args.has("--solver") && solverOnly != "wcsph" && solverOnly != "dfsph") {
+      throw hemo::cli::UsageError("unknown --solver '" + solverOnly + "' (expected wcsph or dfsph)");
+    }
     if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break") {
       throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille or dam_break)");
     }
@@ -1212,7 +1223,7 @@ int main(int argc, char** argv) {
                       : suite == "speed"      ? speed(ctx, scene, scenePath, until, repeat)
                       : suite == "scale"      ? scale(ctx, repeat, maxParticles, ratio, search)
                       : suite == "soak"       ? soak(ctx, scene, scenePath, soakSteps, soakFlat)
-                                              : accuracy(ctx, only);
+                                              : accuracy(ctx, only, solverOnly);
     if (json) {
       json->stream() << Json{{"suite", suite}, {"device", ctx.info().name}, {"driver", ctx.driver()}, {"host_cpu", host}, {"rows", rows}}.dump(2) << "\n";
       json->commit();

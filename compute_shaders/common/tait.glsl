@@ -7,11 +7,8 @@ float hemo_background_pressure(float time, SphParams params) {
   return params.backgroundPressure * ramp;
 }
 
-// Under DFSPH (params.pressureSolver 1) the solve gives the pressure: 0 here.
+// (Under DFSPH, params.pressureSolver 1, B = 0 and p_bg = 0: p = 0, the solve gives the pressure.)
 float hemo_tait_pressure(float rho, float background, SphParams params) {
-  if (params.pressureSolver != 0u) {
-    return 0.0;
-  }
   const float ratio = rho / params.rho0;
   const float r2 = ratio * ratio;
   const float p = params.taitB * (r2 * r2 * r2 * ratio - 1.0) + background;
