@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 namespace hemo::reference {
 
@@ -247,27 +248,27 @@ double dfsphDenominator(const std::vector<Pair>& pairs, double floor) {
 }
 }  // namespace
 
-DfsphSolve dfsphDensitySolve(const std::vector<SphParticle>& particles, const std::vector<double>& rho,
-                             const std::vector<glm::dvec3>& aNp, double dt, const SphModel& m, double floor,
-                             int corrections) {
-  const auto pairs = dfsphPairs(particles, m);
+// The iteration both solves share: `corrections` + 1 predictions, each giving every fluid
+// particle its stiffness and error (predict(i, u) -> {k_i, e_i}, u the current values), and a
+// correction after each but the last, u_i -= sum_j m_j (k_i + k_j) gradW_ij (boundary:
+// k_j = 0), adding accumulate(i, k_i) to the particle's pressure entry.
+template <class Predict, class Accumulate>
+DfsphSolve dfsphIterate(const std::vector<SphParticle>& particles, const std::vector<std::vector<Pair>>& pairs,
+                        std::vector<glm::dvec3> values, int corrections, Predict predict, Accumulate accumulate) {
   const std::size_t n = particles.size();
   DfsphSolve out;
-  out.values = aNp;
+  out.values = std::move(values);
   out.pressure.assign(n, 0.0);
   std::vector<double> k(n, 0.0);
   std::size_t fluid = 0;
   for (const auto& p : particles) fluid += p.kind == 0;
-  auto vStar = [&](std::size_t j) { return particles[j].kind == 0 ? particles[j].v + dt * out.values[j] : particles[j].v; };
   for (int it = 0; it <= corrections; ++it) {
     double error = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       if (particles[i].kind != 0) continue;
-      double div = 0.0;
-      for (const Pair& p : pairs[i]) div += glm::dot(vStar(i) - vStar(p.j), p.mGradW);
-      const double compression = std::max(rho[i] + dt * div - m.rho0, 0.0);
-      k[i] = compression / (dt * dt * dfsphDenominator(pairs[i], floor));
-      error += std::min(compression / m.rho0, 1.0);
+      const glm::dvec2 ke = predict(i, out.values);
+      k[i] = ke.x;
+      error += ke.y;
     }
     out.errors.push_back(error / double(std::max<std::size_t>(fluid, 1)));
     if (it == corrections) break;
@@ -277,46 +278,43 @@ DfsphSolve dfsphDensitySolve(const std::vector<SphParticle>& particles, const st
       glm::dvec3 sum(0.0);
       for (const Pair& p : pairs[i]) sum += (k[i] + (p.fluid ? k[p.j] : 0.0)) * p.mGradW;
       next[i] -= sum;
-      out.pressure[i] += k[i] * rho[i] * rho[i];
+      out.pressure[i] += accumulate(i, k[i]);
     }
     out.values = next;
   }
   return out;
 }
 
+DfsphSolve dfsphDensitySolve(const std::vector<SphParticle>& particles, const std::vector<double>& rho,
+                             const std::vector<glm::dvec3>& aNp, double dt, const SphModel& m, double floor,
+                             int corrections) {
+  const auto pairs = dfsphPairs(particles, m);
+  return dfsphIterate(
+      particles, pairs, aNp, corrections,
+      [&](std::size_t i, const std::vector<glm::dvec3>& a) {
+        auto vStar = [&](std::size_t j) { return particles[j].kind == 0 ? particles[j].v + dt * a[j] : particles[j].v; };
+        double div = 0.0;
+        for (const Pair& p : pairs[i]) div += glm::dot(vStar(i) - vStar(p.j), p.mGradW);
+        const double compression = std::max(rho[i] + dt * div - m.rho0, 0.0);
+        return glm::dvec2(compression / (dt * dt * dfsphDenominator(pairs[i], floor)), std::min(compression / m.rho0, 1.0));
+      },
+      [&](std::size_t i, double k) { return k * rho[i] * rho[i]; });
+}
+
 DfsphSolve dfsphDivergenceSolve(const std::vector<SphParticle>& particles, const SphModel& m, double floor,
                                 double lastDt, int corrections) {
   const auto pairs = dfsphPairs(particles, m);
-  const std::size_t n = particles.size();
-  DfsphSolve out;
-  for (const auto& p : particles) out.values.push_back(p.v);
-  out.pressure.assign(n, 0.0);
-  std::vector<double> k(n, 0.0);
-  std::size_t fluid = 0;
-  for (const auto& p : particles) fluid += p.kind == 0;
-  for (int it = 0; it <= corrections; ++it) {
-    double error = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (particles[i].kind != 0) continue;
-      double div = 0.0;
-      for (const Pair& p : pairs[i]) div += glm::dot(out.values[i] - out.values[p.j], p.mGradW);
-      const double rate = std::max(div, 0.0);
-      k[i] = rate / dfsphDenominator(pairs[i], floor);
-      error += std::min(rate * lastDt / m.rho0, 1.0);
-    }
-    out.errors.push_back(error / double(std::max<std::size_t>(fluid, 1)));
-    if (it == corrections) break;
-    std::vector<glm::dvec3> next = out.values;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (particles[i].kind != 0) continue;
-      glm::dvec3 sum(0.0);
-      for (const Pair& p : pairs[i]) sum += (k[i] + (p.fluid ? k[p.j] : 0.0)) * p.mGradW;
-      next[i] -= sum;
-      out.pressure[i] += k[i];
-    }
-    out.values = next;
-  }
-  return out;
+  std::vector<glm::dvec3> v;
+  for (const auto& p : particles) v.push_back(p.v);
+  return dfsphIterate(
+      particles, pairs, std::move(v), corrections,
+      [&](std::size_t i, const std::vector<glm::dvec3>& u) {
+        double div = 0.0;
+        for (const Pair& p : pairs[i]) div += glm::dot(u[i] - u[p.j], p.mGradW);
+        const double rate = std::max(div, 0.0);
+        return glm::dvec2(rate / dfsphDenominator(pairs[i], floor), std::min(rate * lastDt / m.rho0, 1.0));
+      },
+      [](std::size_t, double k) { return k; });
 }
 
 glm::dvec3 fluidMomentum(const std::vector<SphParticle>& particles) {

@@ -2,6 +2,7 @@
 // docs/physics.md): the dam break against Martin & Moyce at a step several times WCSPH's,
 // a column's floor load, hard cases at the large step, the tolerance met, reruns bit-identical.
 #include "gpu_test.hpp"
+#include "run_state.hpp"
 #include "hemo/reference/published.hpp"
 #include "hemo/scene/builders.hpp"
 #include "hemo/scene/scene.hpp"
@@ -184,10 +185,8 @@ TEST_F(DfsphTest, TwoRunsAreBitIdentical) {
     sim::RunOptions opt;
     opt.steps = 120;
     sim.run(opt);
-    const auto s = sim.snapshot();
-    std::vector<glm::vec4> state = s.positions;
-    state.insert(state.end(), s.velocities.begin(), s.velocities.end());
-    for (const glm::vec2& dp : s.densityPressure) state.emplace_back(dp, 0.0f, 0.0f);
+    std::vector<glm::vec4> state = positionsAndVelocities(sim);
+    for (const glm::vec2& dp : sim.snapshot().densityPressure) state.emplace_back(dp, 0.0f, 0.0f);
     if (run == 0) {
       first = state;
       EXPECT_GT(sim.solver().readPressureSolveStats().totalIterations, 0u) << "the case should make the solve iterate";
