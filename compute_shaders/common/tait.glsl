@@ -7,7 +7,7 @@ float hemo_background_pressure(float time, SphParams params) {
   return params.backgroundPressure * ramp;
 }
 
-// (Under DFSPH, params.pressureSolver 1, B = 0 and p_bg = 0: p = 0, the solve gives the pressure.)
+// (Under DFSPH, params.pressureSolver 1, B = 0: p = p_bg, and the solve adds the rest.)
 float hemo_tait_pressure(float rho, float background, SphParams params) {
   const float ratio = rho / params.rho0;
   const float r2 = ratio * ratio;

@@ -91,7 +91,7 @@
 //                            indirect arguments.
 //   uint  pressureSolver     0: the Tait equation of state gives the pressure (WCSPH); 1: the
 //                            DFSPH solve does (see "The pressure solver" below): the density
-//                            pass writes p = 0 and boundary particles (rho0, 0)
+//                            pass writes p = p_bg and boundary particles (rho0, p_bg)
 //   float solveFloor         DFSPH: the least denominator |sum_j m_j gradW_ij|^2 + sum_j |m_j gradW_ij|^2
 //                            the stiffness divides by (kg^2 m^-8): a quarter of a full
 //                            neighbourhood's on the fill's lattice. A particle the wall's
@@ -426,8 +426,10 @@
 
 // The pressure solver (hemo::sim::PressureSolver::Dfsph): divergence-free SPH (Bender &
 // Koschier 2015, 2017) in place of the Tait equation of state. The density pass then writes
-// p = 0 and the boundary pass (rho0, 0), so the force pass gives the non-pressure acceleration
-// a_np. Two solves per step, each a relaxed Jacobi iteration of two pair passes with the
+// p = p_bg (the background pressure, 0 unless the scene sets one) and the boundary pass
+// (rho0, p_bg), so the force pass gives the non-pressure acceleration a_np (with p_bg's pair
+// terms, which load a vessel's wall with its lumen pressure). After the density solve a wall
+// takes the reaction of both solves' mirrored boundary terms (wall/dfsph_reaction.comp). Two solves per step, each a relaxed Jacobi iteration of two pair passes with the
 // stiffness denominator D_i = max(|sum_j m_j gradW_ij|^2 + sum_{j fluid} |m_j gradW_ij|^2, floor)
 // (j over fluid and boundary neighbours; a boundary neighbour moves with its own velocity and
 // mirrors i's stiffness, as in Akinci et al. 2012):

@@ -56,6 +56,22 @@
 #define HEMO_SPRINGF_BINDING_DT_COUNTS 22
 #define HEMO_SPRINGF_BINDING_COUNT 23
 
+// wall/dfsph_reaction.comp (DFSPH scenes only): after the density solve, each wall particle
+// adds the reaction of the pressure the solve gave its fluid neighbours through the mirrored
+// boundary term, F_w = sum_f m_f m_w (p_f / rho_f^2) gradW_fw, to its acceleration; push:
+// uint n, uint first, uint idCount (the slots [first, n)).
+#define HEMO_WALLP_BINDING_POSITIONS 0   // texel vec4 (x, SPH mass)
+#define HEMO_WALLP_BINDING_VELOCITIES 1  // texel vec4 (v, kind)
+#define HEMO_WALLP_BINDING_IDS 2         // texel uint
+#define HEMO_WALLP_BINDING_WALL_INFO 3   // texel vec4 by id (mass, anchored)
+#define HEMO_WALLP_BINDING_STATE 4       // texel vec4 (rho, p)
+#define HEMO_WALLP_BINDING_KAPPA 5       // texel vec4: y, the solve's pressure (interface/sph.h, HEMO_DFSPH_BINDING_KAPPA)
+#define HEMO_WALLP_BINDING_NCOUNT 6      // the wall particle's fluid neighbours (as HEMO_SPRINGF_BINDING_NCOUNT)
+#define HEMO_WALLP_BINDING_NLIST 7
+#define HEMO_WALLP_BINDING_PARAMS 8
+#define HEMO_WALLP_BINDING_ACCEL 9       // storage: its own (wall) record
+#define HEMO_WALLP_BINDING_COUNT 10
+
 // wall/point_shade.comp: per particle slot, vec2(largest strain of its unbroken springs,
 // fraction of its springs broken) for the renderer; push: uint n, uint idCount.
 #define HEMO_SHADE_BINDING_POSITIONS 0

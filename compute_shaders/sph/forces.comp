@@ -227,7 +227,9 @@ float hemo_forces(uint i) {
 
   const float speed = length(vi.xyz);
   const float accelMag = length(a);
-  float limit = min(params.cflAcoustic * h / (params.c0 + speed), params.dtViscous);
+  // (under DFSPH c0 is 0: a particle at rest has no flow limit, and the floor keeps the
+  // division defined)
+  float limit = min(params.cflAcoustic * h / max(params.c0 + speed, 1.0e-30), params.dtViscous);
   if (accelMag > 0.0) {
     limit = min(limit, params.cflForce * sqrt(h / accelMag));
   }

@@ -186,7 +186,7 @@ void main() {
         }
         const float speed = length(gV[m]);
         const float accelMag = length(a);
-        float limit = min(params.cflAcoustic * h / (params.c0 + speed), params.dtViscous);
+        float limit = min(params.cflAcoustic * h / max(params.c0 + speed, 1.0e-30), params.dtViscous);
         if (accelMag > 0.0) {
           limit = min(limit, params.cflForce * sqrt(h / accelMag));
         }

@@ -138,7 +138,7 @@ vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v, out vec3 d, out vec3 x0) {
   float r = length(d - vec3(hemo_predicted_middle(), 0.0, 0.0));
   if (kMode == HEMO_INTEGRATE_RK2_FULL) {
     const float speed = length(v);
-    r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / (params.c0 + speed));
+    r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / max(params.c0 + speed, 1.0e-30));
   }
   return vec2(d.x, r);
 }

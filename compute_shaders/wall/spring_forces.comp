@@ -249,7 +249,7 @@ float hemo_wall(uint slot, uint id) {
     updateNormal(slot, id);
   }
   accel[slot] = vec4(force / info.x + pc.gravity.xyz, marker);
-  const float acoustic = pc.acousticLength / (pc.c0 + length(vSelf));
+  const float acoustic = pc.acousticLength / max(pc.c0 + length(vSelf), 1.0e-30);
   const float limit = stiffness > 0.0 ? min(acoustic, pc.timeStepFactor * sqrt(info.x / stiffness)) : acoustic;
   dtLimit[slot] = limit;
   return limit;

@@ -60,7 +60,7 @@ const std::vector<Field>& schema() {
            {"clamp_negative_pressure", Kind::Bool, "", 0, 0, false, true, "Clamp Tait pressure at 0 (free surfaces)."},
            {"turbulence", Kind::Choice, "", 0, 0, false, "none", "Sub-particle-scale turbulence model (Dalrymple & Rogers 2006), or none.", {"none", "sps"}},
            {"density", Kind::Choice, "", 0, 0, false, "summation", "How the density is found: summed over the neighbours (the seed's method), or carried by each particle and advanced by the continuity equation with delta-SPH density diffusion (holds a free surface at rest; not with a vessel inflow).", {"summation", "continuity"}},
-           {"solver", Kind::Choice, "", 0, 0, false, "wcsph", "How the pressure is found: wcsph (weakly compressible: the Tait equation of state, the step limited by the speed of sound) or dfsph (the constant-density solve of divergence-free SPH, Bender & Koschier 2017: iterates each step to solver_tolerance, the step limited by the flow's speed; summation density, symplectic Euler, tanks and blocks only, no vessel yet).", {"wcsph", "dfsph"}},
+           {"solver", Kind::Choice, "", 0, 0, false, "wcsph", "How the pressure is found: wcsph (weakly compressible: the Tait equation of state, the step limited by the speed of sound) or dfsph (the constant-density solve of divergence-free SPH, Bender & Koschier 2017: iterates each step to solver_tolerance, the step limited by the flow's speed; summation density, symplectic Euler and the neighbour list; the wall takes the reaction of the solved pressure, and the background (lumen) pressure loads it as under wcsph).", {"wcsph", "dfsph"}},
            {"solver_tolerance", Kind::Number, "1", 0, 0.1, true, 1e-3, "dfsph: the mean compression (rho* - rho0)+ / rho0 over the fluid that ends a step's iterations."},
            {"solver_max_iterations", Kind::Integer, "1", 1, 1000, false, 50, "dfsph: the cap on each solve's corrections per step; a solve that reaches it above the tolerance is counted and reported. Every step records the cap's worth of gated iterations, and those the GPU skips still cost an empty dispatch each (docs/physics.md)."},
            {"delta_sph", Kind::Number, "-", 0, 1, false, 0.1, "delta of the continuity density's diffusion term (Molteni & Colagrossi 2009, with the hydrostatic correction of Fourtakas et al. 2019)."},
@@ -623,10 +623,8 @@ Scene parseScene(const std::string& text, const std::string& source) {
     }
   }
   if (s.sph.pressureSolver == sim::PressureSolver::Dfsph) {
-    const char* why = s.vessel ? "does not run a vessel yet (its wall and inflow need \"wcsph\")"
-                      : s.sph.densityMethod != sim::DensityMethod::Summation ? "needs fluid.density \"summation\""
+    const char* why = s.sph.densityMethod != sim::DensityMethod::Summation ? "needs fluid.density \"summation\""
                       : s.sph.integrator != sim::Integrator::SymplecticEuler ? "steps with time.integrator \"symplectic_euler\""
-                      : s.sph.backgroundPressure != 0.0f ? "finds the pressure itself: fluid.background_pressure_Pa must be 0"
                       : s.sph.neighbourSearch == sim::NeighbourSearch::Cells ? "needs particles.neighbour_search \"list\" or \"auto\""
                                                                              : nullptr;
     if (why) c.fail("fluid.solver", std::string("\"dfsph\" ") + why);

@@ -258,7 +258,6 @@ void SphSettings::validate() const {
   if (pressureSolver == PressureSolver::Dfsph) {
     require(densityMethod == DensityMethod::Summation, "the DFSPH pressure solver needs summation density");
     require(integrator == Integrator::SymplecticEuler, "the DFSPH pressure solver steps with symplectic Euler");
-    require(backgroundPressure == 0.0f, "the DFSPH pressure solver finds the pressure itself: no background pressure");
     require(neighbourSearch != NeighbourSearch::Cells, "the DFSPH pressure solver needs the neighbour list");
     require(listLayout != ListLayout::Clusters, "the DFSPH pressure solver does not walk clusters");
   }
@@ -904,9 +903,6 @@ std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32
 float SphSolver::rebuildThreshold() const { return 0.5f * (params_.listRadius - params_.supportRadius); }
 
 void SphSolver::attachWall(const SpringNetwork& network) {
-  if (solvesPressure()) {
-    throw std::invalid_argument("the DFSPH pressure solver does not couple to a vessel wall (use the WCSPH solver)");
-  }
   // (walking cells: the grid's positions at build and its cellStart, common/cell_walk.glsl)
   std::vector<const gpu::Buffer*> pages;
   for (const gpu::Buffer& page : nlist_) pages.push_back(cellWalk_ ? &grid_.cellStart() : &page);
@@ -915,7 +911,7 @@ void SphSolver::attachWall(const SpringNetwork& network) {
   const FluidBuffers fluid{&grid_.slotOfId(), &accel_,      &dtLimit_,      &paramsBuffer_, &state_,
                            counts,             countsFormat, pages,          pageSlots_,     &viscousVel_,
                            &pairPosition_,     listWidth_,   &dtPartials_,   &dtCounts_,     pairSpecialization({listWidth_}),
-                           cellWalk_};
+                           cellWalk_,          solvesPressure() ? &kappa_ : nullptr};
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }
@@ -936,9 +932,6 @@ const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, boo
 
 void SphSolver::setInflow(const Inflow& inflow) {
   const InflowParams p = makeInflowParams(inflow, settings_.restDensity, settings_.particleMass());
-  if (p.enabled != 0u && solvesPressure()) {
-    throw std::invalid_argument("the DFSPH pressure solver does not drive a vessel inflow (use the WCSPH solver)");
-  }
   inflow_.upload(std::vector<InflowParams>{p});
   inflowOn_ = p.enabled != 0u;
   if (inflowOn_) {
@@ -1228,6 +1221,11 @@ void SphSolver::recordPressureSolveOver(gpu::CommandRecorder& rec, std::uint32_t
     reduce(k);
   }
   if (timestamps) timestamps->mark(rec, mode == HEMO_DFSPH_MODE_DIVERGENCE ? "divergence solve" : "pressure solve");
+  if (wall_ && mode == HEMO_DFSPH_MODE_DENSITY) {
+    // the wall's share: the reaction of both solves' pressure on the fluid next to it
+    wall_->recordPressureReaction(rec, nonFluidStart(), particles_->count());
+    if (timestamps) timestamps->mark(rec, "wall pressure reaction");
+  }
 }
 
 PressureSolveStats SphSolver::readPressureSolveStats(bool divergence) const {

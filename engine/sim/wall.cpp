@@ -67,6 +67,9 @@ namespace {
 struct ShadePush {
   std::uint32_t n, idCount;
 };
+struct PressureReactionPush {  // wall/dfsph_reaction.comp
+  std::uint32_t n, first, idCount;
+};
 }  // namespace
 
 MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, const FluidBuffers& fluid,
@@ -159,6 +162,28 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                             {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
                                             {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts}}));
   }
+  if (fluid.kappa) {
+    if (fluid.cellWalk || fluid.neighbourListPages.size() != 1) {
+      throw std::invalid_argument("the wall's share of the DFSPH pressure needs the fluid's list in one page");
+    }
+    pressureReaction_ = &cache.get({"wall/dfsph_reaction", HEMO_WALLP_BINDING_COUNT, sizeof(PressureReactionPush), kWorkgroup,
+                                    fluid.reactionSpecialization, 1u << HEMO_WALLP_BINDING_PARAMS,
+                                    1u << HEMO_WALLP_BINDING_POSITIONS | 1u << HEMO_WALLP_BINDING_VELOCITIES |
+                                        1u << HEMO_WALLP_BINDING_IDS | 1u << HEMO_WALLP_BINDING_WALL_INFO |
+                                        1u << HEMO_WALLP_BINDING_STATE | 1u << HEMO_WALLP_BINDING_KAPPA |
+                                        1u << HEMO_WALLP_BINDING_NCOUNT | 1u << HEMO_WALLP_BINDING_NLIST});
+    pressureReactionSet_ = pressureReaction_->makeSet(
+        {texelBinding(HEMO_WALLP_BINDING_POSITIONS, &a.positions, kVec4),
+         texelBinding(HEMO_WALLP_BINDING_VELOCITIES, &a.velocities, kVec4),
+         texelBinding(HEMO_WALLP_BINDING_IDS, &a.ids, kUint),
+         texelBinding(HEMO_WALLP_BINDING_WALL_INFO, &wallInfo_, kVec4),
+         texelBinding(HEMO_WALLP_BINDING_STATE, fluid.state, kVec4),
+         texelBinding(HEMO_WALLP_BINDING_KAPPA, fluid.kappa, kVec4),
+         texelBinding(HEMO_WALLP_BINDING_NCOUNT, fluid.neighbourCounts, fluid.neighbourCountsFormat),
+         texelBinding(HEMO_WALLP_BINDING_NLIST, fluid.neighbourListPages[0], fluid.listReadWidth == 4u ? kUvec4 : kUint),
+         {HEMO_WALLP_BINDING_PARAMS, fluid.params},
+         {HEMO_WALLP_BINDING_ACCEL, fluid.accel}});
+  }
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
                                     {HEMO_SHADE_BINDING_IDS, &a.ids},
@@ -195,6 +220,14 @@ void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uin
     rec.computeToCompute();
     groupBase += static_cast<std::uint32_t>(groups.total());
   });
+}
+
+void MassSpring::recordPressureReaction(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n) {
+  if (!pressureReaction_) throw std::logic_error("recordPressureReaction: the wall was built without DFSPH's pressure");
+  const std::uint32_t count = n > first ? n - first : 0u;
+  rec.dispatch(*pressureReaction_, pressureReactionSet_, PressureReactionPush{n, first, idCount_},
+               pressureReaction_->groupsFor(std::max(count, 1u)));
+  rec.computeToCompute();
 }
 
 std::uint32_t MassSpring::workgroups(std::uint32_t first, std::uint32_t n) const {

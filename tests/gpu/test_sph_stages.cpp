@@ -927,6 +927,7 @@ TEST_F(SphStageTest, DfsphSolvesMatchReference) {
     s.solverMaxIterations = 3;
     s.neighbourCapacity = capacity;
     s.listLayout = sim::ListLayout::Contiguous;
+    s.backgroundPressure = 25.0f;  // in the force pass's pair terms, and added to the reported pressure
     const Case c = makeCase(rng, s, 9, 8, 7);
     const auto n = static_cast<std::uint32_t>(c.pos.size());
     const float lastDt = 2.0e-4f;
@@ -976,12 +977,13 @@ TEST_F(SphStageTest, DfsphSolvesMatchReference) {
     EXPECT_NEAR(divStats.lastError, div.errors.back(), 2e-6 + 1e-3 * div.errors.back());
 
     // the density solve, from the non-pressure accelerations of the reference's forces
-    // (p = 0 everywhere, boundary particles at rho0)
+    // (p = p_bg everywhere, boundary particles at rho0)
+    const double background = s.backgroundPressure;
     auto rp = reference::densityPressure(moved, model);
     std::vector<double> rho(n);
     for (std::size_t i = 0; i < moved.size(); ++i) {
       rho[i] = rp[i].x;
-      rp[i] = moved[i].kind == 0 ? glm::dvec2(rp[i].x, 0.0) : glm::dvec2(model.rho0, 0.0);
+      rp[i] = moved[i].kind == 0 ? glm::dvec2(rp[i].x, background) : glm::dvec2(model.rho0, background);
     }
     const auto aNp = reference::accelerations(moved, rp, model);
     const auto dens = reference::dfsphDensitySolve(moved, rho, aNp, dt, model, floor, 3);
@@ -999,7 +1001,7 @@ TEST_F(SphStageTest, DfsphSolvesMatchReference) {
       EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - dens.values[i]), 5e-4 * accelScale) << "acceleration of particle " << i;
       // the divergence solve's impulse over dt, then the density solve's corrections
       const double pressure = div.pressure[i] * rho[i] * rho[i] / dt + dens.pressure[i];
-      EXPECT_NEAR(state[slot].y, pressure, 5e-4 * pressureScale) << "pressure of particle " << i;
+      EXPECT_NEAR(state[slot].y, background + pressure, 5e-4 * pressureScale) << "pressure of particle " << i;
     }
     const sim::PressureSolveStats st2 = solver.readPressureSolveStats();
     EXPECT_EQ(st2.solves, 1u);

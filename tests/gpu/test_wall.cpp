@@ -14,6 +14,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <memory>
 #include <numbers>
@@ -420,43 +421,128 @@ TEST_F(WallTest, ParticleWithAllSpringsBrokenDetachesFromTheWall) {
   EXPECT_EQ(solver_->wall()->readDetachedCount(), 1u);
 }
 
-// Fluid thrown at a free wall sheet (no anchors, no gravity): fluid and wall exchange momentum
-// through exactly opposite pair forces and the springs are internal, so the total momentum
-// (SPH masses for the fluid, spring masses for the wall) stays put over 1,000 steps.
-TEST_F(WallTest, FluidAndFreeWallConserveMomentum) {
+// DFSPH's share for the wall (wall/dfsph_reaction.comp): after the density solve each free
+// wall particle adds F_w = sum_f m_f m_w (p_f / rho_f^2) gradW_fw over its spring mass, the
+// exact opposite of what the solves' mirrored boundary term gave the fluid, with p_f the
+// solves' pressure. Checked against a double-precision sum over the solver's own pressures,
+// densities and positions, with the list read four entries per texel (capacity 128) and one
+// (130); the solver's reported pressure is that plus the background pressure.
+TEST_F(WallTest, DfsphWallTakesTheReactionOfTheSolvedPressure) {
   auto rng = rngFor();
-  sim::SphSettings s = wallSettings(glm::vec3(0.0f));
+  sim::SphSettings s = wallSettings({0.0f, 0.0f, -9.81f});
   s.soundSpeed = 20.0f;
-  s.viscosity = 0.01f;
-  s.clampNegativePressure = false;
-  s.neighbourCapacity = 256;  // the free sheet bends where the fluid hits it and crowds together
-  CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.1f, 0.01f, 0.0f, 1.0f);  // relaxed sheet, fluid at rest density
-  for (auto& point : c.net.points) point.anchored = false;
-  for (std::uint32_t i = c.wall; i < c.pos.size(); ++i) c.vel[i].z -= 0.3f;  // towards the sheet
+  s.pressureSolver = sim::PressureSolver::Dfsph;
+  s.solverTolerance = 1.0e-7f;
+  s.solverMaxIterations = 3;
+  s.backgroundPressure = 40.0f;
+  s.listLayout = sim::ListLayout::Contiguous;
+  const CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.6f, 0.1f, 0.1f, 0.9f);  // squeezed onto the sheet
   const auto n = static_cast<std::uint32_t>(c.pos.size());
-  setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.2f), glm::vec3(0.3f));
-  auto momentum = [&]() {
-    const auto vel = store_->readVelocities();
+  for (const std::uint32_t capacity : {128u, 130u}) {
+    SCOPED_TRACE(testing::Message() << "capacity " << capacity);
+    s.neighbourCapacity = capacity;
+    setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.05f), glm::vec3(0.15f));
+    ASSERT_EQ(solver_->listReadWidth(), capacity % 4u == 0u ? 4u : 1u);
+    evaluate();  // with the divergence solve, and the springs and the wall's other reactions
+    const auto before = solver_->accel().readback<glm::vec4>(n);
+    rec_->begin();
+    solver_->recordPressureSolve(*rec_);
+    rec_->end();
+    rec_->submitAndWait();
+    const auto after = solver_->accel().readback<glm::vec4>(n);
+    const auto kappa = solver_->solveStiffness().readback<glm::vec4>(n);
+    const auto state = solver_->state().readback<glm::vec4>(n);
     const auto pos = store_->readPositions();
     const auto ids = store_->readIds();
-    glm::dvec3 fluid(0.0), wall(0.0);
-    for (std::uint32_t slot = 0; slot < n; ++slot) {
-      const std::uint32_t i = ids[slot];
-      if (i < c.wall) wall += double(c.net.points[i].mass) * glm::dvec3(vel[slot]);
-      else fluid += double(pos[slot].w) * glm::dvec3(vel[slot]);
+    const double h = solver_->params().h;
+    std::vector<glm::dvec3> want(n, glm::dvec3(0.0));
+    double scale = 0.0, pressureScale = 0.0;
+    for (std::uint32_t w = 0; w < n; ++w) {
+      const std::uint32_t id = ids[w];
+      if (id >= c.wall) {
+        pressureScale = std::max(pressureScale, double(kappa[w].y));
+        EXPECT_FLOAT_EQ(state[w].y, kappa[w].y + s.backgroundPressure) << "reported pressure of particle " << id;
+        continue;
+      }
+      if (c.net.points[id].anchored) continue;
+      glm::dvec3 f(0.0);
+      for (std::uint32_t k = 0; k < n; ++k) {
+        if (ids[k] < c.wall) continue;
+        const glm::dvec3 d = glm::dvec3(glm::vec3(pos[k])) - glm::dvec3(glm::vec3(pos[w]));
+        const double r = glm::length(d);
+        if (r == 0.0 || r >= 2.0 * h) continue;
+        const double rho = state[k].x;
+        f += (double(pos[k].w) * double(pos[w].w) * double(kappa[k].y) / (rho * rho) * reference::kernelDwdr(r, h) / r) * d;
+      }
+      want[w] = f / double(c.net.points[id].mass);
+      scale = std::max(scale, glm::length(want[w]));
     }
-    return std::pair{fluid, wall};
-  };
-  const auto [fluid0, wall0] = momentum();
-  const glm::dvec3 p0 = fluid0 + wall0;
-  steps(1000);
-  EXPECT_EQ(solver_->readStatus().neighbourOverflow, 0u) << "the case must stay within the list capacity";
-  const auto [fluid1, wall1] = momentum();
-  const double moved = glm::length(wall1 - wall0);
-  EXPECT_GT(moved, 0.1 * glm::length(p0)) << "the fluid must hand the wall a good share of its momentum";
-  EXPECT_LT(glm::length(fluid1 + wall1 - p0), 1e-5 * glm::length(p0))
-      << "total momentum drifted; fluid gave " << glm::length(fluid1 - fluid0) << ", wall got " << moved;
-  EXPECT_EQ(solver_->readStatus().nonFinite, 0u);
+    ASSERT_GT(pressureScale, 10.0 * s.backgroundPressure) << "the solve must find a pressure in this squeezed case";
+    ASSERT_GT(scale, 1.0) << "the solved pressure must push the wall noticeably";
+    std::size_t pushed = 0;
+    for (std::uint32_t w = 0; w < n; ++w) {
+      const std::uint32_t id = ids[w];
+      if (id >= c.wall) continue;
+      const glm::dvec3 change = glm::dvec3(glm::vec3(after[w])) - glm::dvec3(glm::vec3(before[w]));
+      EXPECT_LT(glm::length(change - want[w]), 2e-4 * scale) << "wall particle " << id;
+      EXPECT_EQ(after[w].w, before[w].w) << "wall particle " << id;
+      pushed += glm::length(want[w]) > 1e-3 * scale;
+    }
+    EXPECT_GT(pushed, 50u);
+  }
+}
+
+// Fluid thrown at a free wall sheet (no anchors, no gravity): fluid and wall exchange momentum
+// through exactly opposite pair forces and the springs are internal, so the total momentum
+// (SPH masses for the fluid, spring masses for the wall) stays put over 1,000 steps; under
+// DFSPH (300 steps), the wall takes the exact opposite of the solves' boundary term too.
+TEST_F(WallTest, FluidAndFreeWallConserveMomentum) {
+  for (const sim::PressureSolver solver : {sim::PressureSolver::Wcsph, sim::PressureSolver::Dfsph}) {
+    const bool dfsph = solver == sim::PressureSolver::Dfsph;
+    SCOPED_TRACE(dfsph ? "dfsph" : "wcsph");
+    auto rng = rngFor();
+    sim::SphSettings s = wallSettings(glm::vec3(0.0f));
+    s.soundSpeed = 20.0f;
+    s.viscosity = 0.01f;
+    s.clampNegativePressure = false;
+    s.neighbourCapacity = 256;  // the free sheet bends where the fluid hits it and crowds together
+    s.pressureSolver = solver;
+    s.solverMaxIterations = 10;
+    if (dfsph) s.listLayout = sim::ListLayout::Contiguous;
+    CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.1f, 0.01f, 0.0f, 1.0f);  // relaxed sheet, fluid at rest density
+    for (auto& point : c.net.points) point.anchored = false;
+    for (std::uint32_t i = c.wall; i < c.pos.size(); ++i) c.vel[i].z -= 0.3f;  // towards the sheet
+    const auto n = static_cast<std::uint32_t>(c.pos.size());
+    setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.2f), glm::vec3(0.3f));
+    auto momentum = [&]() {
+      const auto vel = store_->readVelocities();
+      const auto pos = store_->readPositions();
+      const auto ids = store_->readIds();
+      glm::dvec3 fluid(0.0), wall(0.0);
+      for (std::uint32_t slot = 0; slot < n; ++slot) {
+        const std::uint32_t i = ids[slot];
+        if (i < c.wall) wall += double(c.net.points[i].mass) * glm::dvec3(vel[slot]);
+        else fluid += double(pos[slot].w) * glm::dvec3(vel[slot]);
+      }
+      return std::pair{fluid, wall};
+    };
+    const auto [fluid0, wall0] = momentum();
+    const glm::dvec3 p0 = fluid0 + wall0;
+    steps(dfsph ? 300 : 1000);
+    EXPECT_EQ(solver_->readStatus().neighbourOverflow, 0u) << "the case must stay within the list capacity";
+    const auto [fluid1, wall1] = momentum();
+    const double moved = glm::length(wall1 - wall0);
+    EXPECT_GT(moved, 0.1 * glm::length(p0)) << "the fluid must hand the wall a good share of its momentum";
+    EXPECT_LT(glm::length(fluid1 + wall1 - p0), 1e-5 * glm::length(p0))
+        << "total momentum drifted; fluid gave " << glm::length(fluid1 - fluid0) << ", wall got " << moved;
+    EXPECT_EQ(solver_->readStatus().nonFinite, 0u);
+    if (dfsph) {
+      const sim::PressureSolveStats st = solver_->readPressureSolveStats();
+      EXPECT_GT(st.totalIterations, 0u) << "the solve must act in this case";
+      std::printf("dfsph: %.1f ms of simulated time in 300 steps, %u density and %u divergence corrections, wall got %.3g of %.3g kg m/s\n",
+                  1e3 * time(), st.totalIterations, solver_->readPressureSolveStats(true).totalIterations, moved, glm::length(p0));
+    }
+  }
 }
 
 // Normals follow the deformed wall: a 6 x 5 sheet (frame points along +x and +y, so the
@@ -689,8 +775,13 @@ class LaplaceTest : public WallTest {
     t.maxForce = float(t.stiffness * 0.05 * hoop);
     return t;
   }
-  double build(double target, float ramp) {
+  double build(double target, float ramp, sim::PressureSolver solver = sim::PressureSolver::Wcsph) {
     sim::SphSettings s = fluid();
+    s.pressureSolver = solver;
+    if (solver == sim::PressureSolver::Dfsph) {
+      s.listLayout = sim::ListLayout::Contiguous;
+      s.solverMaxIterations = 5;  // every step records the cap's worth (lavapipe's time)
+    }
     t_ = tube(s, 10, 5);
     tube_ = scene::buildTube(t_);
     const double pStar = scene::hoopRupturePressure(t_, tube_);
@@ -701,6 +792,7 @@ class LaplaceTest : public WallTest {
           glm::vec3(0.0f, -outer, -outer), glm::vec3(t_.length, outer, outer));
     return pStar;
   }
+  void ruptureAtTheHoopLimit(sim::PressureSolver solver);
   // Runs `count` steps and measures the mean fluid pressure and the wall's smallest radius.
   Sample advance(int count) {
     steps(count);
@@ -729,9 +821,10 @@ TEST_F(LaplaceTest, RupturePressureOfTheLayoutIsTheHoopEstimate) {
   EXPECT_NEAR(pStar / estimate, 1.0, 0.15) << pStar << " Pa vs " << estimate << " Pa";
 }
 
-TEST_F(LaplaceTest, TubeRupturesWhenTheLumenPressureReachesTheHoopLimit) {
-  // 1.3 P* after 0.39 s: about 0.015 P* per 50 steps.
-  const double pStar = build(1.3, 0.39f);
+// The lumen pressure rises to 1.3 P* in 0.39 s (about 0.015 P* per 50 steps) until a spring
+// breaks; checks the mean fluid pressure just before.
+void LaplaceTest::ruptureAtTheHoopLimit(sim::PressureSolver solver) {
+  const double pStar = build(1.3, 0.39f, solver);
   Sample last{}, now{};
   for (int batch = 0; batch < 200; ++batch) {
     now = advance(50);
@@ -751,10 +844,24 @@ TEST_F(LaplaceTest, TubeRupturesWhenTheLumenPressureReachesTheHoopLimit) {
                                                                  tube_.particles.normals, tube_.wall))
                              .rupturePressure;
   EXPECT_NEAR(last.pressure / staticP, 1.0, 0.2);
-  std::printf("first break at t = %.4f s: mean fluid pressure %.0f Pa = %.3f P* (P* = %.0f Pa) = %.3f of the static estimate "
+  std::printf("%s: first break at t = %.4f s: mean fluid pressure %.0f Pa = %.3f P* (P* = %.0f Pa) = %.3f of the static estimate "
               "(%.0f Pa), %u springs\n",
-              now.time, last.pressure, last.pressure / pStar, pStar, last.pressure / staticP, staticP, now.broken);
+              solver == sim::PressureSolver::Dfsph ? "dfsph" : "wcsph", now.time, last.pressure, last.pressure / pStar, pStar,
+              last.pressure / staticP, staticP, now.broken);
+  if (solver == sim::PressureSolver::Dfsph) {
+    const sim::PressureSolveStats st = solver_->readPressureSolveStats();
+    std::printf("dfsph: %u density and %u divergence corrections in %u steps, %u and %u solves at the cap\n",
+                st.totalIterations, solver_->readPressureSolveStats(true).totalIterations, st.solves, st.capHits,
+                solver_->readPressureSolveStats(true).capHits);
+  }
 }
+
+TEST_F(LaplaceTest, TubeRupturesWhenTheLumenPressureReachesTheHoopLimit) { ruptureAtTheHoopLimit(sim::PressureSolver::Wcsph); }
+
+// The same under DFSPH: the background (lumen) pressure loads the wall through the force
+// pass, the wall takes the reaction of the solved pressure, and the first break comes within
+// the same tolerances.
+TEST_F(LaplaceTest, TubeRupturesAtTheHoopLimitUnderDfsph) { ruptureAtTheHoopLimit(sim::PressureSolver::Dfsph); }
 
 TEST_F(LaplaceTest, TubeHoldsBelowTheHoopLimit) {
   // Lumen pressure raised to 0.77 P* in 0.25 s, then held to 0.35 s. (With the ring fill the

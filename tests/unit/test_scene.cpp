@@ -129,7 +129,7 @@ TEST(Scene, OutOfRangeValuesAreNamed) {
   expectError(j, {"fluid.density_kg_m3"});
 }
 
-// The DFSPH solver's settings, and what it does not run yet, are named.
+// The DFSPH solver's settings, and what it does not run, are named.
 TEST(Scene, PressureSolverSettingsAreCheckedAndItsLimitsNamed) {
   Json j = validScene();
   j["fluid"]["solver"] = "dfsph";
@@ -159,17 +159,16 @@ TEST(Scene, PressureSolverSettingsAreCheckedAndItsLimitsNamed) {
   expectError(j, {"fluid.solver", "symplectic_euler"});
   j = validScene();
   j["fluid"]["solver"] = "dfsph";
-  j["fluid"]["background_pressure_Pa"] = 100;
-  expectError(j, {"fluid.solver", "background_pressure_Pa"});
-  j = validScene();
-  j["fluid"]["solver"] = "dfsph";
   j["particles"]["neighbour_search"] = "cells";
   expectError(j, {"fluid.solver", "neighbour_search"});
-  // a vessel: its wall and inflow need WCSPH so far
+  // a vessel with its inflow and lumen (background) pressure runs under DFSPH
   std::ifstream in(std::string(HEMO_SOURCE_DIR) + "/scenes/aneurysm.json");
   Json v = Json::parse(in);
   v["fluid"]["solver"] = "dfsph";
-  expectError(v, {"fluid.solver", "vessel"});
+  const Scene vessel = parseScene(v.dump(), "aneurysm.json");
+  EXPECT_EQ(vessel.sph.pressureSolver, sim::PressureSolver::Dfsph);
+  EXPECT_GT(vessel.sph.backgroundPressure, 0.0f);
+  ASSERT_TRUE(vessel.vessel.has_value());
 }
 
 TEST(Scene, BoxesWithMinAboveMaxAreNamed) {

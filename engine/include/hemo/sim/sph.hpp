@@ -226,14 +226,16 @@ class SphSolver {
   // force pass, the solve that adds the pressure
   // acceleration for the step the integrator will take (interface/sph.h, "The pressure
   // solver"): the first prediction, then the cap's worth of gated (correction, prediction)
-  // pairs, each followed by the reduction that decides on the next. `endTime` as the integrator's.
+  // pairs, each followed by the reduction that decides on the next; with a wall, its share of
+  // the solve's pressure (MassSpring::recordPressureReaction). `endTime` as the integrator's.
   void recordPressureSolve(gpu::CommandRecorder& rec, float endTime = 3.0e38f,
                            gpu::TimestampQueries* timestamps = nullptr);
   bool solvesPressure() const { return settings_.pressureSolver == PressureSolver::Dfsph; }
   // (a readback; zeros under WCSPH): the density solve's, or the divergence solve's
   PressureSolveStats readPressureSolveStats(bool divergence = false) const;
   // vec4 per slot: k_i = kappa_i / rho_i of the last prediction (m^5 kg^-1 s^-2), the pressure
-  // of the step's impulses (Pa, also in state().y), the divergence solve's sum of k_i, 0.
+  // of the step's impulses (Pa; state().y holds it plus the background pressure), the
+  // divergence solve's sum of k_i, 0.
   const gpu::Buffer& solveStiffness() const { return kappa_; }
   // Between list builds the force evaluations update only the boundary and wall particles
   // with fluid in their list; the others keep the state the last build gave them. This sets

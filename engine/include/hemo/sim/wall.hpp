@@ -9,6 +9,8 @@
 //                  every force the fluid felt from it (gathered over its fluid neighbours),
 //                  divides by its mass, adds gravity (anchored particles: zero), and writes
 //                  its time-step limit
+// Under DFSPH a second pass (wall/dfsph_reaction.comp), after the density solve, adds the
+// reaction of the pressure the solve gave the fluid through the wall.
 // The SPH integrator then moves wall particles like fluid particles. Attach a network to an
 // SphSolver with SphSolver::attachWall.
 #include "hemo/gpu/pipeline.hpp"
@@ -87,6 +89,9 @@ struct FluidBuffers {
   const gpu::Buffer* dtCounts;
   std::vector<std::uint32_t> reactionSpecialization;  // of the spring pass (SphSolver::pairSpecialization)
   bool cellWalk;  // the fluid keeps no list: the spring pass's variant that walks cells (interface/sph.h)
+  // DFSPH's stiffness and pressure per slot (interface/sph.h, HEMO_DFSPH_BINDING_KAPPA), for
+  // the wall's share of the solve's pressure; null under WCSPH.
+  const gpu::Buffer* kappa = nullptr;
 };
 
 class MassSpring {
@@ -101,6 +106,11 @@ class MassSpring {
   // particle (SphSolver::nonFluidStart). The pass's SIMD groups write the time step's partials
   // from index dtPartialBase (past the force pass's) on (common/dt_fold.glsl).
   void record(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t dtPartialBase);
+  // DFSPH (FluidBuffers::kappa set): after the density solve, the reaction of the pressure the
+  // solve gave the fluid through the wall particles in [first, n), added to their
+  // accelerations (wall/dfsph_reaction.comp; the list in one page). Ends with a barrier.
+  void recordPressureReaction(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n);
+  bool takesPressureReaction() const { return pressureReaction_ != nullptr; }
   // The workgroups record(first, n, ...) dispatches.
   std::uint32_t workgroups(std::uint32_t first, std::uint32_t n) const;
 
@@ -132,8 +142,9 @@ class MassSpring {
   gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_, shade_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* shadeStage_;
+  const gpu::ComputePipeline* pressureReaction_ = nullptr;  // DFSPH only
   std::vector<gpu::DescriptorSet> forcesSets_;  // one per page of the fluid's list
-  gpu::DescriptorSet shadeSet_;
+  gpu::DescriptorSet shadeSet_, pressureReactionSet_;
   std::uint32_t pageSlots_ = 0;
   template <class Fn>
   void forEachPage(std::uint32_t begin, std::uint32_t end, Fn fn) const {
