@@ -156,6 +156,17 @@ int main(int argc, char** argv) {
                    "pressure is %.0f Pa, which the fluid's own pressure lags while the wall stretches\n",
                    rupture->pressure, rupture->method.c_str(), double(scene.sph.backgroundPressure));
     }
+    if (const auto* wall = sim.solver().wall()) {
+      // what sets the step: the springs' own limit (times the substeps) against the fluid's
+      const hemo::sim::SphParams& sp = sim.solver().params();
+      const bool dfsph = sim.solver().solvesPressure();
+      const double fluidLimit = double(sp.cflAcoustic) * sp.h / (dfsph ? double(scene.expectedMaxSpeed) : double(sp.c0));
+      std::fprintf(stderr,
+                   "hemo-run: the wall's springs limit the step to %.3g s (%u substep%s of time_step_factor sqrt(m / sum k) = "
+                   "%.3g s); the fluid's own limit is about %.3g s (%s)\n",
+                   wall->springTimeStepLimit() * wall->substeps(), wall->substeps(), wall->substeps() == 1 ? "" : "s",
+                   wall->springTimeStepLimit(), fluidLimit, dfsph ? "C_a h / expected_max_speed" : "C_a h / c0");
+    }
     const bool tty = isatty(2);
     double lastPrint = -1.0;
     options.onBatch = [&](const hemo::sim::Progress& p) {
@@ -347,6 +358,10 @@ int main(int argc, char** argv) {
                                           std::max(1u, sim.fluidParticles() + sim.boundaryParticles() + sim.wallParticles())},
                {"finite", finite}};
     summary["solver"] = sim.solver().solvesPressure() ? "dfsph" : "wcsph";
+    if (const auto* springs = sim.solver().wall()) {
+      summary["wall_substeps"] = springs->substeps();
+      summary["wall_step_limit_s"] = springs->springTimeStepLimit() * springs->substeps();
+    }
     if (sim.solver().solvesPressure()) {
       // what the pressure solves did (sph/dfsph_reduce.comp's counts, this run and its resumed part)
       // the density solve's, and the divergence solve's as solver_divergence_*

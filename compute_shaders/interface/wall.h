@@ -54,7 +54,11 @@
 // The time step's reduction, begun by the fluid's force pass (interface/sph.h, HEMO_FORCES_BINDING_DT_*):
 #define HEMO_SPRINGF_BINDING_DT_PARTIALS 21
 #define HEMO_SPRINGF_BINDING_DT_COUNTS 22
-#define HEMO_SPRINGF_BINDING_COUNT 23
+// vec4 per slot, written for wall slots: (F_fluid / m + g, 0), what the fluid (and, under
+// DFSPH, the solve's reaction, wall/dfsph_reaction.comp) and gravity give the particle for the
+// whole step; the wall's substeps (wall/substep.comp) add the springs to it.
+#define HEMO_SPRINGF_BINDING_HELD 23
+#define HEMO_SPRINGF_BINDING_COUNT 24
 
 // wall/dfsph_reaction.comp (DFSPH scenes only): after the density solve, each wall particle
 // adds the reaction of the pressure the solve gave its fluid neighbours through the mirrored
@@ -70,7 +74,38 @@
 #define HEMO_WALLP_BINDING_NLIST 7
 #define HEMO_WALLP_BINDING_PARAMS 8
 #define HEMO_WALLP_BINDING_ACCEL 9       // storage: its own (wall) record
-#define HEMO_WALLP_BINDING_COUNT 10
+#define HEMO_WALLP_BINDING_HELD 10       // storage: its own record of HEMO_SPRINGF_BINDING_HELD
+#define HEMO_WALLP_BINDING_COUNT 11
+
+// wall/substep.comp: the wall's substeps. A scene whose springs would limit the step (their
+// dt <= C sqrt(m / sum k)) lets the wall take N substeps of dt / N per fluid step instead
+// (hemo::sim::SpringNetwork::substeps): the fluid's force on it held for the step, the springs
+// re-evaluated, rupture included, at every substep; symplectic Euler, as the fluid. Mode
+// ADVANCE: v += a dt / N, x += v dt / N for the free wall slots; mode FORCE: a = springs / m +
+// held (rupture and detachment as wall/spring_forces.comp). The step records ADVANCE, then
+// (FORCE, ADVANCE) N - 1 times, after the fluid's dt is known and before the integrator,
+// which then leaves wall particles where the substeps put them. Push: uint n, uint first,
+// uint idCount, uint substeps, uint mode, uint clockIn, float endTime.
+#define HEMO_SUBSTEP_MODE_ADVANCE 0u
+#define HEMO_SUBSTEP_MODE_FORCE 1u
+#define HEMO_SUBSTEP_BINDING_POSITIONS 0     // storage (ADVANCE writes its own record)
+#define HEMO_SUBSTEP_BINDING_VELOCITIES 1    // storage (ADVANCE writes its own record)
+#define HEMO_SUBSTEP_BINDING_POSITIONS_IN 2  // texel vec4: the same buffers, read (FORCE)
+#define HEMO_SUBSTEP_BINDING_VELOCITIES_IN 3
+#define HEMO_SUBSTEP_BINDING_IDS 4           // texel uint
+#define HEMO_SUBSTEP_BINDING_SLOT_OF_ID 5    // texel uint
+#define HEMO_SUBSTEP_BINDING_SPRINGS 6       // texel uvec4, two per Spring
+#define HEMO_SUBSTEP_BINDING_FIRST 7         // texel uint
+#define HEMO_SUBSTEP_BINDING_SPRINGS_OF 8    // texel uint
+#define HEMO_SUBSTEP_BINDING_WALL_INFO 9     // texel vec4 by id (mass, anchored)
+#define HEMO_SUBSTEP_BINDING_ACCEL 10        // storage: FORCE writes its own record, ADVANCE reads it
+#define HEMO_SUBSTEP_BINDING_HELD 11         // texel vec4 (HEMO_SPRINGF_BINDING_HELD)
+#define HEMO_SUBSTEP_BINDING_SPRINGS_RW 12   // storage: broken flags
+#define HEMO_SUBSTEP_BINDING_COUNTERS 13
+#define HEMO_SUBSTEP_BINDING_PARAMS 14       // uniform SphParams
+#define HEMO_SUBSTEP_BINDING_DT 15           // uniform vec2: the time step's reduction
+#define HEMO_SUBSTEP_BINDING_CLOCK 16        // uniform: the clock's two records
+#define HEMO_SUBSTEP_BINDING_COUNT 17
 
 // wall/point_shade.comp: per particle slot, vec2(largest strain of its unbroken springs,
 // fraction of its springs broken) for the renderer; push: uint n, uint idCount.

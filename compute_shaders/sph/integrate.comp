@@ -96,6 +96,7 @@ layout(push_constant) uniform Push {
   float endTime;
   uint clockIn;
   float threshold;     // rebuild when the largest reach exceeds it (half the skin), m
+  uint wallAdvanced;   // 1: the wall's substeps (wall/substep.comp) have moved the wall particles
 } pc;
 
 // A wall particle whose springs all broke is marked by the wall stage with accel.w < 0 (fluid
@@ -260,6 +261,15 @@ vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running, out vec3 d,
   vec4 v = texelFetch(velocitiesIn, int(i));
   vec4 x = texelFetch(positionsIn, int(i));
   if (!running || !hemo_moves(v.w)) {
+    return hemo_rebuild_test(i, x.xyz, v.xyz, d, x0);
+  }
+  if (pc.wallAdvanced != 0u && uint(v.w) == HEMO_KIND_WALL) {
+    // Already at the end of the step: only the blow-up check and the detachment mark.
+    if (any(isnan(x.xyz)) || any(isinf(x.xyz)) || any(isnan(v.xyz)) || any(isinf(v.xyz))) {
+      atomicMin(status[HEMO_STATUS_FIRST_BAD_STEP], pc.step);
+      atomicAdd(status[HEMO_STATUS_NONFINITE], 1u);
+    }
+    positions[i].w = hemo_sph_mass(x.w, accel(i).w);
     return hemo_rebuild_test(i, x.xyz, v.xyz, d, x0);
   }
   // Where the step started (the inflow zone is judged there).

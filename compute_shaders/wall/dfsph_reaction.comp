@@ -6,7 +6,8 @@
 // p_f = k_f rho_f^2 (kappa.y: the divergence solve's impulse over dt plus the density
 // solve's). The wall particle takes the exact opposite, gathered over its fluid neighbours:
 //   F_w = sum_f m_f m_w (p_f / rho_f^2) gradW_fw,
-// added to the acceleration wall/spring_forces.comp wrote (F_w over its spring mass). Anchored
+// added to the acceleration wall/spring_forces.comp wrote (F_w over its spring mass), and to
+// what the wall's substeps hold for the step. Anchored
 // particles keep 0; a detached one (SPH mass 0) gets nothing, as the fluid got nothing from it.
 // Other slots are left alone.
 #extension GL_GOOGLE_include_directive : require
@@ -26,6 +27,7 @@ layout(binding = HEMO_WALLP_BINDING_NCOUNT) uniform usamplerBuffer neighbourCoun
 layout(binding = HEMO_WALLP_BINDING_NLIST) uniform usamplerBuffer neighbourList;
 HEMO_SPH_PARAMS_UNIFORM(HEMO_WALLP_BINDING_PARAMS);
 layout(std430, binding = HEMO_WALLP_BINDING_ACCEL) buffer Accel { vec4 accel[]; };  // own (wall) slot only
+layout(std430, binding = HEMO_WALLP_BINDING_HELD) buffer Held { vec4 held[]; };     // own (wall) slot only
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
 layout(push_constant) uniform Push {
@@ -81,6 +83,7 @@ void main() {
       reactionPair(texelFetch(neighbourList, int(hemo_list_slot(slot, k, gPp))).x, true);
     }
   }
-  const vec3 sum = gSum;
-  accel[slot].xyz += (xw.w / info.x) * sum;
+  const vec3 add = (xw.w / info.x) * gSum;
+  accel[slot].xyz += add;
+  held[slot].xyz += add;  // for the wall's substeps (wall/substep.comp)
 }

@@ -3,9 +3,10 @@
 // adjacency by particle id; no float atomics). A spring whose tension exceeds its maximum
 // force breaks for good (the seed's rupture rule; its end a flags it). a = sum of the forces
 // of the unbroken springs / mass + gravity, zero for anchored particles; and the particle's
-// time-step limit min(C sqrt(mass / sum of its unbroken stiffnesses), C_a h / (c0 + |v|))
-// (the first bounds the phase error of its fastest oscillation; C is push.timeStepFactor; the
-// second is the fluid's acoustic limit, which the neighbour-list look-ahead relies on). Other
+// time-step limit min(N C sqrt(mass / sum of its unbroken stiffnesses), C_a h / (c0 + |v|))
+// (the first bounds the phase error of its fastest oscillation in each of the N substeps the
+// wall takes per step, wall/substep.comp; C is push.timeStepFactor; the second is the fluid's
+// acoustic limit, which the neighbour-list look-ahead relies on). Other
 // particle kinds are left alone. Its SIMD groups add their partials of the time step's
 // reduction after the fluid force pass's (common/dt_fold.glsl).
 #extension GL_GOOGLE_include_directive : require
@@ -46,11 +47,13 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_SPRINGS_RW) buffer SpringsRW { Spr
 // The time step's reduction's first level (common/dt_fold.glsl).
 layout(std430, binding = HEMO_SPRINGF_BINDING_DT_PARTIALS) writeonly buffer DtPartials { vec2 dtPartials[]; };
 layout(std430, binding = HEMO_SPRINGF_BINDING_DT_COUNTS) writeonly buffer DtCounts { uint dtCounts[2]; };
+// What the fluid and gravity give each wall slot for the step, (F_fluid / m + g, 0): read by
+// wall/substep.comp (and added to by wall/dfsph_reaction.comp).
+layout(std430, binding = HEMO_SPRINGF_BINDING_HELD) writeonly buffer Held { vec4 held[]; };
 
 #define positions(k) texelFetch(positionsT, int(k))
 #define velocities(k) texelFetch(velocitiesT, int(k))
 #define slotOfId(k) texelFetch(slotOfIdT, int(k)).x
-#define first(k) texelFetch(firstT, int(k)).x
 #define state(k) texelFetch(stateT, int(k))
 #define viscousVel(k) texelFetch(viscousVelT, int(k))
 #define pairPosition(k) texelFetch(pairPositionT, int(k))
@@ -63,13 +66,7 @@ layout(constant_id = 1) const uint kListWidth = 1u;
 #include "common/cell_walk.glsl"
 #endif
 
-// Spring record k of interface/wall.h, read as its two uvec4 texels.
-Spring hemo_spring(uint k) {
-  const uvec4 t0 = texelFetch(springsT, int(2u * k));
-  const uvec4 t1 = texelFetch(springsT, int(2u * k + 1u));
-  return Spring(t0.x, t0.y, uintBitsToFloat(t0.z), uintBitsToFloat(t0.w), uintBitsToFloat(t1.x),
-                uintBitsToFloat(t1.y), t1.z, t1.w);
-}
+#include "wall/spring_gather.glsl"
 
 // The force (N) the fluid exerts on wall particle w: minus the sum, over its fluid neighbours
 // f, of m_f times the pair terms sph/forces.comp gave f for w (same formulas, same inputs),
@@ -181,64 +178,34 @@ layout(push_constant) uniform Push {
   uint dtPartialBase;  // this pass's first partial of the time step's reduction (past the force pass's)
   uint groupBase;      // the workgroups of the pass's earlier dispatches (the pages of the fluid's list)
   uint last;           // 1: the pass's last dispatch (it writes the partials' count)
+  uint substeps;       // the wall's substeps per step (wall/substep.comp; 1: none)
 } pc;
 
 #include "common/dt_fold.glsl"
 
 // The wall particle in `slot`: rupture of its springs, its acceleration and time-step limit
-// (written, and returned).
+// (written, and returned). With substeps (pc.substeps > 1) it also keeps what the fluid and
+// gravity give it for the whole step (held: wall/substep.comp adds the springs at each
+// substep), and its limit on the step is substeps times the springs' own.
 float hemo_wall(uint slot, uint id) {
   const vec4 info = texelFetch(wallInfoT, int(id));
   const bool anchored = info.y != 0.0;
-  const HemoPairParams pp = hemo_pair_params();
-  vec3 force = vec3(0.0);
+  vec3 reaction = vec3(0.0);
   if (!anchored) {
-    force = hemo_fluid_reaction(slot);
+    reaction = hemo_fluid_reaction(slot);
   }
-  float stiffness = 0.0;
-  uint intact = 0u;
-  float marker = 0.0;
-  const vec3 xSelf = positions(slot).xyz;
-  const vec3 vSelf = velocities(slot).xyz;
-  const uint end = first(id + 1u);
-  for (uint e = first(id); e < end; ++e) {
-    const uint springIndex = texelFetch(springsOfT, int(e)).x;
-    const Spring s = hemo_spring(springIndex);
-    if (s.broken != 0u) {
-      continue;
-    }
-    // Only the other end is gathered; the force is computed from (a, b) in the spring's own
-    // order either way, so both ends get exactly opposite forces.
-    const bool selfIsA = id == s.a;
-    const uint other = slotOfId(selfIsA ? s.b : s.a);
-    const vec3 xOther = positions(other).xyz;
-    const vec3 vOther = velocities(other).xyz;
-    float tension;
-    const vec3 delta = hemo_min_image(selfIsA ? xOther - xSelf : xSelf - xOther, pp);
-    const vec3 fa = hemo_spring_force_on_a(delta, selfIsA ? vSelf : vOther, selfIsA ? vOther : vSelf, s.restLength,
-                                           s.stiffness, s.damping, tension);
-    if (tension > s.maxForce) {
-      // Rupture: the spring breaks now, for good. Both ends (anchored ones too) compute this
-      // tension from the same inputs in the same order, so they agree; end a alone writes the
-      // flag and counts it. The other end may read the record before or after that write and
-      // skips the spring either way.
-      if (selfIsA) {
-        springsRW[springIndex].broken = 1u;
-        atomicAdd(counters[HEMO_WALL_COUNTER_BROKEN], 1u);
-      }
-      continue;
-    }
-    force += selfIsA ? fa : -fa;
-    stiffness += s.stiffness;
-    ++intact;
-  }
+  float stiffness;
+  uint intact, total;
+  const vec3 springs = hemo_spring_gather(slot, id, stiffness, intact, total);
   if (anchored) {
     accel[slot] = vec4(0.0);
+    held[slot] = vec4(0.0);
     dtLimit[slot] = 3.0e38;
     updateNormal(slot, id);
     return 3.0e38;
   }
-  if (intact == 0u && end > first(id) && positions(slot).w != 0.0) {
+  float marker = 0.0;
+  if (intact == 0u && total > 0u && positions(slot).w != 0.0) {
     // All its springs are broken: the particle detaches from the wall for good. The integrator
     // sets its SPH mass to zero (marker accel.w < 0), so it no longer counts in the fluid's
     // density, pressure, viscosity or repulsion (the wall stops holding the fluid there); it
@@ -248,9 +215,12 @@ float hemo_wall(uint slot, uint id) {
   } else {
     updateNormal(slot, id);
   }
-  accel[slot] = vec4(force / info.x + pc.gravity.xyz, marker);
-  const float acoustic = pc.acousticLength / max(pc.c0 + length(vSelf), 1.0e-30);
-  const float limit = stiffness > 0.0 ? min(acoustic, pc.timeStepFactor * sqrt(info.x / stiffness)) : acoustic;
+  const vec3 outside = reaction / info.x + pc.gravity.xyz;
+  accel[slot] = vec4((reaction + springs) / info.x + pc.gravity.xyz, marker);
+  held[slot] = vec4(outside, 0.0);
+  const float acoustic = pc.acousticLength / max(pc.c0 + length(velocities(slot).xyz), 1.0e-30);
+  const float own = float(pc.substeps) * pc.timeStepFactor * sqrt(info.x / stiffness);
+  const float limit = stiffness > 0.0 ? min(acoustic, own) : acoustic;
   dtLimit[slot] = limit;
   return limit;
 }

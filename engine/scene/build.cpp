@@ -77,6 +77,7 @@ SceneBuild buildScene(const Scene& s) {
         out.wall = b.wall;
       }
       out.network->timeStepFactor = s.vessel->timeStepFactor;
+      out.network->substeps = s.vessel->substeps;
     } catch (const std::invalid_argument& e) {
       throw SceneError(s.name + ": vessel: " + e.what());
     }

@@ -113,6 +113,7 @@ const std::vector<Field>& schema() {
            {"sac_stiffness_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "Aneurysms: the sac's or bulge's springs' stiffness / the tube's."},
            {"sac_strength_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "Aneurysms: the sac's or bulge's springs' maximum force / the tube's."},
            {"time_step_factor", Kind::Number, "1", 0, 1, true, 0.1, "The wall's time-step limit: dt <= factor sqrt(m / sum k) at every wall point. Symplectic Euler is stable up to 1 (a spring network's highest frequency is at most sqrt(2 sum k / m)); RK2 midpoint amplifies an undamped spring by about 1 + (omega dt)^4 / 8 per step and relies on the springs' damping, so keep it small there."},
+           {"substeps", Kind::Integer, "1", 1, 256, false, 1, "The wall's substeps per fluid step: with N > 1 the wall takes N substeps of dt / N (its springs and rupture evaluated at each, the fluid's force held over the step), so its springs limit the step to N time_step_factor sqrt(m / sum k) instead of time_step_factor sqrt(m / sum k). Pick N about the fluid's own step over the springs' limit (hemo-run prints both). Symplectic Euler only."},
            {"inflow", Kind::Section, "", 0, 0, false, Json::object(), "Driven inflow (periodic vessels): fluid in a zone at the start of the tube moves at a prescribed axial velocity, and what leaves the far end comes back through the periodic seam (recycled; the particle count never changes). A pump: it sets the flow rate whatever the pressure.", {},
             {
                 {"profile", Kind::Choice, "", 0, 0, false, "none", "Velocity profile over the cross-section: parabolic (Poiseuille, peak 2x the mean), plug (uniform), or none (no inflow).", {"none", "parabolic", "plug"}},
@@ -384,6 +385,7 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   w.branchAngle = float(v["branch_angle_deg"].get<double>() * std::numbers::pi / 180.0);
   w.branchLength = v["branch_length_m"].get<float>();
   w.timeStepFactor = v["time_step_factor"].get<float>();
+  w.substeps = v["substeps"].get<std::uint32_t>();
   for (const char* key : {"length_m", "radius_m", "point_mass_kg"}) {
     if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
   }
@@ -621,6 +623,9 @@ Scene parseScene(const std::string& text, const std::string& source) {
       c.fail("boundary.tanks[" + std::to_string(k) + "]",
              "its " + std::to_string(s.tanks[k].layers) + " layers of boundary particles reach outside the domain");
     }
+  }
+  if (s.vessel && s.vessel->substeps > 1 && s.sph.integrator != sim::Integrator::SymplecticEuler) {
+    c.fail("vessel.substeps", "above 1 needs time.integrator \"symplectic_euler\" (the wall's substeps are symplectic Euler)");
   }
   if (s.sph.pressureSolver == sim::PressureSolver::Dfsph) {
     const char* why = s.sph.densityMethod != sim::DensityMethod::Summation ? "needs fluid.density \"summation\""

@@ -44,6 +44,7 @@ std::uint64_t fingerprintOf(const scene::Scene& scene, const scene::SceneBuild& 
   if (build.network) {
     const SpringNetwork& net = *build.network;
     h.addValue(net.timeStepFactor);
+    h.addValue(net.substeps);
     h.addValue(std::uint64_t(net.springs.size()));
     for (const Spring& s : net.springs) {
       h.addValue(s.a);

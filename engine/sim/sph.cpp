@@ -81,8 +81,9 @@ struct IntegratePush {
   float endTime;
   std::uint32_t clockIn;
   float threshold;  // the rebuild test (full stages): whether to collect the tile boxes, m
+  std::uint32_t wallAdvanced;  // 1: the wall's substeps have moved the wall particles
 };
-static_assert(sizeof(IntegratePush) == 24);
+static_assert(sizeof(IntegratePush) == 28);
 struct DecidePush {  // sph/rebuild_decide.comp
   float threshold;            // half the skin, m
   std::uint32_t gateSlots;    // the rebuild gate's slots
@@ -911,7 +912,11 @@ void SphSolver::attachWall(const SpringNetwork& network) {
   const FluidBuffers fluid{&grid_.slotOfId(), &accel_,      &dtLimit_,      &paramsBuffer_, &state_,
                            counts,             countsFormat, pages,          pageSlots_,     &viscousVel_,
                            &pairPosition_,     listWidth_,   &dtPartials_,   &dtCounts_,     pairSpecialization({listWidth_}),
-                           cellWalk_,          solvesPressure() ? &kappa_ : nullptr};
+                           cellWalk_,          solvesPressure() ? &kappa_ : nullptr,
+                           &dtResult_,         &clock_};
+  if (network.substeps > 1 && settings_.integrator != Integrator::SymplecticEuler) {
+    throw std::invalid_argument("the wall's substeps step with symplectic Euler (the scene's integrator is RK2)");
+  }
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
 }
@@ -1148,7 +1153,9 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   // The second stage reuses the step's dt; slots past `moving` (rigid) have no limit.
   // At least one workgroup: invocation 0 advances the clock even with no particles, and a
   // full stage's partials of the rebuild test must not be empty.
-  const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold()};
+  const bool wallAdvanced = wall_ && wall_->substeps() > 1 && mode == HEMO_INTEGRATE_SYMPLECTIC_EULER;
+  if (wallAdvanced) wall_->recordSubsteps(rec, nonFluidStart(), n, clockParity_, endTime);
+  const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold(), wallAdvanced ? 1u : 0u};
   const std::uint32_t inflow = inflowOn_ ? 1 : 0;
   const gpu::ComputePipeline& integrate = *integrate_[inflow][mode];
   const gpu::Groups groups = integrate.groupsFor(std::max(moving, 1u));

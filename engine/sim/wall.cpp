@@ -26,8 +26,13 @@ struct ForcesPush {
   std::uint32_t dtPartialBase;
   std::uint32_t groupBase;  // the workgroups of the pass's earlier dispatches (pages)
   std::uint32_t last;       // 1: the pass's last dispatch (it writes the partials' count)
+  std::uint32_t substeps;   // the wall's substeps per step
 };
-static_assert(sizeof(ForcesPush) == 52);
+static_assert(sizeof(ForcesPush) == 56);
+struct SubstepPush {  // wall/substep.comp
+  std::uint32_t n, first, idCount, substeps, mode, clockIn;
+  float endTime;
+};
 
 bool finiteNonNegative(float x) { return std::isfinite(x) && x >= 0.0f; }
 }  // namespace
@@ -49,6 +54,7 @@ void SpringNetwork::validate() const {
   if (!(std::isfinite(timeStepFactor) && timeStepFactor > 0.0f && timeStepFactor <= 1.0f)) {
     throw std::invalid_argument("spring network: time-step factor must be in (0, 1]");
   }
+  if (substeps < 1 || substeps > 256) throw std::invalid_argument("spring network: substeps must be in [1, 256]");
   std::set<std::pair<std::uint32_t, std::uint32_t>> seen;
   for (std::size_t k = 0; k < springs.size(); ++k) {
     const Spring& s = springs[k];
@@ -87,7 +93,10 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
       wallInfo_(context, std::max<std::uint64_t>(network.points.size(), 1) * 16, gpu::MemoryUse::Device, "wall mass and anchors"),
       frames_(context, std::max<std::uint64_t>(network.points.size(), 1) * 8, gpu::MemoryUse::Device, "wall normal frames"),
       counters_(context, 16, gpu::MemoryUse::Device, "wall counters"),
-      shade_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "wall shade") {
+      shade_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "wall shade"),
+      held_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
+            "wall force held over the step") {
+  substeps_ = network.substeps;
   network.validate();
   if (idCount_ > particles.capacity()) {
     throw std::invalid_argument("spring network: " + std::to_string(idCount_) + " points but the particle store holds " +
@@ -100,6 +109,15 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
     gpuSprings.push_back({std::min(s.a, s.b), std::max(s.a, s.b), s.restLength, s.stiffness, s.damping, s.maxForce, 0u, 0u});
     ++count[s.a];
     ++count[s.b];
+  }
+  {
+    std::vector<double> stiffness(idCount_, 0.0);
+    for (const Spring& sp : network.springs) stiffness[sp.a] += sp.stiffness, stiffness[sp.b] += sp.stiffness;
+    for (std::uint32_t i = 0; i < idCount_; ++i) {
+      if (!network.points[i].anchored && stiffness[i] > 0.0) {
+        springLimit_ = std::min(springLimit_, network.timeStepFactor * std::sqrt(network.points[i].mass / stiffness[i]));
+      }
+    }
   }
   std::vector<std::uint32_t> first(idCount_ + 1, 0);
   for (std::uint32_t i = 0; i < idCount_; ++i) first[i + 1] = first[i] + count[i];
@@ -160,7 +178,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                             texelBinding(HEMO_SPRINGF_BINDING_PAIR_POSITION, fluid.pairPositions, kVec4),
                                             {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_},
                                             {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
-                                            {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts}}));
+                                            {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts},
+                                            {HEMO_SPRINGF_BINDING_HELD, &held_}}));
   }
   if (fluid.kappa) {
     if (fluid.cellWalk || fluid.neighbourListPages.size() != 1) {
@@ -182,7 +201,36 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
          texelBinding(HEMO_WALLP_BINDING_NCOUNT, fluid.neighbourCounts, fluid.neighbourCountsFormat),
          texelBinding(HEMO_WALLP_BINDING_NLIST, fluid.neighbourListPages[0], fluid.listReadWidth == 4u ? kUvec4 : kUint),
          {HEMO_WALLP_BINDING_PARAMS, fluid.params},
-         {HEMO_WALLP_BINDING_ACCEL, fluid.accel}});
+         {HEMO_WALLP_BINDING_ACCEL, fluid.accel},
+         {HEMO_WALLP_BINDING_HELD, &held_}});
+  }
+  if (substeps_ > 1) {
+    if (!fluid.stepLimits || !fluid.clock) throw std::invalid_argument("the wall's substeps need the step's dt and clock");
+    substep_ = &cache.get({"wall/substep", HEMO_SUBSTEP_BINDING_COUNT, sizeof(SubstepPush), kWorkgroup,
+                           fluid.reactionSpecialization,
+                           1u << HEMO_SUBSTEP_BINDING_PARAMS | 1u << HEMO_SUBSTEP_BINDING_DT | 1u << HEMO_SUBSTEP_BINDING_CLOCK,
+                           1u << HEMO_SUBSTEP_BINDING_POSITIONS_IN | 1u << HEMO_SUBSTEP_BINDING_VELOCITIES_IN |
+                               1u << HEMO_SUBSTEP_BINDING_IDS | 1u << HEMO_SUBSTEP_BINDING_SLOT_OF_ID |
+                               1u << HEMO_SUBSTEP_BINDING_SPRINGS | 1u << HEMO_SUBSTEP_BINDING_FIRST |
+                               1u << HEMO_SUBSTEP_BINDING_SPRINGS_OF | 1u << HEMO_SUBSTEP_BINDING_WALL_INFO |
+                               1u << HEMO_SUBSTEP_BINDING_HELD});
+    substepSet_ = substep_->makeSet({{HEMO_SUBSTEP_BINDING_POSITIONS, &a.positions},
+                                     {HEMO_SUBSTEP_BINDING_VELOCITIES, &a.velocities},
+                                     texelBinding(HEMO_SUBSTEP_BINDING_POSITIONS_IN, &a.positions, kVec4),
+                                     texelBinding(HEMO_SUBSTEP_BINDING_VELOCITIES_IN, &a.velocities, kVec4),
+                                     texelBinding(HEMO_SUBSTEP_BINDING_IDS, &a.ids, kUint),
+                                     texelBinding(HEMO_SUBSTEP_BINDING_SLOT_OF_ID, fluid.slotOfId, kUint),
+                                     texelBinding(HEMO_SUBSTEP_BINDING_SPRINGS, &springs_, kUvec4),
+                                     texelBinding(HEMO_SUBSTEP_BINDING_FIRST, &first_, kUint),
+                                     texelBinding(HEMO_SUBSTEP_BINDING_SPRINGS_OF, &springsOf_, kUint),
+                                     texelBinding(HEMO_SUBSTEP_BINDING_WALL_INFO, &wallInfo_, kVec4),
+                                     {HEMO_SUBSTEP_BINDING_ACCEL, fluid.accel},
+                                     texelBinding(HEMO_SUBSTEP_BINDING_HELD, &held_, kVec4),
+                                     {HEMO_SUBSTEP_BINDING_SPRINGS_RW, &springs_},
+                                     {HEMO_SUBSTEP_BINDING_COUNTERS, &counters_},
+                                     {HEMO_SUBSTEP_BINDING_PARAMS, fluid.params},
+                                     {HEMO_SUBSTEP_BINDING_DT, fluid.stepLimits},
+                                     {HEMO_SUBSTEP_BINDING_CLOCK, fluid.clock}});
   }
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
@@ -214,7 +262,7 @@ void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uin
   std::uint32_t groupBase = 0;
   forEachPage(first, n, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
     const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, hi, idCount_, timeStepFactor_, acousticLength_,
-                          soundSpeed_, lo, dtPartialBase, groupBase, p == lastPage ? 1u : 0u};
+                          soundSpeed_, lo, dtPartialBase, groupBase, p == lastPage ? 1u : 0u, substeps_};
     const gpu::Groups groups = forces_->groupsFor(hi - lo);
     rec.dispatch(*forces_, forcesSets_[p], push, groups);
     rec.computeToCompute();
@@ -228,6 +276,22 @@ void MassSpring::recordPressureReaction(gpu::CommandRecorder& rec, std::uint32_t
   rec.dispatch(*pressureReaction_, pressureReactionSet_, PressureReactionPush{n, first, idCount_},
                pressureReaction_->groupsFor(std::max(count, 1u)));
   rec.computeToCompute();
+}
+
+void MassSpring::recordSubsteps(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t clockIn,
+                                float endTime) {
+  if (!substep_) throw std::logic_error("recordSubsteps: the wall takes no substeps");
+  const gpu::Groups groups = substep_->groupsFor(std::max(n > first ? n - first : 0u, 1u));
+  for (std::uint32_t k = 0; k < substeps_; ++k) {
+    if (k > 0) {
+      rec.dispatch(*substep_, substepSet_,
+                   SubstepPush{n, first, idCount_, substeps_, HEMO_SUBSTEP_MODE_FORCE, clockIn, endTime}, groups);
+      rec.computeToCompute();
+    }
+    rec.dispatch(*substep_, substepSet_,
+                 SubstepPush{n, first, idCount_, substeps_, HEMO_SUBSTEP_MODE_ADVANCE, clockIn, endTime}, groups);
+    rec.computeToCompute();
+  }
 }
 
 std::uint32_t MassSpring::workgroups(std::uint32_t first, std::uint32_t n) const {

@@ -74,6 +74,7 @@ struct Vessel {
   float branchAngle = 0.0f;    // rad (bifurcation): each branch's angle to the parent's axis
   float branchLength = 0.0f;   // m: each leg, split -> bend and bend -> merge
   float timeStepFactor = 0.1f;  // the wall's dt <= factor sqrt(m / sum k) (sim::SpringNetwork)
+  std::uint32_t substeps = 1;    // the wall's substeps per fluid step (sim::SpringNetwork::substeps)
   // Tissue properties, when the scene gives them instead of stiffness / max force (0: not
   // given); the loader maps them onto the springs with scene::springsFromTissue.
   float youngsModulus = 0.0f;   // Pa

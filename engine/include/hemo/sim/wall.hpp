@@ -50,7 +50,12 @@ struct SpringNetwork {
   std::vector<WallPoint> points;  // indexed by particle id; ids of other particles may be listed
                                   // too (unused: only wall-kind particles are moved)
   std::vector<Spring> springs;
-  float timeStepFactor = 0.1f;    // dt <= factor sqrt(m / sum k) per particle
+  float timeStepFactor = 0.1f;    // dt <= factor sqrt(m / sum k) per particle (per substep)
+  // Substeps of the wall per fluid step (1: none). With N > 1 the wall takes N substeps of
+  // dt / N, the fluid's force on it held for the step and its springs (and rupture) evaluated
+  // at each (wall/substep.comp), so its springs limit the step to N factor sqrt(m / sum k).
+  // Symplectic Euler only.
+  std::uint32_t substeps = 1;
   // Throws std::invalid_argument naming the spring or point (ids out of range, a spring from a
   // particle to itself, a duplicate, non-positive rest length or mass, negative stiffness,
   // damping or maximum force, non-finite values, a frame with missing, repeated or
@@ -92,6 +97,10 @@ struct FluidBuffers {
   // DFSPH's stiffness and pressure per slot (interface/sph.h, HEMO_DFSPH_BINDING_KAPPA), for
   // the wall's share of the solve's pressure; null under WCSPH.
   const gpu::Buffer* kappa = nullptr;
+  // The wall's substeps read the step's dt as the integrator does: the time step's reduction
+  // (vec2) and the clock's two records.
+  const gpu::Buffer* stepLimits = nullptr;
+  const gpu::Buffer* clock = nullptr;
 };
 
 class MassSpring {
@@ -111,6 +120,21 @@ class MassSpring {
   // accelerations (wall/dfsph_reaction.comp; the list in one page). Ends with a barrier.
   void recordPressureReaction(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n);
   bool takesPressureReaction() const { return pressureReaction_ != nullptr; }
+  // With substeps() > 1: after the step's dt is known (and the wall's forces, DFSPH's share
+  // included, are in), the wall's substeps for the slots [first, n) to the end of the step
+  // (wall/substep.comp): 2 substeps() - 1 dispatches, each followed by a barrier. `clockIn`
+  // and `endTime` as the integrator's, which then leaves the wall particles where they are.
+  void recordSubsteps(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t clockIn,
+                      float endTime);
+  std::uint32_t substeps() const { return substeps_; }
+  // The springs' own explicit limit on a (sub)step as built, time_step_factor sqrt(m / sum k),
+  // the smallest over the free points with springs (s; 3e38 without any); the step's limit is
+  // substeps() times this.
+  double springTimeStepLimit() const { return springLimit_; }
+  // vec4 per slot, for wall slots: (what the fluid and gravity give the particle for the step,
+  // as an acceleration, 0), as the last force evaluation left it (interface/wall.h,
+  // HEMO_SPRINGF_BINDING_HELD).
+  const gpu::Buffer& held() const { return held_; }
   // The workgroups record(first, n, ...) dispatches.
   std::uint32_t workgroups(std::uint32_t first, std::uint32_t n) const;
 
@@ -139,10 +163,15 @@ class MassSpring {
   std::uint32_t idCount_;
   float gravity_[4];
   float timeStepFactor_, acousticLength_, soundSpeed_;
+  std::uint32_t substeps_ = 1;
+  double springLimit_ = 3.0e38;
   gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_, shade_;
+  gpu::Buffer held_;  // vec4 per slot: what the fluid and gravity give a wall particle for the step
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* shadeStage_;
   const gpu::ComputePipeline* pressureReaction_ = nullptr;  // DFSPH only
+  const gpu::ComputePipeline* substep_ = nullptr;           // substeps > 1 only
+  gpu::DescriptorSet substepSet_;
   std::vector<gpu::DescriptorSet> forcesSets_;  // one per page of the fluid's list
   gpu::DescriptorSet shadeSet_, pressureReactionSet_;
   std::uint32_t pageSlots_ = 0;
