@@ -112,6 +112,13 @@ TEST_F(CheckpointTest, ResumedRunIsBitIdenticalToTheUninterruptedOne) {
     gpu::LimitOverrides pages;
     pages.maxStorageBufferRange = 2048 * s.sph.neighbourCapacity * 4 + 4096;
     cases.push_back({"aneurysm, list in pages", s, 61, 40, pages});
+    // (the wall's share of the solve, and its substeps with the force they hold)
+    s = shipped("aneurysm.json");
+    s.sph.pressureSolver = sim::PressureSolver::Dfsph;
+    s.sph.solverMaxIterations = 10;
+    s.sph.listLayout = sim::ListLayout::Contiguous;
+    s.vessel->substeps = 4;
+    cases.push_back({"aneurysm, DFSPH, the wall in 4 substeps", s, 21, 15, {}});
   }
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
