@@ -156,6 +156,12 @@ int main(int argc, char** argv) {
                    "pressure is %.0f Pa, which the fluid's own pressure lags while the wall stretches\n",
                    rupture->pressure, rupture->method.c_str(), double(scene.sph.backgroundPressure));
     }
+    if (sim.solver().solvesPressure() && sim.solver().wall() && scene.sph.backgroundPressure > 0.0f) {
+      std::fprintf(stderr,
+                   "hemo-run: warning: DFSPH with a pressurised vessel: the lumen pressure pushes the blood next to the wall "
+                   "into every gap the stretching wall opens, so the flow is noisier than under WCSPH and the wall tears at a "
+                   "lower lumen pressure (docs/physics.md, \"The pressure solver\"); use \"wcsph\" for rupture pressures\n");
+    }
     if (const auto* wall = sim.solver().wall()) {
       // what sets the step: the springs' own limit (times the substeps) against the fluid's
       const hemo::sim::SphParams& sp = sim.solver().params();
