@@ -76,19 +76,28 @@ TEST_F(WallStabilityTest, FastJetOnTheWall) {
               sim->brokenSprings(), o.escaped);
 }
 
+// The tube with springs 200x stiffer (1e4 N/m, undamped) at the largest time-step factor, in
+// `substeps` per step; and the wall's own explicit limit sqrt(m / sum k) (about 14 springs per
+// point).
+nlohmann::json stiffTube(int substeps) {
+  nlohmann::json j = tube();
+  j["vessel"]["stiffness_N_m"] = 1e4;
+  j["vessel"]["damping_N_s_m"] = 0.0;
+  j["vessel"]["time_step_factor"] = 1.0;
+  j["vessel"]["substeps"] = substeps;
+  return j;
+}
+const double kStiffWallLimit = std::sqrt(2e-5 / (1e4 * 14.0));
+
 // Springs 200x stiffer (1e4 N/m) under the lumen pressure, with the wall's time step at the
 // largest factor the network accepts (dt = sqrt(m / sum k), symplectic Euler; its stability
 // limit is 2 / omega_max >= sqrt(2 m / sum k)). The wall's step governs: about 6 us here
 // against the fluid's 40 us.
 TEST_F(WallStabilityTest, StiffSpringsAtTheLargestTimeStepFactor) {
-  nlohmann::json j = tube();
-  j["vessel"]["stiffness_N_m"] = 1e4;
-  j["vessel"]["damping_N_s_m"] = 0.0;
-  j["vessel"]["time_step_factor"] = 1.0;
-  const auto sim = make(ctx(), j);
+  const auto sim = make(ctx(), stiffTube(1));
   const Outcome o = runAndCheck(*sim, 0.005);
   const double meanDt = 0.005 / double(sim->steps());
-  const double dtWall = std::sqrt(2e-5 / (1e4 * 14.0));  // about 14 springs per point
+  const double dtWall = kStiffWallLimit;
   EXPECT_LT(meanDt, 2.0 * dtWall) << "the wall's limit did not govern the step";
   EXPECT_LT(o.maxSpeed, 0.5);
   EXPECT_EQ(o.escaped, 0u);
@@ -101,15 +110,10 @@ TEST_F(WallStabilityTest, StiffSpringsAtTheLargestTimeStepFactor) {
 // wall's own 12 us, while 8 substeps would allow 96 us), and the tube stays as quiet as at the
 // wall's own step.
 TEST_F(WallStabilityTest, StiffSpringsInSubstepsDoNotLimitTheStep) {
-  nlohmann::json j = tube();
-  j["vessel"]["stiffness_N_m"] = 1e4;
-  j["vessel"]["damping_N_s_m"] = 0.0;
-  j["vessel"]["time_step_factor"] = 1.0;
-  j["vessel"]["substeps"] = 8;
-  const auto sim = make(ctx(), j);
+  const auto sim = make(ctx(), stiffTube(8));
   const Outcome o = runAndCheck(*sim, 0.005);
   const double meanDt = 0.005 / double(sim->steps());
-  const double dtWall = std::sqrt(2e-5 / (1e4 * 14.0));  // about 14 springs per point
+  const double dtWall = kStiffWallLimit;
   EXPECT_GT(meanDt, 3.0 * dtWall) << "the wall's springs still limit the step";
   EXPECT_LT(o.maxSpeed, 0.5);
   EXPECT_EQ(o.escaped, 0u);
