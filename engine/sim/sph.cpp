@@ -202,6 +202,13 @@ std::uint64_t activeArgsBytes(const gpu::Context& context, const SphSettings& s,
   const std::uint32_t pages = listPagesFor(context, s, particles);
   return pages > 1 ? kActiveArgsStride * pages : 16;
 }
+// Slots of the rebuild gate, two regions (every slot sorted, or the moving ones): each records
+// the grid's four passes, the list's build once per page, up to three cluster passes and the
+// boundary sort once per page (SphSolver::recordNeighbours).
+std::uint32_t rebuildGateSlots(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
+  const std::uint32_t pages = listPagesFor(context, s, particles);
+  return 2 * std::max(32u, 8u + 2u * pages);
+}
 
 // Whether the fluid walks clusters (ListLayout): on CPU devices, where a fetch costs per lane,
 // for summation density without the SPS term (the cluster passes have neither), with the list
@@ -500,7 +507,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                  "rebuild tile boxes"),
       tileResult_(context, 4, gpu::MemoryUse::Device, "rebuild tile result"),
       tileOccupied_(context, (std::uint64_t(tileSpec_.tiles()) + 2) * 4, gpu::MemoryUse::Device, "rebuild tiles occupied"),
-      rebuildGate_(context, checkResult_, 64, "neighbour rebuild", 2),
+      rebuildGate_(context, checkResult_, rebuildGateSlots(context, settings_, particles), "neighbour rebuild", 2),
       kappa_(context, settings_.pressureSolver == PressureSolver::Dfsph ? perParticle(particles, 16) : 16,
              gpu::MemoryUse::Device, "dfsph stiffness and pressure (k, p, divergence sum of k)"),
       solvePartials_(context, 16, gpu::MemoryUse::Device, "dfsph error partials"),

@@ -439,24 +439,29 @@ TEST_F(SphPhysicsTest, FoldedDispatchesGiveBitIdenticalRuns) {
 // pages of 4,096 slots, the passes that walk them run once per page (the boundary pass over
 // each page's own active list), and the run is bit-identical to the one with each list in one
 // buffer: with the contiguous layout (four entries a texel) and the interleaved one (a GPU's:
-// the page's slots are the stride), and with the SPS term's pass.
+// the page's slots are the stride), and with the SPS term's pass. Pages of 1,024 slots (about
+// 20 of them) record more dispatches in the rebuild's gated region than a fixed share of the
+// gate held, as a GPU's 16M particles did.
 TEST_F(SphPhysicsTest, ListSplitIntoPagesGivesBitIdenticalRuns) {
   struct Case {
     const char* name;
     sim::ListLayout layout;
     bool sps;
     gpu::LimitOverrides limits;
+    std::uint32_t pageSlots;
   };
   // Each holds the lists of 4,096 slots of 128 entries and a little more: a storage buffer's
   // bytes, or the texels as the pair passes read them (one entry each when interleaved, four
   // when contiguous).
-  gpu::LimitOverrides storage, texels, texels4;
+  gpu::LimitOverrides storage, texels, texels4, storage1k;
   storage.maxStorageBufferRange = 4096 * 128 * 4 + 4096;
+  storage1k.maxStorageBufferRange = 1024 * 128 * 4 + 4096;
   texels.maxTexelBufferElements = 4096 * 128 + 1024;
   texels4.maxTexelBufferElements = 4096 * 128 / 4 + 256;
-  const Case cases[] = {{"contiguous, storage range", sim::ListLayout::Contiguous, false, storage},
-                        {"interleaved, texel elements", sim::ListLayout::Interleaved, false, texels},
-                        {"contiguous with SPS, texel elements", sim::ListLayout::Contiguous, true, texels4}};
+  const Case cases[] = {{"contiguous, storage range", sim::ListLayout::Contiguous, false, storage, 4096},
+                        {"interleaved, texel elements", sim::ListLayout::Interleaved, false, texels, 4096},
+                        {"contiguous with SPS, texel elements", sim::ListLayout::Contiguous, true, texels4, 4096},
+                        {"interleaved, pages of 1,024 slots", sim::ListLayout::Interleaved, false, storage1k, 1024}};
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);
     scene::Scene scene = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/dam_break.json");
@@ -479,8 +484,9 @@ TEST_F(SphPhysicsTest, ListSplitIntoPagesGivesBitIdenticalRuns) {
     gpu::Context small(options);
     const auto whole = run(ctx(), 1u);
     const std::uint32_t slots = sim::Simulation(ctx(), scene).store().capacity();
-    const auto split = run(small, (slots + 4095) / 4096);
-    ASSERT_GE((slots + 4095) / 4096, 3u) << "pages enough to test: " << slots << " slots";
+    const std::uint32_t pages = (slots + c.pageSlots - 1) / c.pageSlots;
+    const auto split = run(small, pages);
+    ASSERT_GE(pages, c.pageSlots == 1024 ? 13u : 3u) << "pages enough to test: " << slots << " slots";
     ASSERT_EQ(whole.first.size(), split.first.size());
     EXPECT_EQ(whole.second, split.second) << "the same simulated time";
     EXPECT_EQ(0, std::memcmp(whole.first.data(), split.first.data(), whole.first.size() * sizeof(glm::vec4)))
