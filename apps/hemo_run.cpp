@@ -382,6 +382,8 @@ int main(int argc, char** argv) {
       summary["solver_divergence_iterations_mean"] = div.meanIterations();
       summary["solver_divergence_iterations_max"] = div.maxIterations;
       summary["solver_divergence_cap_hits"] = div.capHits;
+      summary["solver_recorded_iterations_per_step"] = sim.recordedSolveIterationsPerStep();
+      summary["solver_redone_batches"] = sim.redoneBatches();
       for (const auto& [name, s] : {std::pair{"pressure", st}, std::pair{"divergence", div}}) {
         if (s.capHits == 0) continue;
         std::cerr << "hemo-run: warning: in " << s.capHits << " of " << s.solves << " steps the " << name

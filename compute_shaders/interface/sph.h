@@ -457,8 +457,12 @@
 // integers: the order of the sum cannot change a bit) and one workgroup reduces the sums
 // (sph/dfsph_reduce.comp): the first prediction of a solve and every reduction always run;
 // each later (correction, prediction) pair is a gated region (hemo::gpu::DispatchGate) that
-// the reduction before it opens or closes, so the host records the cap's worth and the GPU
-// decides how many run.
+// the reduction before it opens or closes, so the GPU decides how many run. The host records
+// R regions per solve, R at most the cap (hemo::sim::SphSolver::setRecordedIterations): a
+// solve still open after the R-th, below the cap, marks the batch (HEMO_DFSPH_DEPTH_DEEPER)
+// and hemo::sim::Simulation::run runs the batch again from its start with the cap's worth
+// recorded. Every solve thus ends as the cap's recording would have ended it, bit for bit,
+// while a step records only the few iterations that solves usually take.
 #define HEMO_DFSPH_ERROR_SCALE 1048576.0
 #define HEMO_DFSPH_MODE_DENSITY 0u
 #define HEMO_DFSPH_MODE_DIVERGENCE 1u
@@ -482,7 +486,12 @@
 #define HEMO_DFSPH_REDUCE_BINDING_ARMED 2   // hemo::gpu::DispatchGate::armedCounts
 #define HEMO_DFSPH_REDUCE_BINDING_ARGS 3    // ... arguments
 #define HEMO_DFSPH_REDUCE_BINDING_OPENED 4  // ... openings
-#define HEMO_DFSPH_REDUCE_BINDING_COUNT 5
+#define HEMO_DFSPH_REDUCE_BINDING_DEPTH 5   // uint[HEMO_DFSPH_DEPTH_COUNT], reset by the host each batch
+#define HEMO_DFSPH_REDUCE_BINDING_COUNT 6
+// The depth words: what the batch's solves needed of the recorded regions.
+#define HEMO_DFSPH_DEPTH_MAX 0     // most corrections of one solve in the batch
+#define HEMO_DFSPH_DEPTH_DEEPER 1  // solves left open after the last recorded region, below the cap
+#define HEMO_DFSPH_DEPTH_COUNT 2
 // The stats: HEMO_DFSPH_STAT_COUNT words per solve, the density solve's first, then the
 // divergence solve's.
 #define HEMO_DFSPH_STAT_ACTIVE 0        // 1 while the current step's solve iterates

@@ -16,6 +16,7 @@ layout(std430, binding = HEMO_DFSPH_REDUCE_BINDING_STATS) buffer Stats { uint st
 layout(std430, binding = HEMO_DFSPH_REDUCE_BINDING_ARMED) readonly buffer Armed { uvec4 gateArmed[]; };
 layout(std430, binding = HEMO_DFSPH_REDUCE_BINDING_ARGS) writeonly buffer Args { uvec4 gateArgs[]; };
 layout(std430, binding = HEMO_DFSPH_REDUCE_BINDING_OPENED) buffer Opened { uint gateOpened; };
+layout(std430, binding = HEMO_DFSPH_REDUCE_BINDING_DEPTH) buffer Depth { uint depth[HEMO_DFSPH_DEPTH_COUNT]; };
 layout(push_constant) uniform Push {
   uint partialCount;   // the prediction's workgroups
   uint fluid;          // fluid particles (the mean's divisor)
@@ -24,6 +25,7 @@ layout(push_constant) uniform Push {
   float tolerance;     // of the mean compression, / rho0
   uint slots;          // the gate's slots
   uint statBase;       // the solve's stats: 0 density, HEMO_DFSPH_STAT_COUNT divergence
+  uint recorded;       // the gated regions the host recorded after this solve's first prediction
 } pc;
 
 #include "common/gate.glsl"
@@ -68,7 +70,12 @@ void main() {
       stats(HEMO_DFSPH_STAT_ITERATIONS) += 1u;
       stats(HEMO_DFSPH_STAT_TOTAL) += 1u;
       stats(HEMO_DFSPH_STAT_ACTIVE) = 1u;
+      // No region follows the last recorded one: the batch is run again, recorded deeper.
+      if (pc.iteration >= pc.recorded) {
+        depth[HEMO_DFSPH_DEPTH_DEEPER] += 1u;
+      }
     } else {
+      depth[HEMO_DFSPH_DEPTH_MAX] = max(depth[HEMO_DFSPH_DEPTH_MAX], stats(HEMO_DFSPH_STAT_ITERATIONS));
       stats(HEMO_DFSPH_STAT_ACTIVE) = 0u;
       stats(HEMO_DFSPH_STAT_SOLVES) += 1u;
       stats(HEMO_DFSPH_STAT_CAP_HITS) += converged ? 0u : 1u;

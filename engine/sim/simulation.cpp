@@ -12,6 +12,12 @@ namespace hemo::sim {
 
 namespace {
 
+// DFSPH's recorded regions per solve (Simulation::run): the first batch's, and the fewest a
+// batch records. Solves mostly take 0-3 corrections; each region recorded but not needed costs
+// two empty dispatches and their barriers, a batch run again costs the whole batch.
+constexpr std::uint32_t kFirstSolveDepth = 8;
+constexpr std::uint32_t kMinSolveDepth = 4;
+
 // What the physics of a run depends on, as built: a checkpoint of another scene (or another
 // version of this one) does not match it.
 std::uint64_t fingerprintOf(const scene::Scene& scene, const scene::SceneBuild& build) {
@@ -132,19 +138,53 @@ RunResult Simulation::run(const RunOptions& options) {
       if (left < double(batch)) batch = std::min<std::uint64_t>(batch, std::uint64_t(left * 1.1) + 2);
     }
     const std::uint64_t before = clock.steps;
-    recorder_->begin();
-    std::uint32_t statsRows = 0;
-    for (std::uint64_t k = 0; k < batch; ++k) {
-      const std::uint64_t dispatches = recorder_->dispatchCount(), barriers = recorder_->barrierCount();
-      solver_->recordStep(*recorder_, static_cast<std::uint32_t>(steps_ + k), static_cast<std::uint32_t>(k),
-                          static_cast<float>(endTime));
-      recordedDispatches_ += recorder_->dispatchCount() - dispatches;
-      recordedBarriers_ += recorder_->barrierCount() - barriers;
-      ++recordedSteps_;
-      if (stats_ && (steps_ + k) % statsEvery_ == 0) stats_->record(*recorder_, statsRows++);
+    // DFSPH records its solves' iterations to a depth below the cap where it can (RunOptions::
+    // recordedSolveIterations): a batch in which some solve needed more runs again from a
+    // copy of its starting state, recorded to the cap, so that every result is the cap's.
+    const bool solves = solver_->solvesPressure();
+    const std::uint32_t cap = solver_->settings().solverMaxIterations;
+    if (solves) {
+      if (solveDepth_ == 0) solveDepth_ = std::min(cap, kFirstSolveDepth);
+      solver_->setRecordedIterations(options.recordedSolveIterations.value_or(solveDepth_));
     }
-    recorder_->end();
-    recorder_->submitAndWait();
+    const std::vector<std::uint32_t> hostAtStart = solver_->hostState();
+    bool again = false;
+    std::uint32_t statsRows = 0;
+    for (;;) {
+      const bool speculative = solves && solver_->recordedIterations() < cap;
+      recorder_->begin();
+      if (again) recordRestoreState(*recorder_);
+      if (speculative) recordSaveState(*recorder_);
+      if (solves) solver_->recordSolveDepthReset(*recorder_);
+      statsRows = 0;
+      for (std::uint64_t k = 0; k < batch; ++k) {
+        const std::uint64_t dispatches = recorder_->dispatchCount(), barriers = recorder_->barrierCount();
+        solver_->recordStep(*recorder_, static_cast<std::uint32_t>(steps_ + k), static_cast<std::uint32_t>(k),
+                            static_cast<float>(endTime));
+        recordedDispatches_ += recorder_->dispatchCount() - dispatches;
+        recordedBarriers_ += recorder_->barrierCount() - barriers;
+        if (stats_ && (steps_ + k) % statsEvery_ == 0) stats_->record(*recorder_, statsRows++);
+      }
+      recorder_->end();
+      recorder_->submitAndWait();
+      if (solves) recordedSolveRegions_ += 2 * std::uint64_t(solver_->recordedIterations()) * batch;
+      const SphSolver::SolveDepth depth = solves ? solver_->readSolveDepth() : SphSolver::SolveDepth{};
+      if (speculative && depth.deeper > 0) {
+        // Some solve was left open after the last recorded region: back to the batch's start.
+        ++redoneBatches_;
+        again = true;
+        solver_->restoreHostState(hostAtStart);
+        solver_->setRecordedIterations(cap);
+        continue;
+      }
+      // The next batch records half as much again as this one's solves took at most, and two
+      // more: a batch's most changes slowly from one batch to the next.
+      if (solves) {
+        solveDepth_ = std::clamp(depth.maxIterations + depth.maxIterations / 2 + 2, std::min(cap, kMinSolveDepth), cap);
+      }
+      break;
+    }
+    recordedSteps_ += batch;
     clock = solver_->readClock();
     checkStatus(steps_);
     if (statsRows > 0 && options.onStepStats) {
@@ -167,6 +207,30 @@ RunResult Simulation::run(const RunOptions& options) {
   r.simTime = clock.time;
   r.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
+}
+
+void Simulation::recordSaveState(gpu::CommandRecorder& rec) {
+  const std::vector<gpu::Buffer*> state = checkpointBuffers();
+  if (saved_.size() != state.size()) {
+    saved_.clear();
+    saved_.reserve(state.size());
+    for (const gpu::Buffer* b : state) saved_.emplace_back(*context_, b->size(), gpu::MemoryUse::Device, b->name() + " (batch start)");
+  }
+  rec.computeToTransfer();
+  rec.transferToTransfer();
+  for (std::size_t i = 0; i < state.size(); ++i) rec.copy(*state[i], saved_[i], state[i]->size());
+  rec.transferToTransfer();
+  rec.transferToCompute();
+}
+
+void Simulation::recordRestoreState(gpu::CommandRecorder& rec) {
+  const std::vector<gpu::Buffer*> state = checkpointBuffers();
+  if (saved_.size() != state.size()) throw std::logic_error("Simulation: no saved state to restore");
+  rec.computeToTransfer();
+  rec.transferToTransfer();
+  for (std::size_t i = 0; i < state.size(); ++i) rec.copy(saved_[i], *state[i], state[i]->size());
+  rec.transferToTransfer();
+  rec.transferToCompute();
 }
 
 void Simulation::checkStatus(std::uint64_t batchFirstStep) {

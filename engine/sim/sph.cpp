@@ -70,7 +70,7 @@ struct DfsphCorrectPush {  // sph/dfsph_correct.comp
 struct DfsphReducePush {  // sph/dfsph_reduce.comp
   std::uint32_t partialCount, fluid, iteration, maxIterations;
   float tolerance;
-  std::uint32_t slots, statBase;
+  std::uint32_t slots, statBase, recorded;
 };
 struct DtReducePush {  // sph/dt_reduce.comp
   std::uint32_t wallBase;  // the wall stage's first partial
@@ -513,7 +513,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       solvePartials_(context, 16, gpu::MemoryUse::Device, "dfsph error partials"),
       solveStats_(context, 2 * HEMO_DFSPH_STAT_COUNT * 4, gpu::MemoryUse::Device, "dfsph stats"),
       // (a correction and a prediction per region; the density solve's regions, the divergence solve's)
-      pressureGate_(context, solveStats_, 4, "pressure solve", 2) {
+      pressureGate_(context, solveStats_, 4, "pressure solve", 2),
+      solveDepth_(context, HEMO_DFSPH_DEPTH_COUNT * 4, gpu::MemoryUse::Device, "dfsph recorded depth"),
+      recordedIterations_(settings_.solverMaxIterations) {
   const SphSettings& settings = settings_;  // (Auto resolved)
   cellWalk_ = settings.neighbourSearch == NeighbourSearch::Cells;
   const bool contiguous = contiguousList(context, settings);
@@ -889,9 +891,11 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                              {HEMO_DFSPH_REDUCE_BINDING_STATS, &solveStats_},
                                              {HEMO_DFSPH_REDUCE_BINDING_ARMED, &pressureGate_.armedCounts()},
                                              {HEMO_DFSPH_REDUCE_BINDING_ARGS, &pressureGate_.arguments()},
-                                             {HEMO_DFSPH_REDUCE_BINDING_OPENED, &pressureGate_.openings()}});
+                                             {HEMO_DFSPH_REDUCE_BINDING_OPENED, &pressureGate_.openings()},
+                                             {HEMO_DFSPH_REDUCE_BINDING_DEPTH, &solveDepth_}});
   }
   solveStats_.upload(std::vector<std::uint32_t>(2 * HEMO_DFSPH_STAT_COUNT, 0u));
+  solveDepth_.upload(std::vector<std::uint32_t>(HEMO_DFSPH_DEPTH_COUNT, 0u));
   checkCount_.upload(std::vector<std::uint32_t>{0u});
   dtCounts_.upload(std::vector<std::uint32_t>{0u, 0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
@@ -1213,10 +1217,11 @@ void SphSolver::recordPressureSolveOver(gpu::CommandRecorder& rec, std::uint32_t
   auto predict = [&](std::uint32_t iteration) { return DfsphPredictPush{fluidSlots, clockParity_, endTime, iteration, mode}; };
   const std::uint32_t statBase = mode == HEMO_DFSPH_MODE_DIVERGENCE ? HEMO_DFSPH_STAT_COUNT : 0u;
   const std::uint32_t cap = settings_.solverMaxIterations;
+  const std::uint32_t recorded = std::min(recordedIterations_, cap);
   auto reduce = [&](std::uint32_t iteration) {
     rec.dispatch(*dfsphReduce_, dfsphReduceSet_,
                  DfsphReducePush{partials, particles_->fluidCount(), iteration, cap, settings_.solverTolerance,
-                                 pressureGate_.slots(), statBase},
+                                 pressureGate_.slots(), statBase, recorded},
                  dfsphReduce_->groupsFor(1u));
     rec.computeToCompute();  // the stats; the gate's arguments before the region's indirect reads
   };
@@ -1224,7 +1229,7 @@ void SphSolver::recordPressureSolveOver(gpu::CommandRecorder& rec, std::uint32_t
   rec.dispatch(*dfsphPredict_, dfsphPredictSet_, predict(0), groups);
   rec.computeToCompute();
   reduce(0);
-  for (std::uint32_t k = 1; k <= cap; ++k) {
+  for (std::uint32_t k = 1; k <= recorded; ++k) {
     rec.beginGate(pressureGate_, mode == HEMO_DFSPH_MODE_DIVERGENCE ? 1u : 0u);
     rec.dispatch(*dfsphCorrect_, dfsphCorrectSet_, DfsphCorrectPush{fluidSlots, mode},
                  dfsphCorrect_->groupsFor(std::max(fluidSlots, 1u)));
@@ -1240,6 +1245,20 @@ void SphSolver::recordPressureSolveOver(gpu::CommandRecorder& rec, std::uint32_t
     wall_->recordPressureReaction(rec, nonFluidStart(), particles_->count());
     if (timestamps) timestamps->mark(rec, "wall pressure reaction");
   }
+}
+
+void SphSolver::setRecordedIterations(std::uint32_t regions) {
+  recordedIterations_ = std::clamp(regions, 1u, std::max(settings_.solverMaxIterations, 1u));
+}
+
+void SphSolver::recordSolveDepthReset(gpu::CommandRecorder& rec) {
+  rec.fill(solveDepth_, 0u);
+  rec.transferToCompute();
+}
+
+SphSolver::SolveDepth SphSolver::readSolveDepth() const {
+  const auto w = solveDepth_.readback<std::uint32_t>(HEMO_DFSPH_DEPTH_COUNT);
+  return SolveDepth{w[HEMO_DFSPH_DEPTH_MAX], w[HEMO_DFSPH_DEPTH_DEEPER]};
 }
 
 PressureSolveStats SphSolver::readPressureSolveStats(bool divergence) const {

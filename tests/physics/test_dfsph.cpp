@@ -11,9 +11,11 @@
 
 #include <glm/geometric.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <string>
 
 namespace hemo::test {
@@ -193,6 +195,70 @@ TEST_F(DfsphTest, TwoRunsAreBitIdentical) {
     } else {
       ASSERT_EQ(state.size(), first.size());
       EXPECT_EQ(0, std::memcmp(state.data(), first.data(), state.size() * sizeof(glm::vec4)));
+    }
+  }
+}
+
+// How many iterations a step records changes nothing: a solve that needs more than the batch
+// recorded sends the batch back to its start (Simulation::run). The jet in the box (steps of
+// 2 to 5 corrections) and the aneurysm under DFSPH with its wall in 4 substeps (the wall's
+// springs, ruptures and the wall's reaction in the state copied back), each recorded to the
+// cap, to one region per solve (most batches run again), and as the run chooses: the same bits,
+// and the same iterations counted.
+TEST_F(DfsphTest, RecordedIterationsDoNotChangeTheResult) {
+  scene::Scene jet = scene::parseScene(kBox, "hard_case_dfsph");
+  jet.blocks[0].velocity = glm::vec3(2.0f, 0.0f, 0.0f);
+  jet.stepsPerBatch = 16;
+  scene::Scene aneurysm = scene::loadScene(std::string(HEMO_SOURCE_DIR) + "/scenes/aneurysm.json");
+  useDfsph(aneurysm, 1.0e-3f, 50);
+  aneurysm.vessel->substeps = 4;
+  aneurysm.stepsPerBatch = 16;
+  struct Case {
+    const char* name;
+    scene::Scene scene;
+    std::uint64_t steps;
+  };
+  for (const Case& c : {Case{"jet in a box", jet, 120}, Case{"aneurysm, wall in 4 substeps", aneurysm, 80}}) {
+    SCOPED_TRACE(c.name);
+    const std::uint32_t cap = c.scene.sph.solverMaxIterations;
+    std::vector<glm::vec4> reference;
+    sim::PressureSolveStats referenceStats[2];
+    for (const std::optional<std::uint32_t> depth : {std::optional<std::uint32_t>(cap), std::optional<std::uint32_t>(1u),
+                                                     std::optional<std::uint32_t>()}) {
+      SCOPED_TRACE(depth ? "recorded " + std::to_string(*depth) : std::string("recorded as the run chooses"));
+      sim::Simulation sim(ctx(), c.scene);
+      sim::RunOptions opt;
+      opt.steps = c.steps;
+      opt.recordedSolveIterations = depth;
+      sim.run(opt);
+      std::vector<glm::vec4> state = positionsAndVelocities(sim);
+      for (const glm::vec2& dp : sim.snapshot().densityPressure) state.emplace_back(dp, 0.0f, 0.0f);
+      const sim::PressureSolveStats stats[2] = {sim.solver().readPressureSolveStats(false),
+                                                sim.solver().readPressureSolveStats(true)};
+      if (depth == cap) {
+        reference = state;
+        referenceStats[0] = stats[0];
+        referenceStats[1] = stats[1];
+        EXPECT_EQ(sim.redoneBatches(), 0u);
+        EXPECT_GE(std::max(stats[0].maxIterations, stats[1].maxIterations), 2u) << "the case should need a second region";
+        continue;
+      }
+      if (depth == 1u) {
+        EXPECT_GT(sim.redoneBatches(), 0u) << "one region per solve should not do";
+      } else {
+        EXPECT_LT(sim.recordedSolveIterationsPerStep(), 2.0 * cap) << "the run should record less than the cap";
+      }
+      ASSERT_EQ(state.size(), reference.size());
+      EXPECT_EQ(0, std::memcmp(state.data(), reference.data(), state.size() * sizeof(glm::vec4)));
+      for (int k = 0; k < 2; ++k) {
+        EXPECT_EQ(stats[k].solves, referenceStats[k].solves);
+        EXPECT_EQ(stats[k].totalIterations, referenceStats[k].totalIterations);
+        EXPECT_EQ(stats[k].maxIterations, referenceStats[k].maxIterations);
+        EXPECT_EQ(stats[k].capHits, referenceStats[k].capHits);
+      }
+      std::printf("[ depth    ] %s, %s: %llu batches run again, %.1f regions recorded per step, %.1f dispatches per step\n",
+                  c.name, depth ? "one region" : "chosen", static_cast<unsigned long long>(sim.redoneBatches()),
+                  sim.recordedSolveIterationsPerStep(), sim.dispatchesPerStep());
     }
   }
 }

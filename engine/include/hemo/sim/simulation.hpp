@@ -40,6 +40,11 @@ struct RunOptions {
   std::function<void(const Progress&)> onOutput;
   // With enableStepStats: the rows of each batch (steps that changed nothing are left out).
   std::function<void(const std::vector<StepStatsRow>&)> onStepStats;
+  // DFSPH: the (correction, prediction) regions recorded per solve (SphSolver::
+  // setRecordedIterations), 1 to the cap. Unset: chosen per batch from what the last batch's
+  // solves took. Any depth gives the same results bit for bit; a shallow one costs batches run
+  // again (Simulation::redoneBatches), a deep one empty dispatches.
+  std::optional<std::uint32_t> recordedSolveIterations;
 };
 
 struct RunResult {
@@ -72,6 +77,13 @@ class Simulation {
   // particle count, so at small N they set the step time. 0 before the first step.
   double dispatchesPerStep() const { return recordedSteps_ ? double(recordedDispatches_) / double(recordedSteps_) : 0.0; }
   double barriersPerStep() const { return recordedSteps_ ? double(recordedBarriers_) / double(recordedSteps_) : 0.0; }
+  // DFSPH: batches that run() ran again from their start because a solve needed more
+  // iterations than the batch recorded (their first runs' dispatches count in the averages
+  // above), and the solve's recorded regions per step on average.
+  std::uint64_t redoneBatches() const { return redoneBatches_; }
+  double recordedSolveIterationsPerStep() const {
+    return recordedSteps_ ? double(recordedSolveRegions_) / double(recordedSteps_) : 0.0;
+  }
 
   // Checkpoints (hemo/io/checkpoint.hpp). writeCheckpoint writes the whole state between runs
   // (atomically; throws io::WriteError naming the file). resume replaces the state of a
@@ -126,6 +138,11 @@ class Simulation {
 
  private:
   void checkStatus(std::uint64_t batchFirstStep);
+  // A batch that may have to run again (DFSPH recorded below its cap) starts from a copy of
+  // the whole state (the checkpoint's buffers) made on the GPU: save records the copy, restore
+  // records the copy back.
+  void recordSaveState(gpu::CommandRecorder& rec);
+  void recordRestoreState(gpu::CommandRecorder& rec);
 
   gpu::Context* context_;
   scene::Scene scene_;
@@ -143,6 +160,9 @@ class Simulation {
   std::uint64_t steps_ = 0;
   std::uint64_t fingerprint_ = 0;
   std::uint64_t recordedDispatches_ = 0, recordedBarriers_ = 0, recordedSteps_ = 0;
+  std::uint64_t redoneBatches_ = 0, recordedSolveRegions_ = 0;
+  std::uint32_t solveDepth_ = 0;     // the next batch's recorded regions per solve (adaptive)
+  std::vector<gpu::Buffer> saved_;   // recordSaveState's copy
   std::vector<gpu::Buffer*> checkpointBuffers();
 };
 

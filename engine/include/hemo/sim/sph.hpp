@@ -233,6 +233,20 @@ class SphSolver {
   bool solvesPressure() const { return settings_.pressureSolver == PressureSolver::Dfsph; }
   // (a readback; zeros under WCSPH): the density solve's, or the divergence solve's
   PressureSolveStats readPressureSolveStats(bool divergence = false) const;
+  // The gated (correction, prediction) regions recorded per solve, 1 to the cap (default: the
+  // cap, settings().solverMaxIterations). Below the cap, a solve still open after the last
+  // recorded region leaves the step unfinished and marks it (readSolveDepth().deeper): the
+  // caller must then run the batch again from its start with more recorded
+  // (Simulation::run does, from a copy of the state). Takes effect in the next recordStep.
+  void setRecordedIterations(std::uint32_t regions);
+  std::uint32_t recordedIterations() const { return recordedIterations_; }
+  // Zeroes the depth words (a transfer command), before a batch.
+  void recordSolveDepthReset(gpu::CommandRecorder& rec);
+  struct SolveDepth {
+    std::uint32_t maxIterations = 0;  // most corrections of one solve since the reset
+    std::uint32_t deeper = 0;         // solves left open after the last recorded region
+  };
+  SolveDepth readSolveDepth() const;  // (a readback)
   // vec4 per slot: k_i = kappa_i / rho_i of the last prediction (m^5 kg^-1 s^-2), the pressure
   // of the step's impulses (Pa; state().y holds it plus the background pressure), the
   // divergence solve's sum of k_i, 0.
@@ -451,6 +465,9 @@ class SphSolver {
   // partials (uint per workgroup), the stats (HEMO_DFSPH_STAT_*), the gate of the iterations.
   gpu::Buffer kappa_, solvePartials_, solveStats_;
   gpu::DispatchGate pressureGate_;
+  // HEMO_DFSPH_DEPTH_* (not part of the state: what the batch asked of the recording)
+  gpu::Buffer solveDepth_;
+  std::uint32_t recordedIterations_ = 0;
   const gpu::ComputePipeline* dfsphPredict_ = nullptr;
   const gpu::ComputePipeline* dfsphCorrect_ = nullptr;
   const gpu::ComputePipeline* dfsphReduce_ = nullptr;
