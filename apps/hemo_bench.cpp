@@ -566,6 +566,63 @@ Json accuracy(Context& ctx, const std::string& only, const std::string& solverOn
       }
     }
   }
+  if (only.empty() || only == "laplace") {
+    // Laplace's law (LaplaceTest): a closed periodic tube (R = 5 mm, two layers, dp = 1 mm,
+    // 10 mm long) whose hoop springs break at 5% strain; the lumen pressure rises to 1.3 P* in
+    // 0.39 s, P* the static estimate of the spring layout (scene::ruptureEstimate). The error
+    // is |p / P* - 1|, p the lumen pressure at the first broken spring (from the step rows of
+    // every step; the dynamic break comes somewhat below P*: the wall overshoots). WCSPH with
+    // the wall's own step, DFSPH with the wall in 8 substeps.
+    const double dp = 0.001, radius = 0.005;
+    const double around = std::round(2.0 * std::numbers::pi * radius / dp);
+    const double hoop = 2.0 * (radius + 0.5 * dp) * std::sin(std::numbers::pi / around);
+    const double maxForce = 100.0 * 0.05 * hoop;
+    for (const bool dfsph : {false, true}) {
+      if (skip(dfsph)) continue;
+      const std::string text = R"({"scene": "laplace_bench", "particles": {"spacing_m": 0.001},
+        "fluid": {"density_kg_m3": 1060, "viscosity_pa_s": 0.0035, "expected_max_speed_m_s": 0.2},
+        "vessel": {"shape": "tube", "start_m": [0, 0, 0], "length_m": 0.01, "radius_m": 0.005, "layers": 2,
+                   "point_mass_kg": 0.001, "stiffness_N_m": 100, "damping_N_s_m": 0.02, "max_force_N": )" +
+                               std::to_string(maxForce) + R"(},
+        "forces": {"gravity_m_s2": [0, 0, 0]},
+        "time": {"end_time_s": 0.39, "steps_per_batch": 64},
+        "domain": {"min_m": [0, -0.013, -0.013], "max_m": [0.01, 0.013, 0.013], "periodic": ["x"]}})";
+      hemo::scene::Scene scene = hemo::scene::parseScene(text, "laplace_bench");
+      const std::optional<hemo::scene::RuptureEstimate> estimate = hemo::scene::ruptureEstimate(scene);
+      if (!estimate) throw std::runtime_error("accuracy: the Laplace tube has no rupture estimate");
+      const double pStar = estimate->pressure;
+      scene.sph.backgroundPressure = float(1.3 * pStar);
+      scene.sph.backgroundPressureRamp = 0.39f;
+      if (dfsph) {
+        scene.sph.pressureSolver = hemo::sim::PressureSolver::Dfsph;
+        scene.vessel->substeps = 8;
+      }
+      hemo::sim::Simulation sim(ctx, scene);
+      sim.enableStepStats(1);
+      double breakTime = -1.0;
+      hemo::sim::RunOptions opt;
+      opt.until = 0.39;
+      opt.onStepStats = [&](const std::vector<hemo::sim::StepStatsRow>& stepRows) {
+        for (const auto& r : stepRows) {
+          if (breakTime < 0.0 && r.brokenSprings > 0) breakTime = r.time;
+        }
+      };
+      // in pieces of 0.01 s, stopping at the first break
+      double wall = 0.0;
+      for (double t = 0.01; breakTime < 0.0 && t <= 0.39 + 1e-9; t += 0.01) {
+        opt.until = t;
+        wall += sim.run(opt).wallSeconds;
+      }
+      // (no break up to 1.3 P*: the error is at least 0.3)
+      const double lumen = breakTime < 0.0 ? 1.3 * pStar : 1.3 * pStar * breakTime / 0.39;
+      row("laplace", scene, std::abs(lumen / pStar - 1.0), "rel_error_rupture_pressure", sim, wall);
+      rows.back()["rupture_pressure_Pa"] = lumen;
+      rows.back()["rupture_estimate_Pa"] = pStar;
+      rows.back()["wall_substeps"] = scene.vessel->substeps;
+      std::printf("    first break at t = %.4f s, lumen pressure %.0f Pa = %.3f of the static estimate %.0f Pa\n", breakTime,
+                  lumen, lumen / pStar, pStar);
+    }
+  }
   return rows;
 }
 
@@ -1132,7 +1189,7 @@ int main(int argc, char** argv) {
       "         (device: what hemo reads from the device: sizes, limits, timestamps, memory types)\n"
       "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
       "                speed: whole runs, default 3)\n"
-      "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, dam_break)\n"
+      "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, dam_break, laplace)\n"
       "  --solver NAME accuracy: only the runs of this pressure solver (wcsph, dfsph)\n"
       "  --scene FILE  speed, soak: the scene to run (default scenes/dam_break.json; soak: scenes/aneurysm.json)\n"
       "  --until S     speed: simulated seconds per run (default: the scene's time.end_time_s)\n"
@@ -1168,8 +1225,8 @@ int main(int argc, char** argv) {
     if (args.has("--solver") && solverOnly != "wcsph" && solverOnly != "dfsph") {
       throw hemo::cli::UsageError("unknown --solver '" + solverOnly + "' (expected wcsph or dfsph)");
     }
-    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break") {
-      throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille or dam_break)");
+    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break" && only != "laplace") {
+      throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille, dam_break or laplace)");
     }
     if (args.has("--until") && suite != "speed") throw hemo::cli::UsageError("--until applies to the speed suite only");
     if (args.has("--scene") && suite != "speed" && suite != "soak") {
