@@ -1155,7 +1155,11 @@ void SphSolver::recordIntegrate(gpu::CommandRecorder& rec, std::uint32_t step, s
 }
 
 void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex,
-                                    float endTime, std::uint32_t mode, std::uint32_t moving) {
+                                    float endTime, std::uint32_t mode, std::uint32_t moving,
+                                    gpu::TimestampQueries* timestamps) {
+  auto mark = [&](const char* stage) {
+    if (timestamps) timestamps->mark(rec, stage);
+  };
   if (logIndex >= maxStepsPerBatch_) {
     throw std::out_of_range("step log index " + std::to_string(logIndex) + " exceeds the batch capacity " +
                             std::to_string(maxStepsPerBatch_));
@@ -1165,7 +1169,10 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   // At least one workgroup: invocation 0 advances the clock even with no particles, and a
   // full stage's partials of the rebuild test must not be empty.
   const bool wallAdvanced = wall_ && wall_->substeps() > 1 && mode == HEMO_INTEGRATE_SYMPLECTIC_EULER;
-  if (wallAdvanced) wall_->recordSubsteps(rec, nonFluidStart(), n, clockParity_, endTime);
+  if (wallAdvanced) {
+    wall_->recordSubsteps(rec, nonFluidStart(), n, clockParity_, endTime);
+    mark("wall substeps");
+  }
   const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold(), wallAdvanced ? 1u : 0u};
   const std::uint32_t inflow = inflowOn_ ? 1 : 0;
   const gpu::ComputePipeline& integrate = *integrate_[inflow][mode];
@@ -1188,6 +1195,7 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
     // the rebuild test's reduction (with the tile test after symplectic Euler) decides and
     // arms the gate (interface/sph.h)
     rec.computeToCompute();
+    mark("integrate");
     const std::uint32_t tiles = mode == HEMO_INTEGRATE_SYMPLECTIC_EULER ? 1u : 0u;
     rec.dispatch(*rebuildDecide_[tiles], rebuildDecideSet_,
                  DecidePush{rebuildThreshold(), rebuildGate_.slots(), moving < n ? 1u : 0u, groups.x, groups.y},
@@ -1200,6 +1208,7 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
   if (mode != HEMO_INTEGRATE_RK2_HALF) {
     clockParity_ ^= 1u;  // the half stage leaves the clock alone
     rec.computeToCompute();  // the gate's arguments; the test's result for the next step
+    mark("rebuild test");
   } else {
     rec.computeToCompute();
   }
@@ -1358,8 +1367,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
     recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_RK2_FULL, moving);
     mark("rk2 midpoint stage + integrate");
   } else {
-    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_SYMPLECTIC_EULER, moving);
-    mark("integrate");
+    recordIntegrateMode(rec, step, logIndex, endTime, HEMO_INTEGRATE_SYMPLECTIC_EULER, moving, timestamps);
   }
 }
 

@@ -376,7 +376,7 @@ class SphSolver {
   std::uint32_t clockParity_ = 0;  // which clock record holds the current time
   // The integrator over the first `moving` slots (the rest must be rigid boundary particles).
   void recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t step, std::uint32_t logIndex, float endTime,
-                           std::uint32_t mode, std::uint32_t moving);
+                           std::uint32_t mode, std::uint32_t moving, gpu::TimestampQueries* timestamps = nullptr);
   bool inGridOrder() const;  // the slots are sorted since the last upload (fluid first)
   // The boundary-pressure pass in a range mode (HEMO_BPRESSURE_SORT or _REST) over the
   // non-fluid slots.
