@@ -48,6 +48,7 @@ const std::vector<Field>& schema() {
            {"spacing_m", Kind::Number, "m", 0, 10, true, nullptr, "Initial particle spacing dp (fluid and boundary lattice)."},
            {"smoothing_ratio", Kind::Number, "1", 0.5, 3, false, 1.3, "Smoothing length h / dp; the kernel support is 2h."},
            {"neighbour_capacity", Kind::Integer, "1", 8, 1024, false, 128, "Neighbour-list entries per particle; exceeding it stops the run."},
+           {"list_layout", Kind::Choice, "", 0, 0, false, "auto", "How the neighbour list lies in memory: interleaved (entry k of consecutive particles side by side: a GPU's loads coalesce; the default on GPUs), contiguous (each particle's entries together, read four per texel: fewer, wider loads; the default on CPU devices), clusters (CPU devices: one list per four consecutive fluid particles; WCSPH with summation density and no SPS term only, else contiguous), or auto. Results differ only in the order of the sums; for benchmarks and devices where the default is not the fastest.", {"auto", "interleaved", "contiguous", "clusters"}},
            {"neighbour_search", Kind::Choice, "", 0, 0, false, "auto", "How the passes find a particle's neighbours: a neighbour list (fastest where it fits; 8 x neighbour_capacity bytes per particle), cells (no list: each pass walks the grid cells around the particle, for scenes the list would not fit; the same results bit for bit), or auto (the list where the device's memory holds it, else cells).", {"auto", "list", "cells"}},
            {"list_skin", Kind::Number, "1", 0, 1, false, 0.1, "Neighbour-list radius = 2h (1 + skin). A larger skin rebuilds the list less often but makes it longer: 0.1 suits the dam break, 0.25 (with a capacity of 176) the vessel scenes, whose shear flows spread the displacements (docs/benchmarks.md)."},
        }},
@@ -536,6 +537,13 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.sph.neighbourCapacity = part["neighbour_capacity"].get<std::uint32_t>();
   s.sph.listSkin = part["list_skin"].get<float>();
   {
+    const std::string layout = part["list_layout"].get<std::string>();
+    s.sph.listLayout = layout == "interleaved"  ? sim::ListLayout::Interleaved
+                       : layout == "contiguous" ? sim::ListLayout::Contiguous
+                       : layout == "clusters"   ? sim::ListLayout::Clusters
+                                                : sim::ListLayout::Auto;
+  }
+  {
     const std::string search = part["neighbour_search"].get<std::string>();
     s.sph.neighbourSearch = search == "list"    ? sim::NeighbourSearch::List
                             : search == "cells" ? sim::NeighbourSearch::Cells
@@ -631,7 +639,8 @@ Scene parseScene(const std::string& text, const std::string& source) {
     const char* why = s.sph.densityMethod != sim::DensityMethod::Summation ? "needs fluid.density \"summation\""
                       : s.sph.integrator != sim::Integrator::SymplecticEuler ? "steps with time.integrator \"symplectic_euler\""
                       : s.sph.neighbourSearch == sim::NeighbourSearch::Cells ? "needs particles.neighbour_search \"list\" or \"auto\""
-                                                                             : nullptr;
+                      : s.sph.listLayout == sim::ListLayout::Clusters ? "does not walk clusters (particles.list_layout)"
+                                                                       : nullptr;
     if (why) c.fail("fluid.solver", std::string("\"dfsph\" ") + why);
   }
   try {

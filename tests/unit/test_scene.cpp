@@ -130,6 +130,23 @@ TEST(Scene, OutOfRangeValuesAreNamed) {
 }
 
 // The DFSPH solver's settings, and what it does not run, are named.
+// particles.list_layout picks the neighbour list's layout (default: the device's choice).
+TEST(Scene, ListLayoutIsParsedAndChecked) {
+  EXPECT_EQ(parseScene(validScene().dump(), "ok.json").sph.listLayout, sim::ListLayout::Auto);
+  const std::pair<const char*, sim::ListLayout> layouts[] = {{"auto", sim::ListLayout::Auto},
+                                                             {"interleaved", sim::ListLayout::Interleaved},
+                                                             {"contiguous", sim::ListLayout::Contiguous},
+                                                             {"clusters", sim::ListLayout::Clusters}};
+  for (const auto& [name, layout] : layouts) {
+    Json j = validScene();
+    j["particles"]["list_layout"] = name;
+    EXPECT_EQ(parseScene(j.dump(), "ok.json").sph.listLayout, layout) << name;
+  }
+  Json j = validScene();
+  j["particles"]["list_layout"] = "rows";
+  expectError(j, {"particles.list_layout", "interleaved", "contiguous"});
+}
+
 TEST(Scene, PressureSolverSettingsAreCheckedAndItsLimitsNamed) {
   Json j = validScene();
   j["fluid"]["solver"] = "dfsph";
@@ -161,6 +178,10 @@ TEST(Scene, PressureSolverSettingsAreCheckedAndItsLimitsNamed) {
   j["fluid"]["solver"] = "dfsph";
   j["particles"]["neighbour_search"] = "cells";
   expectError(j, {"fluid.solver", "neighbour_search"});
+  j = validScene();
+  j["fluid"]["solver"] = "dfsph";
+  j["particles"]["list_layout"] = "clusters";
+  expectError(j, {"fluid.solver", "list_layout"});
   // a vessel with its inflow and lumen (background) pressure runs under DFSPH
   std::ifstream in(std::string(HEMO_SOURCE_DIR) + "/scenes/aneurysm.json");
   Json v = Json::parse(in);
