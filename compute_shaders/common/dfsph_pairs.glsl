@@ -6,18 +6,13 @@
 // which takes each pair in list order; the padding of a texel read passes j = i, a pair at
 // zero distance whose gradient is exactly 0.
 void hemo_dfsph_pair_range(uint i, uint first, uint end, const bool boundary) {
-  if (kListWidth == 4u) {
-    for (uint k = first & ~3u; k < end; k += 4u) {
-      const uvec4 js = texelFetch(pairList, int(hemo_list_texel(i, k, gPp)));
-      pair(k >= first ? js.x : i, boundary);
-      pair(k + 1u >= first && k + 1u < end ? js.y : i, boundary);
-      pair(k + 2u >= first && k + 2u < end ? js.z : i, boundary);
-      pair(k + 3u >= first && k + 3u < end ? js.w : i, boundary);
-    }
-  } else {
-    for (uint k = first; k < end; ++k) {
-      pair(texelFetch(pairList, int(hemo_list_slot(i, k, gPp))).x, boundary);
-    }
+  // (one entry per texel: from `first` itself)
+  for (uint k = kListWidth == 4u ? first & ~3u : first; k < end; k += 4u) {
+    const uvec4 js = hemo_list_quad(pairList, i, k, end, gPp);
+    pair(k >= first ? js.x : i, boundary);
+    pair(k + 1u >= first && k + 1u < end ? js.y : i, boundary);
+    pair(k + 2u >= first && k + 2u < end ? js.z : i, boundary);
+    pair(k + 3u >= first && k + 3u < end ? js.w : i, boundary);
   }
 }
 

@@ -91,6 +91,21 @@ uint hemo_list_texel(uint i, uint k, HemoPairParams pp) {
   return hemo_list_slot(i, k, pp) >> 2u;
 }
 
+// Entries k .. k+3 of slot i's list in LIST (a usamplerBuffer), k < end: one texel when the
+// pass reads four entries per texel (kListWidth = 4, k a multiple of 4), else four one-entry
+// loads (the interleaved layout; entries from `end` on read entry end - 1, which the caller
+// replaces by its padding). Every pass walks its list four entries at a time either way: the
+// four loads, and the position loads of the four pairs, are independent and can be in flight
+// together. A GPU thread that walked its list one entry at a time waited for each load in turn,
+// which at small particle counts (too few threads to hide the wait) set the pass's time.
+// A macro: the passes declare kListWidth after including this file.
+#define hemo_list_quad(LIST, I, K, END, PP)                                                        \
+  (kListWidth == 4u ? texelFetch(LIST, int(hemo_list_texel(I, K, PP)))                             \
+                    : uvec4(texelFetch(LIST, int(hemo_list_slot(I, K, PP))).x,                     \
+                            texelFetch(LIST, int(hemo_list_slot(I, min((K) + 1u, (END) - 1u), PP))).x, \
+                            texelFetch(LIST, int(hemo_list_slot(I, min((K) + 2u, (END) - 1u), PP))).x, \
+                            texelFetch(LIST, int(hemo_list_slot(I, min((K) + 3u, (END) - 1u), PP))).x))
+
 // The interacting-pair counts of interface/sph.h: (fluid pairs, boundary pairs).
 uvec2 hemo_pair_counts(uint packed) {
   return uvec2(packed & 0xffffu, packed >> 16u);

@@ -137,16 +137,12 @@ void main() {
     }
   }
 #endif
-  for (uint k = 0u; k < count; k += kListWidth) {
-    if (kListWidth == 4u) {
-      const uvec4 fs = texelFetch(neighbourList, int(hemo_list_texel(b, k, gPp)));
-      pair(fs.x, true);
-      pair(k + 1u < count ? fs.y : b, k + 1u < count);
-      pair(k + 2u < count ? fs.z : b, k + 2u < count);
-      pair(k + 3u < count ? fs.w : b, k + 3u < count);
-    } else {
-      pair(texelFetch(neighbourList, int(hemo_list_slot(b, k, gPp))).x, true);
-    }
+  for (uint k = 0u; k < count; k += 4u) {
+    const uvec4 fs = hemo_list_quad(neighbourList, b, k, count, gPp);
+    pair(fs.x, true);
+    pair(k + 1u < count ? fs.y : b, k + 1u < count);
+    pair(k + 2u < count ? fs.z : b, k + 2u < count);
+    pair(k + 3u < count ? fs.w : b, k + 3u < count);
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
   hemo_boundary_store(b, xb4, vb.xyz, gSumW, gSumP, gSumRhoR, gSumV, background);

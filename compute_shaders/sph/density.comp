@@ -156,16 +156,12 @@ void main() {
   }
 #else
   const uint count = texelFetch(neighbourCount, int(i)).x;
-  for (uint k = 0u; k < count; k += kListWidth) {
-    if (kListWidth == 4u) {
-      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
-      pair(js.x, true);
-      pair(k + 1u < count ? js.y : i, k + 1u < count);
-      pair(k + 2u < count ? js.z : i, k + 2u < count);
-      pair(k + 3u < count ? js.w : i, k + 3u < count);
-    } else {
-      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x, true);
-    }
+  for (uint k = 0u; k < count; k += 4u) {
+    const uvec4 js = hemo_list_quad(neighbourList, i, k, count, gPp);
+    pair(js.x, true);
+    pair(k + 1u < count ? js.y : i, k + 1u < count);
+    pair(k + 2u < count ? js.z : i, k + 2u < count);
+    pair(k + 3u < count ? js.w : i, k + 3u < count);
   }
 #endif
   float rho = gRho;

@@ -60,18 +60,13 @@ void pair(uint j) {
 
 // The pairs in entries [first, end) of particle i's pair list.
 void pairRange(uint i, uint first, uint end) {
-  if (kListWidth == 4u) {
-    for (uint k = first & ~3u; k < end; k += 4u) {
-      const uvec4 js = texelFetch(neighbourList, int(hemo_list_texel(i, k, gPp)));
-      pair(k >= first ? js.x : i);
-      pair(k + 1u >= first && k + 1u < end ? js.y : i);
-      pair(k + 2u >= first && k + 2u < end ? js.z : i);
-      pair(k + 3u >= first && k + 3u < end ? js.w : i);
-    }
-  } else {
-    for (uint k = first; k < end; ++k) {
-      pair(texelFetch(neighbourList, int(hemo_list_slot(i, k, gPp))).x);
-    }
+  // (one entry per texel: from `first` itself)
+  for (uint k = kListWidth == 4u ? first & ~3u : first; k < end; k += 4u) {
+    const uvec4 js = hemo_list_quad(neighbourList, i, k, end, gPp);
+    pair(k >= first ? js.x : i);
+    pair(k + 1u >= first && k + 1u < end ? js.y : i);
+    pair(k + 2u >= first && k + 2u < end ? js.z : i);
+    pair(k + 3u >= first && k + 3u < end ? js.w : i);
   }
 }
 

@@ -72,16 +72,12 @@ void main() {
   gXw = xw.xyz;
   gSum = vec3(0.0);
   const uint count = texelFetch(neighbourCount, int(slot)).x;
-  for (uint k = 0u; k < count; k += kListWidth) {
-    if (kListWidth == 4u) {
-      const uvec4 fs = texelFetch(neighbourList, int(hemo_list_texel(slot, k, gPp)));
-      reactionPair(fs.x, true);
-      reactionPair(k + 1u < count ? fs.y : slot, k + 1u < count);
-      reactionPair(k + 2u < count ? fs.z : slot, k + 2u < count);
-      reactionPair(k + 3u < count ? fs.w : slot, k + 3u < count);
-    } else {
-      reactionPair(texelFetch(neighbourList, int(hemo_list_slot(slot, k, gPp))).x, true);
-    }
+  for (uint k = 0u; k < count; k += 4u) {
+    const uvec4 fs = hemo_list_quad(neighbourList, slot, k, count, gPp);
+    reactionPair(fs.x, true);
+    reactionPair(k + 1u < count ? fs.y : slot, k + 1u < count);
+    reactionPair(k + 2u < count ? fs.z : slot, k + 2u < count);
+    reactionPair(k + 3u < count ? fs.w : slot, k + 3u < count);
   }
   const vec3 add = (xw.w / info.x) * gSum;
   accel[slot].xyz += add;

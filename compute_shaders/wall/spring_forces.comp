@@ -134,16 +134,12 @@ vec3 hemo_fluid_reaction(uint w) {
 #else
   const uint count = texelFetch(neighbourCountT, int(w)).x;
 #endif
-  for (uint k = 0u; k < count; k += kListWidth) {
-    if (kListWidth == 4u) {
-      const uvec4 fs = texelFetch(neighbourListT, int(hemo_list_texel(w, k, gPp)));
-      reactionPair(fs.x, true);
-      reactionPair(k + 1u < count ? fs.y : w, k + 1u < count);
-      reactionPair(k + 2u < count ? fs.z : w, k + 2u < count);
-      reactionPair(k + 3u < count ? fs.w : w, k + 3u < count);
-    } else {
-      reactionPair(texelFetch(neighbourListT, int(hemo_list_slot(w, k, gPp))).x, true);
-    }
+  for (uint k = 0u; k < count; k += 4u) {
+    const uvec4 fs = hemo_list_quad(neighbourListT, w, k, count, gPp);
+    reactionPair(fs.x, true);
+    reactionPair(k + 1u < count ? fs.y : w, k + 1u < count);
+    reactionPair(k + 2u < count ? fs.z : w, k + 2u < count);
+    reactionPair(k + 3u < count ? fs.w : w, k + 3u < count);
   }
   const vec3 sum = gSum, repulsion = gRepulsion;
   return -(volumeW * sum + repulsion);
