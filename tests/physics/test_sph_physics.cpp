@@ -15,6 +15,7 @@
 #include <cctype>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <fstream>
 #include <iterator>
 #include <random>
@@ -825,12 +826,14 @@ TEST_F(SphPhysicsTest, EveryStepRecordsTheSameCommands) {
     double dispatches, barriers;
   };
   // per step over steps 2-11 and 12-71 (the first step also arms the gate and marks tiles)
-  auto steady = [&](const scene::Scene& scene) {
+  // (DFSPH: `depth` gated regions recorded per solve, RunOptions::recordedSolveIterations)
+  auto steady = [&](const scene::Scene& scene, std::optional<std::uint32_t> depth = std::nullopt) {
     sim::Simulation sim(ctx(), scene);
     // the totals recorded after `steps` steps in all
     auto runTo = [&](std::uint64_t steps) {
       sim::RunOptions opt;
       opt.steps = steps - sim.steps();
+      opt.recordedSolveIterations = depth;
       sim.run(opt);
       return Counts{std::round(sim.dispatchesPerStep() * double(steps)), std::round(sim.barriersPerStep() * double(steps))};
     };
@@ -857,12 +860,13 @@ TEST_F(SphPhysicsTest, EveryStepRecordsTheSameCommands) {
   vessel.sph.listSkin = 0.01f;
   const Counts wall = steady(vessel);
   EXPECT_GE(wall.dispatches, euler.dispatches + 1) << "the wall stage";
-  // DFSPH records each solve's first prediction and reduction and the cap's worth of gated
-  // (correction, prediction) pairs with their reductions, for both solves (interface/sph.h)
+  // DFSPH records each solve's first prediction and reduction and, recorded to its cap, the
+  // cap's worth of gated (correction, prediction) pairs with their reductions, for both solves
+  // (interface/sph.h; a run records fewer where it can, DfsphTest.RecordedIterationsDoNotChangeTheResult)
   dam.sph.integrator = sim::Integrator::SymplecticEuler;
   dam.sph.pressureSolver = sim::PressureSolver::Dfsph;
   dam.sph.solverMaxIterations = 5;
-  const Counts dfsph = steady(dam);
+  const Counts dfsph = steady(dam, 5u);
   EXPECT_EQ(dfsph.dispatches, euler.dispatches + 2 * (2 + 3 * 5));
   std::printf("per step: symplectic Euler %.0f dispatches %.0f barriers, RK2 %.0f %.0f, with a wall %.0f %.0f, DFSPH capped at 5 %.0f %.0f\n",
               euler.dispatches, euler.barriers, rk2.dispatches, rk2.barriers, wall.dispatches, wall.barriers,
