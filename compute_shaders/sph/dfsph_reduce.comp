@@ -31,6 +31,7 @@ layout(push_constant) uniform Push {
 #include "common/gate.glsl"
 
 shared uvec2 s_sum[gl_WorkGroupSize.x];  // (low, high) words
+shared bool s_open;
 
 uvec2 add64(uvec2 a, uvec2 b) {
   uint carry;
@@ -50,15 +51,18 @@ void main() {
   }
   s_sum[lid] = sum;
   barrier();
-  if (lid != 0u) {
-    return;
+  // Halving the sums in shared memory (integers: any order gives the same bits).
+  for (uint width = gl_WorkGroupSize.x; width > 1u;) {
+    const uint upper = (width + 1u) / 2u;
+    if (lid < width - upper) {
+      s_sum[lid] = add64(s_sum[lid], s_sum[lid + upper]);
+    }
+    barrier();
+    width = upper;
   }
   bool open = false;
-  if (running) {
-    uvec2 total = uvec2(0u);
-    for (uint s = 0u; s < gl_WorkGroupSize.x; ++s) {
-      total = add64(total, s_sum[s]);
-    }
+  if (running && lid == 0u) {
+    const uvec2 total = s_sum[0];
     const float error = (float(total.y) * 4294967296.0 + float(total.x)) / HEMO_DFSPH_ERROR_SCALE / float(max(pc.fluid, 1u));
     const bool converged = error <= pc.tolerance;
     if (pc.iteration == 0u) {
@@ -85,5 +89,9 @@ void main() {
       stats(HEMO_DFSPH_STAT_WORST_ERROR) = floatBitsToUint(isnan(error) || error > worst ? error : worst);
     }
   }
-  hemo_gate_arm(open, pc.slots);
+  if (lid == 0u) {
+    s_open = open;
+  }
+  barrier();
+  hemo_gate_arm(s_open, pc.slots);
 }

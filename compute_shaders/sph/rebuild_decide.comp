@@ -125,6 +125,9 @@ void hemo_tile_clear() {
 shared vec4 s_partial[gl_WorkGroupSize.x];
 shared bool s_nan[gl_WorkGroupSize.x];
 shared uint s_bound;
+shared bool s_open;
+
+bool hemo_decide();
 
 void main() {
   const uint lid = gl_LocalInvocationID.x;
@@ -147,17 +150,30 @@ void main() {
     atomicMax(s_bound, floatBitsToUint(hemo_tile_worst()));  // >= 0: the bits order as the values
     barrier();
     hemo_tile_clear();
+  }
+  // Halving the partials in shared memory (min, max and the two largest: exact in any order).
+  for (uint width = gl_WorkGroupSize.x; width > 1u;) {
+    const uint upper = (width + 1u) / 2u;
+    if (lid < width - upper) {
+      s_partial[lid] = hemo_rebuild_combine(s_partial[lid], s_partial[lid + upper]);
+      s_nan[lid] = s_nan[lid] || s_nan[lid + upper];
+    }
     barrier();
+    width = upper;
   }
-  if (lid != 0u) {
-    return;
+  if (lid == 0u) {
+    s_open = hemo_decide();
   }
+  barrier();
+  hemo_gate_arm(s_open, pc.gateSlots);
+}
+
+// The decision (invocation 0, after the reductions): the result, the tile test's bound and the
+// next step's integrator arguments; returns whether the gate opens.
+bool hemo_decide() {
+  const float inf = uintBitsToFloat(0x7f800000u);
   vec4 total = s_partial[0];
-  bool anyNan = s_nan[0];
-  for (uint s = 1u; s < gl_WorkGroupSize.x; ++s) {
-    total = hemo_rebuild_combine(total, s_partial[s]);
-    anyNan = anyNan || s_nan[s];
-  }
+  const bool anyNan = s_nan[0];
   const vec4 last = checkResult;
   if (pc.staticSlots != 0u) {
     // Slots left out (SphSolver::movingSlots): rigid boundary particles, displacement 0, so
@@ -194,5 +210,5 @@ void main() {
     integrateArgs[0] = collect ? run : skip;
     integrateArgs[1] = collect ? skip : run;
   }
-  hemo_gate_arm(open, pc.gateSlots);
+  return open;
 }
