@@ -151,6 +151,7 @@ RunResult Simulation::run(const RunOptions& options) {
     bool again = false;
     std::uint32_t statsRows = 0;
     for (;;) {
+      if (solves && solver_->recordedIterations() < cap && !canSaveState()) solver_->setRecordedIterations(cap);
       const bool speculative = solves && solver_->recordedIterations() < cap;
       recorder_->begin();
       if (again) recordRestoreState(*recorder_);
@@ -209,13 +210,25 @@ RunResult Simulation::run(const RunOptions& options) {
   return r;
 }
 
+bool Simulation::canSaveState() {
+  if (saveRefused_) return false;
+  const std::vector<gpu::Buffer*> state = checkpointBuffers();
+  if (saved_.size() == state.size()) return true;
+  saved_.clear();
+  saved_.reserve(state.size());
+  try {
+    for (const gpu::Buffer* b : state) saved_.emplace_back(*context_, b->size(), gpu::MemoryUse::Device, b->name() + " (batch start)");
+  } catch (const gpu::OutOfDeviceMemory&) {
+    // (refused before anything was allocated for the buffer that did not fit)
+    saved_.clear();
+    saveRefused_ = true;
+  }
+  return !saveRefused_;
+}
+
 void Simulation::recordSaveState(gpu::CommandRecorder& rec) {
   const std::vector<gpu::Buffer*> state = checkpointBuffers();
-  if (saved_.size() != state.size()) {
-    saved_.clear();
-    saved_.reserve(state.size());
-    for (const gpu::Buffer* b : state) saved_.emplace_back(*context_, b->size(), gpu::MemoryUse::Device, b->name() + " (batch start)");
-  }
+  if (!canSaveState()) throw std::logic_error("Simulation: no room to save the state");
   rec.computeToTransfer();
   rec.transferToTransfer();
   for (std::size_t i = 0; i < state.size(); ++i) rec.copy(*state[i], saved_[i], state[i]->size());

@@ -263,5 +263,39 @@ TEST_F(DfsphTest, RecordedIterationsDoNotChangeTheResult) {
   }
 }
 
+// A device whose memory holds the simulation but not a second copy of its state: the run
+// records the solves to their cap, with the cap's results.
+TEST_F(DfsphTest, WithoutRoomForTheBatchCopyTheSolvesAreRecordedToTheCap) {
+  scene::Scene jet = scene::parseScene(kBox, "hard_case_dfsph");
+  jet.blocks[0].velocity = glm::vec3(2.0f, 0.0f, 0.0f);
+  jet.stepsPerBatch = 16;
+  const std::uint32_t cap = jet.sph.solverMaxIterations;
+  auto run = [&](gpu::Context& context, std::optional<std::uint32_t> depth) {
+    sim::Simulation sim(context, jet);
+    const std::uint64_t built = context.peakDeviceMemoryBytes();
+    sim::RunOptions opt;
+    opt.steps = 60;
+    opt.recordedSolveIterations = depth;
+    sim.run(opt);
+    return std::make_tuple(positionsAndVelocities(sim), sim.recordedSolveIterationsPerStep(), built);
+  };
+  gpu::ContextOptions plain;
+  plain.validation = true;
+  gpu::Context first(plain);
+  const auto [reference, referenceDepth, built] = run(first, cap);
+  EXPECT_DOUBLE_EQ(referenceDepth, 2.0 * cap);
+  gpu::ContextOptions options = plain;
+  options.limits.deviceMemoryBytes = built + built / 4;  // the scene, and a quarter more
+  gpu::Context small(options);
+  const auto [state, depth, builtSmall] = run(small, std::nullopt);
+  EXPECT_EQ(builtSmall, built);
+  EXPECT_DOUBLE_EQ(depth, 2.0 * cap) << "recorded to the cap without room for the copy";
+  ASSERT_EQ(state.size(), reference.size());
+  EXPECT_EQ(0, std::memcmp(state.data(), reference.data(), state.size() * sizeof(glm::vec4)));
+  for (auto* context : {&first, &small}) {
+    for (const auto& m : context->takeValidationMessages()) ADD_FAILURE() << m;
+  }
+}
+
 }  // namespace
 }  // namespace hemo::test

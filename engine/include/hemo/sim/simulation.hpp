@@ -140,7 +140,9 @@ class Simulation {
   void checkStatus(std::uint64_t batchFirstStep);
   // A batch that may have to run again (DFSPH recorded below its cap) starts from a copy of
   // the whole state (the checkpoint's buffers) made on the GPU: save records the copy, restore
-  // records the copy back.
+  // records the copy back. canSaveState allocates the copy on first use; false (for good) when
+  // the device's memory cannot hold it, and the solves are then recorded to their cap.
+  bool canSaveState();
   void recordSaveState(gpu::CommandRecorder& rec);
   void recordRestoreState(gpu::CommandRecorder& rec);
 
@@ -163,6 +165,7 @@ class Simulation {
   std::uint64_t redoneBatches_ = 0, recordedSolveRegions_ = 0;
   std::uint32_t solveDepth_ = 0;     // the next batch's recorded regions per solve (adaptive)
   std::vector<gpu::Buffer> saved_;   // recordSaveState's copy
+  bool saveRefused_ = false;         // the device's memory could not hold the copy
   std::vector<gpu::Buffer*> checkpointBuffers();
 };
 
