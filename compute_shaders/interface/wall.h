@@ -87,25 +87,26 @@
 // which then leaves wall particles where the substeps put them. Push: uint n, uint first,
 // uint idCount, uint substeps, uint mode, uint clockIn, float endTime.
 #define HEMO_SUBSTEP_MODE_ADVANCE 0u
-#define HEMO_SUBSTEP_MODE_FORCE 1u
-#define HEMO_SUBSTEP_BINDING_POSITIONS 0     // storage (ADVANCE writes its own record)
-#define HEMO_SUBSTEP_BINDING_VELOCITIES 1    // storage (ADVANCE writes its own record)
-#define HEMO_SUBSTEP_BINDING_POSITIONS_IN 2  // texel vec4: the same buffers, read (FORCE)
-#define HEMO_SUBSTEP_BINDING_VELOCITIES_IN 3
+#define HEMO_SUBSTEP_MODE_STEP 1u
+#define HEMO_SUBSTEP_BINDING_POSITIONS 0     // storage: the substep's output, its own record
+#define HEMO_SUBSTEP_BINDING_VELOCITIES 1    // storage: the substep's output, its own record
+#define HEMO_SUBSTEP_BINDING_POSITIONS_IN 2  // texel vec4: the substep's input (the other pair, or
+#define HEMO_SUBSTEP_BINDING_VELOCITIES_IN 3 //   the same buffers for a substep in place)
 #define HEMO_SUBSTEP_BINDING_IDS 4           // texel uint
 #define HEMO_SUBSTEP_BINDING_SLOT_OF_ID 5    // texel uint
 #define HEMO_SUBSTEP_BINDING_SPRINGS 6       // texel uvec4, two per Spring
 #define HEMO_SUBSTEP_BINDING_FIRST 7         // texel uint
 #define HEMO_SUBSTEP_BINDING_SPRINGS_OF 8    // texel uint
 #define HEMO_SUBSTEP_BINDING_WALL_INFO 9     // texel vec4 by id (mass, anchored)
-#define HEMO_SUBSTEP_BINDING_ACCEL 10        // storage: FORCE writes its own record, ADVANCE reads it
+#define HEMO_SUBSTEP_BINDING_ACCEL 10        // storage: its own record (STEP writes it)
 #define HEMO_SUBSTEP_BINDING_HELD 11         // texel vec4 (HEMO_SPRINGF_BINDING_HELD)
 #define HEMO_SUBSTEP_BINDING_SPRINGS_RW 12   // storage: broken flags
 #define HEMO_SUBSTEP_BINDING_COUNTERS 13
 #define HEMO_SUBSTEP_BINDING_PARAMS 14       // uniform SphParams
 #define HEMO_SUBSTEP_BINDING_DT 15           // uniform vec2: the time step's reduction
 #define HEMO_SUBSTEP_BINDING_CLOCK 16        // uniform: the clock's two records
-#define HEMO_SUBSTEP_BINDING_COUNT 17
+#define HEMO_SUBSTEP_BINDING_KINDS 17        // texel vec4: the live velocities (w: the slot's kind)
+#define HEMO_SUBSTEP_BINDING_COUNT 18
 
 // wall/point_shade.comp: per particle slot, vec2(largest strain of its unbroken springs,
 // fraction of its springs broken) for the renderer; push: uint n, uint idCount.

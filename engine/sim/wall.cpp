@@ -213,24 +213,35 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                1u << HEMO_SUBSTEP_BINDING_IDS | 1u << HEMO_SUBSTEP_BINDING_SLOT_OF_ID |
                                1u << HEMO_SUBSTEP_BINDING_SPRINGS | 1u << HEMO_SUBSTEP_BINDING_FIRST |
                                1u << HEMO_SUBSTEP_BINDING_SPRINGS_OF | 1u << HEMO_SUBSTEP_BINDING_WALL_INFO |
-                               1u << HEMO_SUBSTEP_BINDING_HELD});
-    substepSet_ = substep_->makeSet({{HEMO_SUBSTEP_BINDING_POSITIONS, &a.positions},
-                                     {HEMO_SUBSTEP_BINDING_VELOCITIES, &a.velocities},
-                                     texelBinding(HEMO_SUBSTEP_BINDING_POSITIONS_IN, &a.positions, kVec4),
-                                     texelBinding(HEMO_SUBSTEP_BINDING_VELOCITIES_IN, &a.velocities, kVec4),
-                                     texelBinding(HEMO_SUBSTEP_BINDING_IDS, &a.ids, kUint),
-                                     texelBinding(HEMO_SUBSTEP_BINDING_SLOT_OF_ID, fluid.slotOfId, kUint),
-                                     texelBinding(HEMO_SUBSTEP_BINDING_SPRINGS, &springs_, kUvec4),
-                                     texelBinding(HEMO_SUBSTEP_BINDING_FIRST, &first_, kUint),
-                                     texelBinding(HEMO_SUBSTEP_BINDING_SPRINGS_OF, &springsOf_, kUint),
-                                     texelBinding(HEMO_SUBSTEP_BINDING_WALL_INFO, &wallInfo_, kVec4),
-                                     {HEMO_SUBSTEP_BINDING_ACCEL, fluid.accel},
-                                     texelBinding(HEMO_SUBSTEP_BINDING_HELD, &held_, kVec4),
-                                     {HEMO_SUBSTEP_BINDING_SPRINGS_RW, &springs_},
-                                     {HEMO_SUBSTEP_BINDING_COUNTERS, &counters_},
-                                     {HEMO_SUBSTEP_BINDING_PARAMS, fluid.params},
-                                     {HEMO_SUBSTEP_BINDING_DT, fluid.stepLimits},
-                                     {HEMO_SUBSTEP_BINDING_CLOCK, fluid.clock}});
+                               1u << HEMO_SUBSTEP_BINDING_HELD | 1u << HEMO_SUBSTEP_BINDING_KINDS});
+    scratchPositions_ = gpu::Buffer(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
+                                    "wall substep positions");
+    scratchVelocities_ = gpu::Buffer(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
+                                     "wall substep velocities");
+    auto substepSet = [&](const gpu::Buffer& readX, const gpu::Buffer& readV, const gpu::Buffer& writeX,
+                          const gpu::Buffer& writeV) {
+      return substep_->makeSet({{HEMO_SUBSTEP_BINDING_POSITIONS, &writeX},
+                                {HEMO_SUBSTEP_BINDING_VELOCITIES, &writeV},
+                                texelBinding(HEMO_SUBSTEP_BINDING_POSITIONS_IN, &readX, kVec4),
+                                texelBinding(HEMO_SUBSTEP_BINDING_VELOCITIES_IN, &readV, kVec4),
+                                texelBinding(HEMO_SUBSTEP_BINDING_IDS, &a.ids, kUint),
+                                texelBinding(HEMO_SUBSTEP_BINDING_SLOT_OF_ID, fluid.slotOfId, kUint),
+                                texelBinding(HEMO_SUBSTEP_BINDING_SPRINGS, &springs_, kUvec4),
+                                texelBinding(HEMO_SUBSTEP_BINDING_FIRST, &first_, kUint),
+                                texelBinding(HEMO_SUBSTEP_BINDING_SPRINGS_OF, &springsOf_, kUint),
+                                texelBinding(HEMO_SUBSTEP_BINDING_WALL_INFO, &wallInfo_, kVec4),
+                                {HEMO_SUBSTEP_BINDING_ACCEL, fluid.accel},
+                                texelBinding(HEMO_SUBSTEP_BINDING_HELD, &held_, kVec4),
+                                {HEMO_SUBSTEP_BINDING_SPRINGS_RW, &springs_},
+                                {HEMO_SUBSTEP_BINDING_COUNTERS, &counters_},
+                                {HEMO_SUBSTEP_BINDING_PARAMS, fluid.params},
+                                {HEMO_SUBSTEP_BINDING_DT, fluid.stepLimits},
+                                {HEMO_SUBSTEP_BINDING_CLOCK, fluid.clock},
+                                texelBinding(HEMO_SUBSTEP_BINDING_KINDS, &a.velocities, kVec4)});
+    };
+    substepSet_ = substepSet(a.positions, a.velocities, a.positions, a.velocities);
+    substepToScratchSet_ = substepSet(a.positions, a.velocities, scratchPositions_, scratchVelocities_);
+    substepFromScratchSet_ = substepSet(scratchPositions_, scratchVelocities_, a.positions, a.velocities);
   }
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
@@ -282,14 +293,18 @@ void MassSpring::recordSubsteps(gpu::CommandRecorder& rec, std::uint32_t first, 
                                 float endTime) {
   if (!substep_) throw std::logic_error("recordSubsteps: the wall takes no substeps");
   const gpu::Groups groups = substep_->groupsFor(std::max(n > first ? n - first : 0u, 1u));
+  // One dispatch a substep: substep k reads what substep k - 1 wrote and writes the other
+  // pair, the live arrays for the last (k = N - 1) and so for every k with N - 1 - k even.
+  // The first reads the live arrays (it advances each particle from its own record, so in
+  // place when it writes them too).
   for (std::uint32_t k = 0; k < substeps_; ++k) {
-    if (k > 0) {
-      rec.dispatch(*substep_, substepSet_,
-                   SubstepPush{n, first, idCount_, substeps_, HEMO_SUBSTEP_MODE_FORCE, clockIn, endTime}, groups);
-      rec.computeToCompute();
-    }
-    rec.dispatch(*substep_, substepSet_,
-                 SubstepPush{n, first, idCount_, substeps_, HEMO_SUBSTEP_MODE_ADVANCE, clockIn, endTime}, groups);
+    const bool toLive = (substeps_ - 1 - k) % 2 == 0;
+    const gpu::DescriptorSet& set = k == 0 ? (toLive ? substepSet_ : substepToScratchSet_)
+                                           : (toLive ? substepFromScratchSet_ : substepToScratchSet_);
+    rec.dispatch(*substep_, set,
+                 SubstepPush{n, first, idCount_, substeps_, k == 0 ? HEMO_SUBSTEP_MODE_ADVANCE : HEMO_SUBSTEP_MODE_STEP,
+                             clockIn, endTime},
+                 groups);
     rec.computeToCompute();
   }
 }

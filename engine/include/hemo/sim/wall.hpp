@@ -122,7 +122,7 @@ class MassSpring {
   bool takesPressureReaction() const { return pressureReaction_ != nullptr; }
   // With substeps() > 1: after the step's dt is known (and the wall's forces, DFSPH's share
   // included, are in), the wall's substeps for the slots [first, n) to the end of the step
-  // (wall/substep.comp): 2 substeps() - 1 dispatches, each followed by a barrier. `clockIn`
+  // (wall/substep.comp): substeps() dispatches, each followed by a barrier. `clockIn`
   // and `endTime` as the integrator's, which then leaves the wall particles where they are.
   void recordSubsteps(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t clockIn,
                       float endTime);
@@ -171,7 +171,10 @@ class MassSpring {
   const gpu::ComputePipeline* shadeStage_;
   const gpu::ComputePipeline* pressureReaction_ = nullptr;  // DFSPH only
   const gpu::ComputePipeline* substep_ = nullptr;           // substeps > 1 only
-  gpu::DescriptorSet substepSet_;
+  // The substeps' sets: in place (the live arrays), live to scratch, scratch to live; the
+  // scratch pair of positions and velocities (substeps > 1 only)
+  gpu::DescriptorSet substepSet_, substepToScratchSet_, substepFromScratchSet_;
+  gpu::Buffer scratchPositions_, scratchVelocities_;
   std::vector<gpu::DescriptorSet> forcesSets_;  // one per page of the fluid's list
   gpu::DescriptorSet shadeSet_, pressureReactionSet_;
   std::uint32_t pageSlots_ = 0;
