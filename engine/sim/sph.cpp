@@ -975,6 +975,9 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rebuildGate_.recordReset(rec);
   rec.fill(solveStats_, 0u);
   rec.fill(kappa_, 0u);  // (the pressure a step past the end time keeps)
+  // Density and pressure are 0 until the first step computes them (outputs before it show
+  // zeros, never the allocation's leftovers)
+  rec.fill(state_, 0u);
   pressureGate_.recordReset(rec);
   armPending_ = true;
 }
