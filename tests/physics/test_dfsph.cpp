@@ -203,8 +203,8 @@ TEST_F(DfsphTest, TwoRunsAreBitIdentical) {
 // recorded sends the batch back to its start (Simulation::run). The jet in the box (steps of
 // 2 to 5 corrections) and the aneurysm under DFSPH with its wall in 4 substeps (the wall's
 // springs, ruptures and the wall's reaction in the state copied back), each recorded to the
-// cap, to one region per solve (most batches run again), and as the run chooses: the same bits,
-// and the same iterations counted.
+// cap, to one region per solve (most batches run again), and as the run chooses, then three
+// profiled steps (Simulation::profileStep) each: the same bits, and the same iterations counted.
 TEST_F(DfsphTest, RecordedIterationsDoNotChangeTheResult) {
   scene::Scene jet = scene::parseScene(kBox, "hard_case_dfsph");
   jet.blocks[0].velocity = glm::vec3(2.0f, 0.0f, 0.0f);
@@ -231,6 +231,9 @@ TEST_F(DfsphTest, RecordedIterationsDoNotChangeTheResult) {
       opt.steps = c.steps;
       opt.recordedSolveIterations = depth;
       sim.run(opt);
+      // (steps like any other, recorded to the depth the run left: one region if it was one)
+      if (depth == 1u) sim.solver().setRecordedIterations(1);
+      sim.profileStep(3);
       std::vector<glm::vec4> state = positionsAndVelocities(sim);
       for (const glm::vec2& dp : sim.snapshot().densityPressure) state.emplace_back(dp, 0.0f, 0.0f);
       const sim::PressureSolveStats stats[2] = {sim.solver().readPressureSolveStats(false),
