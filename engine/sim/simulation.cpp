@@ -147,16 +147,8 @@ RunResult Simulation::run(const RunOptions& options) {
       if (solveDepth_ == 0) solveDepth_ = std::min(cap, kFirstSolveDepth);
       solver_->setRecordedIterations(options.recordedSolveIterations.value_or(solveDepth_));
     }
-    const std::vector<std::uint32_t> hostAtStart = solver_->hostState();
-    bool again = false;
     std::uint32_t statsRows = 0;
-    for (;;) {
-      if (solves && solver_->recordedIterations() < cap && !canSaveState()) solver_->setRecordedIterations(cap);
-      const bool speculative = solves && solver_->recordedIterations() < cap;
-      recorder_->begin();
-      if (again) recordRestoreState(*recorder_);
-      if (speculative) recordSaveState(*recorder_);
-      if (solves) solver_->recordSolveDepthReset(*recorder_);
+    const SphSolver::SolveDepth depth = submitSteps([&] {
       statsRows = 0;
       for (std::uint64_t k = 0; k < batch; ++k) {
         const std::uint64_t dispatches = recorder_->dispatchCount(), barriers = recorder_->barrierCount();
@@ -166,24 +158,12 @@ RunResult Simulation::run(const RunOptions& options) {
         recordedBarriers_ += recorder_->barrierCount() - barriers;
         if (stats_ && (steps_ + k) % statsEvery_ == 0) stats_->record(*recorder_, statsRows++);
       }
-      recorder_->end();
-      recorder_->submitAndWait();
       if (solves) recordedSolveRegions_ += 2 * std::uint64_t(solver_->recordedIterations()) * batch;
-      const SphSolver::SolveDepth depth = solves ? solver_->readSolveDepth() : SphSolver::SolveDepth{};
-      if (speculative && depth.deeper > 0) {
-        // Some solve was left open after the last recorded region: back to the batch's start.
-        ++redoneBatches_;
-        again = true;
-        solver_->restoreHostState(hostAtStart);
-        solver_->setRecordedIterations(cap);
-        continue;
-      }
-      // The next batch records half as much again as this one's solves took at most, and two
-      // more: a batch's most changes slowly from one batch to the next.
-      if (solves) {
-        solveDepth_ = std::clamp(depth.maxIterations + depth.maxIterations / 2 + 2, std::min(cap, kMinSolveDepth), cap);
-      }
-      break;
+    });
+    // The next batch records half as much again as this one's solves took at most, and two
+    // more: a batch's most changes slowly from one batch to the next.
+    if (solves) {
+      solveDepth_ = std::clamp(depth.maxIterations + depth.maxIterations / 2 + 2, std::min(cap, kMinSolveDepth), cap);
     }
     recordedSteps_ += batch;
     clock = solver_->readClock();
@@ -208,6 +188,31 @@ RunResult Simulation::run(const RunOptions& options) {
   r.simTime = clock.time;
   r.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;
+}
+
+SphSolver::SolveDepth Simulation::submitSteps(const std::function<void()>& record) {
+  const bool solves = solver_->solvesPressure();
+  const std::uint32_t cap = solver_->settings().solverMaxIterations;
+  const std::vector<std::uint32_t> hostAtStart = solver_->hostState();
+  bool again = false;
+  for (;;) {
+    if (solves && solver_->recordedIterations() < cap && !canSaveState()) solver_->setRecordedIterations(cap);
+    const bool speculative = solves && solver_->recordedIterations() < cap;
+    recorder_->begin();
+    if (again) recordRestoreState(*recorder_);
+    if (speculative) recordSaveState(*recorder_);
+    if (solves) solver_->recordSolveDepthReset(*recorder_);
+    record();
+    recorder_->end();
+    recorder_->submitAndWait();
+    const SphSolver::SolveDepth depth = solves ? solver_->readSolveDepth() : SphSolver::SolveDepth{};
+    if (!speculative || depth.deeper == 0) return depth;
+    // Some solve was left open after the last recorded region: back to the start, to the cap.
+    ++redoneBatches_;
+    again = true;
+    solver_->restoreHostState(hostAtStart);
+    solver_->setRecordedIterations(cap);
+  }
 }
 
 bool Simulation::canSaveState() {
@@ -277,38 +282,18 @@ std::vector<std::pair<std::string, double>> Simulation::profileStep(int repeats,
   if (!context_->timestampsSupported()) return result;
   gpu::TimestampQueries ts(*context_, 32);
   std::vector<std::vector<std::pair<std::string, double>>> runs;
-  // DFSPH: each step recorded to the depth the last run chose, and run again recorded to the
-  // cap (from a copy of its starting state) when a solve needed more, as run() does: a
-  // profiled step is a step like any other. The timings are the run's that counted.
-  const bool solves = solver_->solvesPressure();
-  const std::uint32_t cap = solver_->settings().solverMaxIterations;
+  // DFSPH: each step recorded to the depth the last run chose, and run again when a solve
+  // needed more (submitSteps), as run() does: a profiled step is a step like any other. The
+  // timings are the run's that counted.
   const std::uint32_t depth = solver_->recordedIterations();
   for (int r = 0; r < repeats; ++r) {
-    const std::vector<std::uint32_t> hostAtStart = solver_->hostState();
-    bool again = false;
-    for (;;) {
-      if (solves && solver_->recordedIterations() < cap && !canSaveState()) solver_->setRecordedIterations(cap);
-      const bool speculative = solves && solver_->recordedIterations() < cap;
-      recorder_->begin();
-      if (again) recordRestoreState(*recorder_);
-      if (speculative) recordSaveState(*recorder_);
-      if (solves) solver_->recordSolveDepthReset(*recorder_);
+    submitSteps([&] {
       ts.reset(*recorder_);
       if (rebuild) solver_->recordRebuildRequest(*recorder_);
       ts.mark(*recorder_, "start");
       solver_->recordStep(*recorder_, static_cast<std::uint32_t>(steps_), 0, 3.0e38f, &ts);
-      recorder_->end();
-      recorder_->submitAndWait();
-      if (speculative && solver_->readSolveDepth().deeper > 0) {
-        ++redoneBatches_;
-        again = true;
-        solver_->restoreHostState(hostAtStart);
-        solver_->setRecordedIterations(cap);
-        continue;
-      }
-      break;
-    }
-    if (solves) solver_->setRecordedIterations(depth);
+    });
+    if (solver_->solvesPressure()) solver_->setRecordedIterations(depth);
     checkStatus(steps_);
     ++steps_;
     runs.push_back(ts.stageMs());

@@ -143,6 +143,10 @@ class Simulation {
   // records the copy back. canSaveState allocates the copy on first use; false (for good) when
   // the device's memory cannot hold it, and the solves are then recorded to their cap.
   bool canSaveState();
+  // Records (`record`, after the command buffer's prologue), submits and waits; under DFSPH
+  // recorded below the cap, from a copy of the starting state, and again recorded to the cap
+  // while a solve was left open (redoneBatches_). Returns what the solves needed.
+  SphSolver::SolveDepth submitSteps(const std::function<void()>& record);
   void recordSaveState(gpu::CommandRecorder& rec);
   void recordRestoreState(gpu::CommandRecorder& rec);
 
