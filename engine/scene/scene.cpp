@@ -139,6 +139,7 @@ const std::vector<Field>& schema() {
            {"cfl_force", Kind::Number, "1", 0, 1, true, 0.25, "C_f in dt <= C_f sqrt(h / |a|)."},
            {"max_dt_s", Kind::Number, "s", 0, 1, true, 1e-3, "Upper bound of the time step."},
            {"end_time_s", Kind::Number, "s", 0, 1e6, false, 1.0, "Simulated time of a run (hemo-run --until overrides)."},
+           {"min_dt_s", Kind::Number, "s", 0, 1, false, 0.0, "The run stops with an error when the time step falls below this: the flow blew up (a particle's speed or acceleration ran away) and the run would never reach its end. 0: 1e-4 times the scene's own step, the smallest of C_a h / (c0 + expected_max_speed) (DFSPH: C_a h / expected_max_speed), max_dt_s, the viscous limit and the wall's spring limit times its substeps."},
            {"steps_per_batch", Kind::Integer, "1", 1, 4096, false, 64, "Steps recorded into one command buffer per submit."},
            {"settle_damping_1_s", Kind::Number, "1/s", 0, 1e6, false, 0.0, "Velocity damping xi of a settling phase: v <- v / (1 + xi dt)."},
            {"settle_until_s", Kind::Number, "s", 0, 1e6, false, 0.0, "The settling phase lasts while t < this (0: none)."},
@@ -597,6 +598,7 @@ Scene parseScene(const std::string& text, const std::string& source) {
   s.sph.cflForce = time["cfl_force"].get<float>();
   s.sph.maxTimeStep = time["max_dt_s"].get<float>();
   s.endTime = time["end_time_s"].get<double>();
+  s.minTimeStep = time["min_dt_s"].get<double>();
   s.stepsPerBatch = time["steps_per_batch"].get<std::uint32_t>();
   s.sph.dampingRate = time["settle_damping_1_s"].get<float>();
   s.sph.dampingUntil = time["settle_until_s"].get<float>();

@@ -101,6 +101,7 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
                                         scene.stepsPerBatch);
   if (build.network) solver_->attachWall(*build.network);  // a scene without walls runs no wall stage
   if (scene.vessel && scene.vessel->inflow) solver_->setInflow(*scene.vessel->inflow);
+  minStep_ = scene.minTimeStep > 0.0 ? scene.minTimeStep : 1.0e-4 * designTimeStep();
   recorder_ = std::make_unique<gpu::CommandRecorder>(context);
   recorder_->begin();
   solver_->recordReset(*recorder_);
@@ -168,6 +169,7 @@ RunResult Simulation::run(const RunOptions& options) {
     recordedSteps_ += batch;
     clock = solver_->readClock();
     checkStatus(steps_);
+    if (clock.steps - before == batch) checkStep(clock, steps_, endTime);
     if (statsRows > 0 && options.onStepStats) {
       std::vector<StepStatsRow> rows;
       std::uint32_t last = static_cast<std::uint32_t>(before);
@@ -249,6 +251,38 @@ void Simulation::recordRestoreState(gpu::CommandRecorder& rec) {
   for (std::size_t i = 0; i < state.size(); ++i) rec.copy(saved_[i], *state[i], state[i]->size());
   rec.transferToTransfer();
   rec.transferToCompute();
+}
+
+double Simulation::designTimeStep() const {
+  const SphParams& p = solver_->params();
+  const double speed = double(scene_.expectedMaxSpeed) + (solver_->solvesPressure() ? 0.0 : double(p.c0));
+  double dt = std::min(double(p.dtMax), double(p.dtViscous));
+  if (speed > 0.0) dt = std::min(dt, double(p.cflAcoustic) * p.h / speed);
+  if (const MassSpring* wall = solver_->wall()) dt = std::min(dt, wall->springTimeStepLimit() * wall->substeps());
+  return dt;
+}
+
+void Simulation::checkStep(const SphClock& clock, std::uint64_t batchFirstStep, double endTime) {
+  // (the step that lands on the end time may be as short as it likes)
+  if (!(clock.lastDt < minStep_) || clock.time >= static_cast<float>(endTime)) return;
+  // The first step of the batch below the limit, from the step log.
+  const auto log = solver_->stepLog().readback<glm::vec2>(scene_.stepsPerBatch);
+  std::uint64_t bad = batchFirstStep + scene_.stepsPerBatch - 1;
+  glm::vec2 at(clock.time, clock.lastDt);
+  for (std::size_t k = 0; k < log.size(); ++k) {
+    if (log[k].y < minStep_) {
+      bad = batchFirstStep + k;
+      at = log[k];
+      break;
+    }
+  }
+  std::ostringstream msg;
+  msg << "the time step collapsed to " << at.y << " s at step " << bad << " (t = " << at.x << " s), below time.min_dt_s = "
+      << minStep_ << " s";
+  if (scene_.minTimeStep <= 0.0) msg << " (1e-4 of the scene's own step, " << designTimeStep() << " s)";
+  msg << ": a particle's speed or acceleration ran away, and the run would not reach its end (lower time.cfl_acoustic / "
+         "time.max_dt_s, or check the forces)";
+  throw SimulationError(msg.str());
 }
 
 void Simulation::checkStatus(std::uint64_t batchFirstStep) {

@@ -635,6 +635,41 @@ TEST_F(SphPhysicsTest, NonFiniteStateStopsWithStepTimeAndParticle) {
   }
 }
 
+// A blow-up that stays finite (one particle at 1e8 m/s) shrinks the step until the clock no
+// longer advances: the run stops with the step, the time and the limit instead of running on.
+TEST_F(SphPhysicsTest, CollapsedTimeStepStopsTheRun) {
+  scene::Scene scene = scene::parseScene(kColumn, "column_test");
+  for (const double minStep : {0.0, 1.0e-9}) {
+    SCOPED_TRACE(testing::Message() << "time.min_dt_s " << minStep);
+    scene.minTimeStep = minStep;
+    sim::Simulation sim(ctx(), scene);
+    const double own = sim.designTimeStep();
+    EXPECT_GT(own, 0.0);
+    EXPECT_LE(own, double(sim.solver().params().dtMax));
+    EXPECT_DOUBLE_EQ(sim.minTimeStep(), minStep > 0.0 ? minStep : 1.0e-4 * own);
+    sim::RunOptions opt;
+    opt.steps = 5;
+    sim.run(opt);  // a healthy start stays above the limit
+    auto vel = sim.store().readVelocities();
+    const auto ids = sim.store().readIds();
+    for (std::size_t i = 0; i < ids.size(); ++i) {
+      if (ids[i] == 42) vel[i].x = 1.0e8f;
+    }
+    sim.store().live().velocities.upload(vel);
+    opt.steps = 3 * scene.stepsPerBatch;
+    try {
+      sim.run(opt);
+      FAIL() << "the run should have stopped";
+    } catch (const sim::SimulationError& e) {
+      const std::string m = e.what();
+      EXPECT_NE(m.find("time step collapsed to "), std::string::npos) << m;
+      EXPECT_NE(m.find("at step 5 (t = "), std::string::npos) << m;
+      EXPECT_NE(m.find("time.min_dt_s"), std::string::npos) << m;
+      EXPECT_EQ(m.find("of the scene's own step") != std::string::npos, minStep == 0.0) << m;
+    }
+  }
+}
+
 // ---- Hard cases: finite state, bounded speed, nothing lost without being counted ----------
 
 void expectHealthy(sim::Simulation& sim, float speedBound) {

@@ -104,6 +104,7 @@ struct Scene {
   std::optional<Vessel> vessel;
   Box domain;
   double endTime = 1.0;             // s
+  double minTimeStep = 0.0;         // s; the run stops when the step falls below it (0: automatic)
   std::uint32_t stepsPerBatch = 64;  // steps recorded per submit
   SurfaceSpec surface;
 };

@@ -136,8 +136,18 @@ class Simulation {
   ParticleStore& store() { return *store_; }
   SphSolver& solver() { return *solver_; }
 
+  // The step below which a run stops (time.min_dt_s, or 1e-4 of the scene's own step), and
+  // that own step: the smallest of the fluid's acoustic (DFSPH: flow) limit at the expected
+  // speed, max_dt_s, the viscous limit and the wall's spring limit times its substeps.
+  double minTimeStep() const { return minStep_; }
+  double designTimeStep() const;
+
  private:
   void checkStatus(std::uint64_t batchFirstStep);
+  // Throws when the batch that started at `batchFirstStep` and did not reach the end time
+  // left the step below minTimeStep(): a blow-up that stays finite (a particle at 1e9 m/s)
+  // shrinks the step until the clock no longer advances, and the run would never end.
+  void checkStep(const SphClock& clock, std::uint64_t batchFirstStep, double endTime);
   // A batch that may have to run again (DFSPH recorded below its cap) starts from a copy of
   // the whole state (the checkpoint's buffers) made on the GPU: save records the copy, restore
   // records the copy back. canSaveState allocates the copy on first use; false (for good) when
@@ -167,6 +177,7 @@ class Simulation {
   std::uint64_t fingerprint_ = 0;
   std::uint64_t recordedDispatches_ = 0, recordedBarriers_ = 0, recordedSteps_ = 0;
   std::uint64_t redoneBatches_ = 0, recordedSolveRegions_ = 0;
+  double minStep_ = 0.0;             // s (minTimeStep)
   std::uint32_t solveDepth_ = 0;     // the next batch's recorded regions per solve (adaptive)
   std::vector<gpu::Buffer> saved_;   // recordSaveState's copy
   bool saveRefused_ = false;         // the device's memory could not hold the copy
