@@ -156,12 +156,6 @@ int main(int argc, char** argv) {
                    "pressure is %.0f Pa, which the fluid's own pressure lags while the wall stretches\n",
                    rupture->pressure, rupture->method.c_str(), double(scene.sph.backgroundPressure));
     }
-    if (sim.solver().solvesPressure() && sim.solver().wall() && scene.sph.backgroundPressure > 0.0f) {
-      std::fprintf(stderr,
-                   "hemo-run: warning: DFSPH with a pressurised vessel: the lumen pressure pushes the blood next to the wall "
-                   "into every gap the stretching wall opens, so the flow is noisier than under WCSPH and the wall tears at a "
-                   "lower lumen pressure (docs/physics.md, \"The pressure solver\"); use \"wcsph\" for rupture pressures\n");
-    }
     if (const auto* wall = sim.solver().wall()) {
       // what sets the step: the springs' own limit (times the substeps) against the fluid's
       const hemo::sim::SphParams& sp = sim.solver().params();
@@ -172,6 +166,15 @@ int main(int argc, char** argv) {
                    "%.3g s); the fluid's own limit is about %.3g s (%s)\n",
                    wall->springTimeStepLimit() * wall->substeps(), wall->substeps(), wall->substeps() == 1 ? "" : "s",
                    wall->springTimeStepLimit(), fluidLimit, dfsph ? "C_a h / expected_max_speed" : "C_a h / c0");
+      const double wallLimit = wall->springTimeStepLimit() * wall->substeps();
+      if (dfsph && wallLimit < 0.5 * fluidLimit) {
+        // (at the wall's own step the solve turns the fill's density errors into fast flow)
+        std::fprintf(stderr,
+                     "hemo-run: warning: DFSPH with a vessel whose springs limit the step to under half the fluid's own "
+                     "limit: at so small a step the solve turns density errors into fast flow and the wall tears early "
+                     "(docs/physics.md, \"The pressure solver\"); set vessel.substeps to %.0f or more\n",
+                     std::ceil(0.5 * fluidLimit / wall->springTimeStepLimit()));
+      }
     }
     const bool tty = isatty(2);
     double lastPrint = -1.0;

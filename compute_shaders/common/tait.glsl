@@ -7,12 +7,28 @@ float hemo_background_pressure(float time, SphParams params) {
   return params.backgroundPressure * ramp;
 }
 
-// (Under DFSPH, params.pressureSolver 1, B = 0: p = p_bg, and the solve adds the rest.)
 float hemo_tait_pressure(float rho, float background, SphParams params) {
   const float ratio = rho / params.rho0;
   const float r2 = ratio * ratio;
   const float p = params.taitB * (r2 * r2 * r2 * ratio - 1.0) + background;
   return params.clampNegativePressure != 0u ? max(p, 0.0) : p;
+}
+
+// Under DFSPH (params.pressureSolver 1) the solve takes compression out, and the equation of
+// state acts on expansion only: p = max(B ((min(rho, rho0) / rho0)^7 - 1) + p_bg, 0), p_bg at
+// rho0 and above, falling to 0 as the blood expands, never below (the solve has no tension
+// either). The lumen pressure therefore falls where the blood expands, as under WCSPH.
+float hemo_expansion_pressure(float rho, float background, SphParams params) {
+  const float ratio = min(rho, params.rho0) / params.rho0;
+  const float r2 = ratio * ratio;
+  return max(params.taitB * (r2 * r2 * r2 * ratio - 1.0) + background, 0.0);
+}
+
+// The pressure the density pass gives: the Tait law under WCSPH, its expansion side under DFSPH.
+float hemo_state_pressure(float rho, float background, SphParams params) {
+  const float tait = hemo_tait_pressure(rho, background, params);
+  const float expansion = hemo_expansion_pressure(rho, background, params);
+  return params.pressureSolver != 0u ? expansion : tait;
 }
 
 // The density the equation of state gives for pressure p (the inverse, for boundary

@@ -91,7 +91,8 @@
 //                            indirect arguments.
 //   uint  pressureSolver     0: the Tait equation of state gives the pressure (WCSPH); 1: the
 //                            DFSPH solve does (see "The pressure solver" below): the density
-//                            pass writes p = p_bg and boundary particles (rho0, p_bg)
+//                            pass writes the expansion side of the Tait law (p_bg at rho0
+//                            and above) and boundary particles (rho0, their fluid's mean)
 //   float solveFloor         DFSPH: the least denominator |sum_j m_j gradW_ij|^2 + sum_j |m_j gradW_ij|^2
 //                            the stiffness divides by (kg^2 m^-8): a quarter of a full
 //                            neighbourhood's on the fill's lattice. A particle the wall's
@@ -425,11 +426,13 @@
 // Step log: vec2 (time after the step, dt) per step of the current batch.
 
 // The pressure solver (hemo::sim::PressureSolver::Dfsph): divergence-free SPH (Bender &
-// Koschier 2015, 2017) in place of the Tait equation of state. The density pass then writes
-// p = p_bg (the background pressure, 0 unless the scene sets one) and the boundary pass
-// (rho0, p_bg), so the force pass gives the non-pressure acceleration a_np (with p_bg's pair
-// terms, which load a vessel's wall with its lumen pressure). After the density solve a wall
-// takes the reaction of both solves' mirrored boundary terms (wall/dfsph_reaction.comp). Two solves per step, each a relaxed Jacobi iteration of two pair passes with the
+// Koschier 2015, 2017) in place of the Tait equation of state for compression. The density
+// pass then writes p = max(B ((min(rho, rho0) / rho0)^7 - 1) + p_bg, 0) (common/tait.glsl,
+// hemo_expansion_pressure: the background pressure p_bg, 0 unless the scene sets one, where
+// the blood is at or above rho0, falling as it expands) and the boundary pass rho0 and its
+// fluid neighbours' mean of it, so the force pass gives the non-pressure acceleration a_np
+// (with those pressures' pair terms, which load a vessel's wall with its lumen pressure).
+// After the density solve a wall takes the reaction of both solves' mirrored boundary terms (wall/dfsph_reaction.comp). Two solves per step, each a relaxed Jacobi iteration of two pair passes with the
 // stiffness denominator D_i = max(|sum_j m_j gradW_ij|^2 + sum_{j fluid} |m_j gradW_ij|^2, floor)
 // (j over fluid and boundary neighbours; a boundary neighbour moves with its own velocity and
 // mirrors i's stiffness, as in Akinci et al. 2012):
@@ -447,9 +450,9 @@
 //               e_i = max(rho*_i - rho0, 0),  k_i = kappa_i / rho_i = e_i / (dt^2 D_i)
 //      correct  a_i -= sum_{j fluid} m_j (k_i + k_j) gradW_ij + sum_b m_b k_i gradW_ib
 //    to a mean e_i / rho0 at most the tolerance. The integrator's symplectic Euler step with
-//    a = a_np + a_p is then the solver's v = v*, x += dt v. state.y shows the pressure of the
-//    step's impulses over dt: the divergence solve's (sum of k_i) rho_i^2 / dt plus the density
-//    solve's sum of k_i rho_i^2, so its time average is the pressure that carries the fluid's
+//    a = a_np + a_p is then the solver's v = v*, x += dt v. state.y shows the density pass's
+//    pressure plus that of the step's impulses over dt: the divergence solve's (sum of k_i)
+//    rho_i^2 / dt plus the density solve's sum of k_i rho_i^2, so its time average is the pressure that carries the fluid's
 //    weight (a single step's is not: a solve corrects the error left by earlier steps whenever
 //    the mean passes the tolerance, and a short step, such as one that ends at the end time,
 //    shows that correction over its short dt).

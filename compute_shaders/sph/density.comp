@@ -174,7 +174,7 @@ void main() {
     }
   }
   const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
-  const float p = hemo_tait_pressure(rho, background, params);
+  const float p = hemo_state_pressure(rho, background, params);
 #if !HEMO_CELL_WALK
   pairCount[i] = gMf | gMb << 16u;  // hemo_pair_counts
 #endif

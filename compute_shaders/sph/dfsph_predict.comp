@@ -14,8 +14,8 @@
 // correction's k_i (from the stiffness it stored) to its solve's sum: the divergence solve's
 // sum of k_i in kappa.z, the density solve's pressure in kappa.y, which starts (its first
 // prediction) from the divergence solve's impulse, (sum of k_i) rho_i^2 / dt, and grows by
-// k_i rho_i^2 per correction; state.y (which the density pass set to the background pressure
-// p_bg) becomes p_bg plus it. A step past the end time (dt = 0) keeps the last pressure,
+// k_i rho_i^2 per correction; state.y becomes the density pass's pressure (the expansion side of
+// the equation of state, common/tait.glsl) plus it. A step past the end time (dt = 0) keeps the last pressure,
 // stiffness 0 and error 0.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
@@ -117,7 +117,8 @@ void main() {
         const float rho2 = si.x * si.x;
         const float p = !running ? last.y : pc.iteration == 0u ? last.z * rho2 / gDt : last.y + last.x * rho2;
         kappa[i] = vec4(running ? compression / (gDt * gDt * d) : 0.0, p, last.z, 0.0);
-        state[i].y = p + hemo_background_pressure(clock.time, params);  // as the density pass's
+        // (the density pass's pressure, recomputed: this pass overwrites it)
+        state[i].y = p + hemo_expansion_pressure(si.x, hemo_background_pressure(clock.time, params), params);
         e = running ? compression / rho0 : 0.0;
       }
       // (NaN counts as the largest error, so a blown-up solve never reads as converged)

@@ -61,8 +61,8 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
         if (r < support) rho += pj.mass * kernelW(r, m.h);
       }
     }
-    double p = m.taitB * (std::pow(rho / m.rho0, 7.0) - 1.0) + m.backgroundPressure;
-    if (m.clampNegativePressure) p = std::max(p, 0.0);
+    double p = m.taitB * (std::pow((m.dfsph ? std::min(rho, m.rho0) : rho) / m.rho0, 7.0) - 1.0) + m.backgroundPressure;
+    if (m.clampNegativePressure || m.dfsph) p = std::max(p, 0.0);
     out[i] = {rho, p};
   }
   // Boundary particles: pressure extrapolated from the fluid (Adami et al. 2012).
@@ -82,6 +82,10 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
     }
     if (sumW <= 0.0) {
       out[b] = {m.rho0, m.backgroundPressure};
+      continue;
+    }
+    if (m.dfsph) {
+      out[b] = {m.rho0, std::clamp(sumP / sumW, 0.0, m.backgroundPressure)};
       continue;
     }
     double p = (sumP + glm::dot(m.gravity, sumRhoR)) / sumW;

@@ -351,8 +351,8 @@ SphParams makeParams(const SphSettings& s) {
   if (s.pressureSolver == PressureSolver::Dfsph) {
     // No equation of state: the solve gives the pressure, and the step is limited by the
     // flow's speed (C_a h / |v|), not by sound (the repulsion keeps its strength from c0).
+    // B stays: the density pass's pressure follows the Tait law on expansion (common/tait.glsl).
     p.pressureSolver = 1u;
-    p.taitB = 0.0f;
     p.c0 = 0.0f;
     p.solveFloor = float(0.25 * s.stiffnessDenominatorAtRest());
   }

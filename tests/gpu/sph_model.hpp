@@ -28,6 +28,7 @@ inline reference::SphModel modelOf(const sim::SphParams& p, double time = 0.0) {
   m.backgroundPressure = p.backgroundPressure * ramp;
   m.deltaSph = p.deltaSph;
   m.c0 = p.c0;
+  m.dfsph = p.pressureSolver != 0;
   m.gravityOnly = {p.gravityOnly[0], p.gravityOnly[1], p.gravityOnly[2]};
   return m;
 }

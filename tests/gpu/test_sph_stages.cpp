@@ -938,6 +938,7 @@ TEST_F(SphStageTest, DfsphSolvesMatchReference) {
     ASSERT_EQ(solver.listReadWidth(), capacity % 4u == 0u ? 4u : 1u);
     const auto slotIds = st.store->readIds();
     const auto velAfterDivergence = st.store->readVelocities();
+    const auto stateBefore = solver.state().readback<glm::vec4>(n);  // the density pass's (rho, p)
     {
       gpu::CommandRecorder rec(ctx());
       rec.begin();
@@ -976,15 +977,28 @@ TEST_F(SphStageTest, DfsphSolvesMatchReference) {
     EXPECT_EQ(divStats.capHits, 1u);
     EXPECT_NEAR(divStats.lastError, div.errors.back(), 2e-6 + 1e-3 * div.errors.back());
 
-    // the density solve, from the non-pressure accelerations of the reference's forces
-    // (p = p_bg everywhere, boundary particles at rho0)
+    // the density solve, from the non-pressure accelerations of the reference's forces (the
+    // expansion side of the Tait law, p_bg at rho0 and above; boundary particles at rho0 with
+    // their fluid's mean pressure)
+    ASSERT_TRUE(model.dfsph);
     const double background = s.backgroundPressure;
-    auto rp = reference::densityPressure(moved, model);
+    const auto rp = reference::densityPressure(moved, model);
     std::vector<double> rho(n);
+    int expanded = 0, compressed = 0;
     for (std::size_t i = 0; i < moved.size(); ++i) {
       rho[i] = rp[i].x;
-      rp[i] = moved[i].kind == 0 ? glm::dvec2(rp[i].x, background) : glm::dvec2(model.rho0, background);
+      if (moved[i].kind != 0) continue;
+      expanded += rho[i] < model.rho0 && rp[i].y < background;
+      compressed += rho[i] > model.rho0 && rp[i].y == background;
     }
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = slotIds[slot];
+      if (moved[i].kind != 0) continue;
+      EXPECT_NEAR(stateBefore[slot].y, rp[i].y, 7.0 * model.taitB * 4e-6 + 1e-5 * background)
+          << "the density pass's pressure of particle " << i;
+    }
+    EXPECT_GT(expanded, 0) << "some fluid should be expanded, below p_bg";
+    EXPECT_GT(compressed, 0) << "some fluid should be compressed, at p_bg";
     const auto aNp = reference::accelerations(moved, rp, model);
     const auto dens = reference::dfsphDensitySolve(moved, rho, aNp, dt, model, floor, 3);
     double accelScale = 0.0, pressureScale = 0.0, pressureChange = 0.0;
@@ -995,14 +1009,22 @@ TEST_F(SphStageTest, DfsphSolvesMatchReference) {
       pressureChange = std::max(pressureChange, glm::length(dens.values[i] - aNp[i]));
     }
     EXPECT_GT(pressureChange, 0.5 * accelScale) << "the pressure should dominate in this compressed case";
+    int partial = 0;  // boundary particles between 0 and p_bg: next to expanded fluid
     for (std::uint32_t slot = 0; slot < n; ++slot) {
       const std::uint32_t i = slotIds[slot];
-      if (moved[i].kind != 0) continue;
+      if (moved[i].kind != 0) {
+        // the boundary pass: rho0 and the fluid neighbours' mean pressure, within [0, p_bg]
+        EXPECT_EQ(state[slot].x, float(model.rho0)) << "density of boundary particle " << i;
+        EXPECT_NEAR(state[slot].y, rp[i].y, 1e-4 * background) << "pressure of boundary particle " << i;
+        partial += rp[i].y > 0.01 * background && rp[i].y < 0.99 * background;
+        continue;
+      }
       EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - dens.values[i]), 5e-4 * accelScale) << "acceleration of particle " << i;
       // the divergence solve's impulse over dt, then the density solve's corrections
       const double pressure = div.pressure[i] * rho[i] * rho[i] / dt + dens.pressure[i];
-      EXPECT_NEAR(state[slot].y, background + pressure, 5e-4 * pressureScale) << "pressure of particle " << i;
+      EXPECT_NEAR(state[slot].y, rp[i].y + pressure, 5e-4 * pressureScale) << "pressure of particle " << i;
     }
+    EXPECT_GT(partial, 0) << "some boundary particle should see expanded fluid";
     const sim::PressureSolveStats st2 = solver.readPressureSolveStats();
     EXPECT_EQ(st2.solves, 1u);
     EXPECT_EQ(st2.lastIterations, 3u);

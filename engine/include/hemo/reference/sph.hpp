@@ -40,6 +40,10 @@ struct SphModel {
   double c0 = 0.0;
   glm::dvec3 gravityOnly{0.0};  // gravity without the body force (m/s^2)
   double lastDt = 0.0;          // s
+  // DFSPH's density pass (common/tait.glsl, hemo_expansion_pressure): the Tait law on
+  // expansion only, p = max(B ((min(rho, rho0) / rho0)^7 - 1) + p_bg, 0); boundary particles
+  // take rho0 and their fluid neighbours' kernel-weighted mean pressure, within [0, p_bg].
+  bool dfsph = false;
 };
 
 // x_i - x_j, by the minimum image on periodic axes.
