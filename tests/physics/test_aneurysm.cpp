@@ -3,6 +3,7 @@
 #include "gpu_test.hpp"
 #include "hemo/scene/build.hpp"
 #include "hemo/sim/simulation.hpp"
+#include "hemo/sim/stats.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -141,6 +142,59 @@ TEST_F(AneurysmTest, SacRupturesFirstAndBloodEscapes) {
               "junction %u, rim %u, tube %u; %u fluid particles entered the sac, %u escaped (%u through the sac's side)\n",
               sacP, tubeP, firstBreak, atFirst[0], atFirst[1], atFirst[2], firstTube, atFirstTube[0], atFirstTube[1],
               atFirstTube[2], sim.time(), broken[0], broken[1], broken[2], broken[3], entered, escaped, viaSac);
+}
+
+// The large-step solver's sac tears near WCSPH's lumen pressure. The coarse aneurysm with
+// test 5's inflow and supply, the lumen pressure raised to 1.5 P*_sac over 30 ms, under WCSPH
+// (the wall at its own step) and under DFSPH (the wall in 8 substeps): the background pressure
+// at the first broken spring (from per-step statistics). Measured on lavapipe: DFSPH at 0.81
+// of WCSPH's (0.72-0.83 with 4-16 substeps), in a ninth of the steps; with p = p_bg in DFSPH's
+// density pass (its first model) at 0.58-0.60. A tear's onset under the flow's loads varies
+// by some 10% with the step and the device's rounding, so the test asks for 30%, which the
+// first model fails; scenes/aneurysm.json's 10% goal is measured with hemo-run
+// (docs/physics.md, "Not yet" under "The pressure solver").
+TEST_F(AneurysmTest, DfsphSacTearsNearWcsphsLumenPressure) {
+  struct Tear {
+    double pressure = -1.0;  // p_bg at the first broken spring (Pa)
+    std::uint32_t steps = 0;
+  };
+  auto firstTear = [&](sim::PressureSolver solver) {
+    scene::Scene scene = coarseAneurysm(1.5);
+    const scene::AneurysmSpec spec = scene::vesselSpec(scene);
+    sim::Inflow inflow;
+    inflow.zoneStart = 0.0f;
+    inflow.zoneEnd = 4.0f * scene.sph.spacing;
+    inflow.radius = spec.tube.radius;
+    inflow.meanSpeed = 0.2f;
+    inflow.ramp = 0.01f;
+    inflow.holdPressure = true;
+    scene.vessel->inflow = inflow;
+    scene.sph.pressureSolver = solver;
+    if (solver == sim::PressureSolver::Dfsph) scene.vessel->substeps = 8;
+    sim::Simulation sim(ctx(), scene);
+    sim.enableStepStats(1);
+    Tear tear;
+    sim::RunOptions opt;
+    opt.steps = 100;
+    opt.onStepStats = [&](const std::vector<sim::StepStatsRow>& rows) {
+      for (const sim::StepStatsRow& r : rows) {
+        if (tear.pressure >= 0.0 || r.brokenSprings == 0) continue;
+        tear.pressure = scene.sph.backgroundPressure * std::min(1.0, double(r.time) / scene.sph.backgroundPressureRamp);
+        tear.steps = r.steps;
+      }
+    };
+    while (tear.pressure < 0.0 && sim.time() < 0.04) sim.run(opt);
+    return tear;
+  };
+  const Tear wcsph = firstTear(sim::PressureSolver::Wcsph);
+  const Tear dfsph = firstTear(sim::PressureSolver::Dfsph);
+  ASSERT_GT(wcsph.pressure, 0.0) << "no spring broke under WCSPH by 0.04 s";
+  ASSERT_GT(dfsph.pressure, 0.0) << "no spring broke under DFSPH by 0.04 s";
+  std::printf("first broken spring: WCSPH at p_bg %.0f Pa after %u steps, DFSPH (8 wall substeps) at %.0f Pa (%.3f) "
+              "after %u steps\n",
+              wcsph.pressure, wcsph.steps, dfsph.pressure, dfsph.pressure / wcsph.pressure, dfsph.steps);
+  EXPECT_NEAR(dfsph.pressure / wcsph.pressure, 1.0, 0.30) << "DFSPH's sac tears at another lumen pressure";
+  EXPECT_LT(2 * dfsph.steps, wcsph.steps) << "DFSPH should take far larger steps";
 }
 
 }  // namespace
