@@ -35,14 +35,17 @@ using Json = nlohmann::json;
 
 const char* kUsage =
     "usage: hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N]\n"
-    "                [--stats-every N] [--surface-every N] [--png-every N] [--png-size WxH] [--profile N]\n"
-    "                [--checkpoint-every N] [--resume FILE]\n"
+    "                [--vtk-format xml|legacy] [--stats-every N] [--surface-every N] [--png-every N]\n"
+    "                [--png-size WxH] [--profile N] [--checkpoint-every N] [--resume FILE]\n"
     "  --out DIR        output directory (default: out/<scene name>)\n"
     "  --steps N        run until step N (N steps; a resumed run counts the checkpoint's steps)\n"
     "  --until SECONDS  run until this simulated time (default: the scene's time.end_time_s)\n"
     "  --device SEL     Vulkan device index or name part (default: HEMO_DEVICE, else the best)\n"
-    "  --vtk-every N    write DIR/particles_<step>.vtk every N steps (and at the end); with a vessel\n"
-    "                   also DIR/springs_<step>.vtk (strain, tension, broken)\n"
+    "  --vtk-every N    write DIR/particles_<step>.vtu every N steps (and at the end), listed with\n"
+    "                   their times in DIR/particles.pvd (a ParaView time series); with a vessel also\n"
+    "                   DIR/springs_<step>.vtp (strain, tension, broken) in DIR/springs.pvd\n"
+    "  --vtk-format F   xml (default): binary VTK XML as above; legacy: ASCII legacy VTK,\n"
+    "                   DIR/particles_<step>.vtk and DIR/springs_<step>.vtk, no .pvd\n"
     "  --stats-every N  write DIR/steps.csv: time, dt, max fluid speed, max density error, broken\n"
     "                   springs and detached wall particles of every N-th step (recorded on the GPU)\n"
     "  --profile N      after the run, time N more steps stage by stage (GPU ms in stage_ms),\n"
@@ -84,7 +87,7 @@ int main(int argc, char** argv) {
   try {
     args = hemo::cli::parse(argc, argv, {"--out", "--steps", "--until", "--device", "--vtk-every", "--png-every",
                                          "--surface-every", "--profile", "--stats-every", "--png-size",
-                                         "--checkpoint-every", "--resume"});
+                                         "--checkpoint-every", "--resume", "--vtk-format"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SCENE.json");
     if (args.has("--steps") && args.has("--until")) throw hemo::cli::UsageError("give --steps or --until, not both");
 
@@ -95,6 +98,7 @@ int main(int argc, char** argv) {
 
   hemo::sim::RunOptions options;
   std::uint32_t vtkEvery = 0;
+  bool vtkLegacy = false;
   std::uint32_t surfaceEvery = 0;
   std::uint32_t pngEvery = 0;
   std::uint32_t pngWidth = 960, pngHeight = 540;
@@ -107,6 +111,9 @@ int main(int argc, char** argv) {
     if (args.has("--steps")) stepsTotal = args.count("--steps", 0, 1, 4000000000ull);
     if (args.has("--until")) options.until = args.seconds("--until", 0.0);
     vtkEvery = static_cast<std::uint32_t>(args.count("--vtk-every", 0, 1, 1000000000));
+    const std::string vtkFormat = args.text("--vtk-format", "xml");
+    if (vtkFormat != "xml" && vtkFormat != "legacy") throw hemo::cli::UsageError("--vtk-format expects xml or legacy");
+    vtkLegacy = vtkFormat == "legacy";
     surfaceEvery = static_cast<std::uint32_t>(args.count("--surface-every", 0, 1, 1000000000));
     pngEvery = static_cast<std::uint32_t>(args.count("--png-every", 0, 1, 1000000000));
     std::tie(pngWidth, pngHeight) = args.size("--png-size", {960, 540});
@@ -184,18 +191,40 @@ int main(int argc, char** argv) {
         lastPrint = p.wallSeconds;
       }
     };
+    // The XML frames' time series; a resumed run keeps the frames up to its checkpoint's step.
+    std::optional<hemo::io::PvdSeries> particleSeries, springSeries;
+    auto keepFrame = [&](const std::string& file) {
+      const std::size_t digits = file.find_last_of('_');
+      return resumed && digits != std::string::npos &&
+             std::strtoull(file.c_str() + digits + 1, nullptr, 10) <= firstStep;
+    };
+    std::uint64_t vtkFiles = 0;  // particle frames written by this run
     auto writeVtk = [&](const hemo::sim::Progress& p) {
+      ++vtkFiles;
+      const auto step = static_cast<unsigned long long>(p.steps);
       char name[64];
-      std::snprintf(name, sizeof name, "particles_%08llu.vtk", static_cast<unsigned long long>(p.steps));
       const hemo::sim::Snapshot snap = sim.snapshot();
       const glm::vec3 period = sim.solver().grid().spec().period;
-      if (const auto* wall = sim.solver().wall()) {
-        const auto springs = wall->readSprings();
-        hemo::io::writeParticlesVtk(out / name, snap, p.time, &springs, period);
-        std::snprintf(name, sizeof name, "springs_%08llu.vtk", static_cast<unsigned long long>(p.steps));
-        hemo::io::writeSpringsVtk(out / name, snap, springs, p.time, period);
-      } else {
-        hemo::io::writeParticlesVtk(out / name, snap, p.time);
+      const auto* wall = sim.solver().wall();
+      const std::vector<hemo::sim::GpuSpring> springs = wall ? wall->readSprings() : std::vector<hemo::sim::GpuSpring>{};
+      if (vtkLegacy) {
+        std::snprintf(name, sizeof name, "particles_%08llu.vtk", step);
+        hemo::io::writeParticlesVtk(out / name, snap, p.time, wall ? &springs : nullptr, period);
+        if (wall) {
+          std::snprintf(name, sizeof name, "springs_%08llu.vtk", step);
+          hemo::io::writeSpringsVtk(out / name, snap, springs, p.time, period);
+        }
+        return;
+      }
+      std::snprintf(name, sizeof name, "particles_%08llu.vtu", step);
+      hemo::io::writeParticlesVtu(out / name, snap, p.time, wall ? &springs : nullptr, period);
+      if (!particleSeries) particleSeries.emplace(out / "particles.pvd", keepFrame);
+      particleSeries->add(p.time, name);
+      if (wall) {
+        std::snprintf(name, sizeof name, "springs_%08llu.vtp", step);
+        hemo::io::writeSpringsVtp(out / name, snap, springs, p.time, period);
+        if (!springSeries) springSeries.emplace(out / "springs.pvd", keepFrame);
+        springSeries->add(p.time, name);
       }
     };
     // (written under a temporary name during the run, renamed when it ends: hemo/io/atomic_file.hpp)
@@ -406,6 +435,7 @@ int main(int argc, char** argv) {
       summary["rebuild_stage_ms"] = rebuildMs;
     }
     if (pngFiles > 0) summary["png_files"] = pngFiles;
+    if (vtkFiles > 0) summary["vtk_files"] = vtkFiles;
     if (surfaceFiles > 0) {
       summary["surface_files"] = surfaceFiles;
       summary["surface_triangles"] = lastSurface.triangles;
