@@ -309,7 +309,11 @@ vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running, out vec3 d,
       const float inner = 1.0 - params.wallSpacing / inflow.radius;  // R - dp, over R
       const float rho = state(i).x;
       if (rho > 0.0 && s2 < inner * inner) {
-        x.w = clamp(x.w * (1.0 + 0.1 * (inflow.restDensity / rho - 1.0)), inflow.baseMass, inflow.maxMass);
+        // (per unit of time: a tenth per acoustic step C_a h / c0, WCSPH's own; DFSPH's
+        // longer steps take the same fraction of the way per second, at most half)
+        const float c0 = sqrt(7.0 * params.taitB / params.rho0);
+        const float rate = params.pressureSolver != 0u ? min(0.1 * dt * c0 / (params.cflAcoustic * params.h), 0.5) : 0.1;
+        x.w = clamp(x.w * (1.0 + rate * (inflow.restDensity / rho - 1.0)), inflow.baseMass, inflow.maxMass);
       }
     }
   } else if (kMode != HEMO_INTEGRATE_RK2_FULL) {

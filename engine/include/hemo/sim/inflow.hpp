@@ -19,7 +19,9 @@
 // way towards the one that brings its summed density to the rest density rho0 (pressure p_bg,
 // the lumen pressure), m <- m (1 + (rho0 / rho - 1) / 10), kept between the initial mass m0 and
 // maxMassRatio m0 (two-sided, so the scatter of single densities does not ratchet the mass
-// up; sph/integrate.comp says why a tenth and why not at the wall). The flow carries the mass
+// up; sph/integrate.comp says why a tenth and why not at the wall). Under DFSPH the fraction is
+// a tenth per acoustic step C_a h / c0 (at most a half), the same rate per second as under
+// WCSPH with its longer steps. The flow carries the mass
 // downstream; particles that took it up
 // stand for proportionally more volume (their spacing grows as (m / m0)^(1/3) at rest
 // density), and the cap bounds how long a bleed can be fed.
