@@ -41,6 +41,19 @@ void checkSprings(const sim::Snapshot& s, const std::vector<sim::GpuSpring>& spr
 
 }  // namespace
 
+SpringStats springStats(const sim::Snapshot& s, const std::vector<sim::GpuSpring>& springs, glm::vec3 period) {
+  checkSprings(s, springs);
+  SpringStats out;
+  out.strain.reserve(springs.size());
+  out.tension.reserve(springs.size());
+  for (const auto& k : springs) {
+    const double length = springLength(s, k, period);
+    out.strain.push_back(float(length / k.restLength - 1.0));
+    out.tension.push_back(k.broken ? 0.0f : float(k.stiffness * (length - k.restLength)));
+  }
+  return out;
+}
+
 WallPointStats wallPointStats(const sim::Snapshot& s, const std::vector<sim::GpuSpring>& springs, glm::vec3 period) {
   checkSprings(s, springs);
   const std::size_t n = s.positions.size();
@@ -99,7 +112,7 @@ void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s
 
 void writeSpringsVtk(const std::filesystem::path& path, const sim::Snapshot& s, const std::vector<sim::GpuSpring>& springs,
                      double time, glm::vec3 period) {
-  checkSprings(s, springs);
+  const SpringStats stats = springStats(s, springs, period);
   AtomicFile file(path);
   std::ostream& out = vtkHeader(file, "hemo springs", time);
   const std::size_t n = s.positions.size(), m = springs.size();
@@ -108,9 +121,9 @@ void writeSpringsVtk(const std::filesystem::path& path, const sim::Snapshot& s, 
   out << "LINES " << m << ' ' << 3 * m << '\n';
   for (const auto& k : springs) out << "2 " << k.a << ' ' << k.b << '\n';
   out << "CELL_DATA " << m << "\nSCALARS strain float 1\nLOOKUP_TABLE default\n";
-  for (const auto& k : springs) out << float(springLength(s, k, period) / k.restLength - 1.0) << '\n';
+  for (float x : stats.strain) out << x << '\n';
   out << "SCALARS tension_N float 1\nLOOKUP_TABLE default\n";
-  for (const auto& k : springs) out << (k.broken ? 0.0f : float(k.stiffness * (springLength(s, k, period) - k.restLength))) << '\n';
+  for (float x : stats.tension) out << x << '\n';
   out << "SCALARS broken int 1\nLOOKUP_TABLE default\n";
   for (const auto& k : springs) out << (k.broken ? 1 : 0) << '\n';
   file.commit();

@@ -1,11 +1,8 @@
 #include "hemo/io/atomic_file.hpp"
 #include "hemo/io/output.hpp"
 
-#include <glm/geometric.hpp>
-
 #include <bit>
-#include <cmath>
-#include <cstring>
+#include <cstdlib>
 #include <fstream>
 #include <regex>
 #include <sstream>
@@ -57,13 +54,6 @@ std::ostream& xmlHeader(AtomicFile& file, const char* type) {
   out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"" << type << "\" version=\"1.0\" byte_order=\"" << byteOrder()
       << "\" header_type=\"UInt64\">\n";
   return out;
-}
-
-glm::dvec3 minImage(glm::dvec3 d, glm::vec3 period) {
-  for (int a = 0; a < 3; ++a) {
-    if (period[a] > 0.0f) d[a] -= double(period[a]) * std::round(d[a] / double(period[a]));
-  }
-  return d;
 }
 
 std::vector<float> xyz(const std::vector<glm::vec4>& v) {
@@ -127,22 +117,18 @@ void writeParticlesVtu(const std::filesystem::path& path, const sim::Snapshot& s
 void writeSpringsVtp(const std::filesystem::path& path, const sim::Snapshot& s, const std::vector<sim::GpuSpring>& springs,
                      double time, glm::vec3 period) {
   const std::size_t n = s.positions.size(), m = springs.size();
+  const SpringStats stats = springStats(s, springs, period);
   std::vector<std::int32_t> connectivity, offsets;
-  std::vector<float> strain, tension;
   std::vector<std::uint8_t> broken;
   connectivity.reserve(2 * m);
   for (const auto& k : springs) {
-    if (k.a >= n || k.b >= n) throw std::runtime_error("a spring refers to particle ids beyond the snapshot");
     connectivity.insert(connectivity.end(), {std::int32_t(k.a), std::int32_t(k.b)});
     offsets.push_back(std::int32_t(connectivity.size()));
-    const double length = glm::length(minImage(glm::dvec3(s.positions[k.b]) - glm::dvec3(s.positions[k.a]), period));
-    strain.push_back(float(length / k.restLength - 1.0));
-    tension.push_back(k.broken ? 0.0f : float(k.stiffness * (length - k.restLength)));
     broken.push_back(k.broken ? 1 : 0);
   }
   AppendedArrays arrays;
   const std::string timeValue = arrays.add("Float64", "TimeValue", 1, &time, 1);
-  const std::string cellData[3] = {arrays.add("Float32", "strain", 1, strain), arrays.add("Float32", "tension_N", 1, tension),
+  const std::string cellData[3] = {arrays.add("Float32", "strain", 1, stats.strain), arrays.add("Float32", "tension_N", 1, stats.tension),
                                    arrays.add("UInt8", "broken", 1, broken)};
   const std::string points = arrays.add("Float32", "position_m", 3, xyz(s.positions));
   const std::string lines[2] = {arrays.add("Int32", "connectivity", 1, connectivity), arrays.add("Int32", "offsets", 1, offsets)};

@@ -18,6 +18,15 @@ struct WallPointStats {
 WallPointStats wallPointStats(const sim::Snapshot& snapshot, const std::vector<sim::GpuSpring>& springs,
                               glm::vec3 period);
 
+// Per spring: its strain |x_b - x_a| / rest - 1 (minimum image on periodic axes) and its
+// tension (N, the elastic part k (|d| - rest); 0 once broken). Throws std::runtime_error if a
+// spring names a particle the snapshot does not have.
+struct SpringStats {
+  std::vector<float> strain;
+  std::vector<float> tension;
+};
+SpringStats springStats(const sim::Snapshot& snapshot, const std::vector<sim::GpuSpring>& springs, glm::vec3 period);
+
 // Legacy VTK polydata (ASCII) of all particles: velocity (m/s), density (kg/m^3),
 // pressure (Pa), kind (0 fluid, 1 boundary, 2 wall) and id; with springs also the wall's
 // max_strain and broken_fraction (wallPointStats). Throws std::runtime_error naming the file
