@@ -1,14 +1,30 @@
 #pragma once
-// Files as bytes, for tests that damage or edit them (checkpoints).
+// Files as bytes, for tests that write, damage or edit them (checkpoints, output files).
 #include "hemo/io/hash.hpp"
 
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <string>
 #include <vector>
 
+#include <unistd.h>
+
 namespace hemo::test {
+
+// An empty folder of its own under the system's temporary folder: hemo_<name>_<pid>.
+inline std::filesystem::path freshTempDir(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("hemo_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline std::string readText(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
 
 inline std::vector<char> readAll(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);

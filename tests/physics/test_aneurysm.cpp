@@ -41,6 +41,21 @@ scene::Scene coarseAneurysm(double target) {
   return s;
 }
 
+// The same with test 5's blood flow: a parabolic inflow of mean 0.2 m/s in the tube's first
+// four spacings, ramped over 10 ms, the zone also the lumen's supply.
+scene::Scene coarseAneurysmWithSupply(double target) {
+  scene::Scene s = coarseAneurysm(target);
+  sim::Inflow inflow;
+  inflow.zoneStart = 0.0f;
+  inflow.zoneEnd = 4.0f * s.sph.spacing;
+  inflow.radius = scene::vesselSpec(s).tube.radius;
+  inflow.meanSpeed = 0.2f;
+  inflow.ramp = 0.01f;
+  inflow.holdPressure = true;
+  s.vessel->inflow = inflow;
+  return s;
+}
+
 // Springs of the built network by where they are: in the sac (both ends sac points), joining
 // the sac to the tube, on the neck's rim (tube springs with an end joined to a sac point), or
 // in the parent tube (the rest).
@@ -73,16 +88,8 @@ struct SpringPlaces {
 // and its junction's springs broken); blood escapes through
 // the hole, and every particle stays finite and counted.
 TEST_F(AneurysmTest, SacRupturesFirstAndBloodEscapes) {
-  scene::Scene scene = coarseAneurysm(1.5);
+  scene::Scene scene = coarseAneurysmWithSupply(1.5);
   const scene::AneurysmSpec spec = scene::vesselSpec(scene);
-  sim::Inflow inflow;
-  inflow.zoneStart = 0.0f;
-  inflow.zoneEnd = 4.0f * scene.sph.spacing;
-  inflow.radius = spec.tube.radius;
-  inflow.meanSpeed = 0.2f;
-  inflow.ramp = 0.01f;
-  inflow.holdPressure = true;
-  scene.vessel->inflow = inflow;
   const scene::AneurysmBuild build = scene::buildSaccularAneurysm(spec);
   const double sacP = scene::sacRupturePressure(build), tubeP = scene::hoopRupturePressure(spec.tube, scene::buildTube(spec.tube));
   ASSERT_LT(1.5 * sacP, 0.7 * tubeP) << "the test needs a lumen pressure the tube holds";
@@ -159,16 +166,7 @@ TEST_F(AneurysmTest, DfsphSacTearsNearWcsphsLumenPressure) {
     std::uint32_t steps = 0;
   };
   auto firstTear = [&](sim::PressureSolver solver) {
-    scene::Scene scene = coarseAneurysm(1.5);
-    const scene::AneurysmSpec spec = scene::vesselSpec(scene);
-    sim::Inflow inflow;
-    inflow.zoneStart = 0.0f;
-    inflow.zoneEnd = 4.0f * scene.sph.spacing;
-    inflow.radius = spec.tube.radius;
-    inflow.meanSpeed = 0.2f;
-    inflow.ramp = 0.01f;
-    inflow.holdPressure = true;
-    scene.vessel->inflow = inflow;
+    scene::Scene scene = coarseAneurysmWithSupply(1.5);
     scene.sph.pressureSolver = solver;
     if (solver == sim::PressureSolver::Dfsph) scene.vessel->substeps = 8;
     sim::Simulation sim(ctx(), scene);

@@ -1,6 +1,8 @@
 // Output files are whole or absent (hemo/io/atomic_file.hpp).
 #include "hemo/io/atomic_file.hpp"
 
+#include "file_bytes.hpp"
+
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -15,19 +17,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("hemo_atomic_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-std::string contents(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+fs::path freshDir(const std::string& name) { return freshTempDir("atomic_" + name); }
 
 std::size_t entries(const fs::path& dir) {
   std::size_t n = 0;
@@ -43,7 +33,7 @@ TEST(AtomicFile, CommitPutsTheWholeFileUnderItsNameAndNothingElse) {
     EXPECT_FALSE(fs::exists(dir / "out.txt")) << "nothing under the real name before the commit";
     file.commit();
   }
-  EXPECT_EQ(contents(dir / "out.txt"), "first line\n42\n");
+  EXPECT_EQ(readText(dir / "out.txt"), "first line\n42\n");
   EXPECT_EQ(entries(dir), 1u) << "no temporary left";
   fs::remove_all(dir);
 }
@@ -57,7 +47,7 @@ TEST(AtomicFile, UnfinishedFileLeavesTheOldOneAndNoTemporary) {
     throw std::runtime_error("stopped half way");
   } catch (const std::runtime_error&) {
   }
-  EXPECT_EQ(contents(dir / "summary.json"), "{\"old\": true}\n");
+  EXPECT_EQ(readText(dir / "summary.json"), "{\"old\": true}\n");
   EXPECT_EQ(entries(dir), 1u);
   fs::remove_all(dir);
 }
@@ -69,7 +59,7 @@ TEST(AtomicFile, CFileWritesCommitToo) {
     ASSERT_EQ(std::fwrite("\x89PNG", 1, 4, file.file()), 4u);
     file.commit();
   }
-  EXPECT_EQ(contents(dir / "frame.png"), "\x89PNG");
+  EXPECT_EQ(readText(dir / "frame.png"), "\x89PNG");
   fs::remove_all(dir);
 }
 

@@ -3,6 +3,8 @@
 // series, and a resumed run's kept frames.
 #include "hemo/io/output.hpp"
 
+#include "file_bytes.hpp"
+
 #include <gtest/gtest.h>
 #include <glm/geometric.hpp>
 
@@ -23,19 +25,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path freshDir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("hemo_vtk_xml_" + name + "_" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
-
-std::string contents(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+fs::path freshDir(const std::string& name) { return freshTempDir("vtk_xml_" + name); }
 
 // A VTK XML file as its reader sees it: each DataArray's attributes, and its bytes from the
 // appended block (a UInt64 count, then the data).
@@ -51,7 +41,7 @@ struct XmlFile {
 };
 
 XmlFile parse(const fs::path& path) {
-  const std::string text = contents(path);
+  const std::string text = readText(path);
   XmlFile f;
   const std::string marker = "<AppendedData encoding=\"raw\">";
   const std::size_t at = text.find(marker);
@@ -219,7 +209,7 @@ TEST(VtkXml, SpringLinesReadBackWithStrainTensionAndBroken) {
 }
 
 std::vector<std::pair<double, std::string>> pvdEntries(const fs::path& path) {
-  const std::string text = contents(path);
+  const std::string text = readText(path);
   const std::regex entry(R"re(<DataSet timestep="([^"]+)" part="0" file="([^"]+)"/>)re");
   std::vector<std::pair<double, std::string>> out;
   for (auto it = std::sregex_iterator(text.begin(), text.end(), entry); it != std::sregex_iterator(); ++it) {
