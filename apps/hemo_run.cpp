@@ -259,6 +259,41 @@ int main(int argc, char** argv) {
         if (!csv) csvFile->commit();  // (throws the write's error, naming the file)
       };
     }
+    // With tools: every step's force, torque and pose of each tool (the GPU logs them inside
+    // the batch), kept up to the checkpoint's step on a resumed run like steps.csv.
+    std::unique_ptr<hemo::io::AtomicFile> toolFile;
+    if (!scene.tools.empty()) {
+      const char* header =
+          "step,time_s,dt_s,tool,force_x_N,force_y_N,force_z_N,torque_x_N_m,torque_y_N_m,torque_z_N_m,"
+          "position_x_m,position_y_m,position_z_m";
+      std::vector<std::string> kept;
+      if (resumed) {
+        std::ifstream old(out / "tools.csv");
+        std::string line;
+        if (std::getline(old, line) && line == header) {
+          while (std::getline(old, line)) {
+            char* end = nullptr;
+            const unsigned long long step = std::strtoull(line.c_str(), &end, 10);
+            if (end == line.c_str() || *end != ',' || step > firstStep) break;
+            kept.push_back(line);
+          }
+        }
+      }
+      toolFile = std::make_unique<hemo::io::AtomicFile>(out / "tools.csv");
+      std::ostream& csv = toolFile->stream();
+      csv << header << "\n";
+      for (const std::string& line : kept) csv << line << "\n";
+      csv.precision(9);
+      options.onToolLog = [&](const std::vector<hemo::sim::ToolLogRow>& rows) {
+        for (const auto& r : rows) {
+          const auto& f = r.sample;
+          csv << r.step + 1 << ',' << f.force.w << ',' << r.dt << ',' << scene.tools[r.tool].name << ',' << f.force.x << ','
+              << f.force.y << ',' << f.force.z << ',' << f.torque.x << ',' << f.torque.y << ',' << f.torque.z << ','
+              << f.position.x << ',' << f.position.y << ',' << f.position.z << '\n';
+        }
+        if (!csv) toolFile->commit();  // (throws the write's error, naming the file)
+      };
+    }
     std::uint64_t surfaceFiles = 0;
     hemo::surface::McTotals lastSurface;
     auto writeSurface = [&](const hemo::sim::Progress& p) {
@@ -345,6 +380,7 @@ int main(int argc, char** argv) {
     }
     if (tty) std::fprintf(stderr, "\n");
     if (csvFile) csvFile->commit();  // the steps up to the end, or up to the blow-up
+    if (toolFile) toolFile->commit();
     if (finite) {
       hemo::sim::Progress p;
       p.steps = sim.steps();
@@ -396,6 +432,12 @@ int main(int argc, char** argv) {
                                           std::max(1u, sim.fluidParticles() + sim.boundaryParticles() + sim.wallParticles())},
                {"finite", finite}};
     summary["solver"] = sim.solver().solvesPressure() ? "dfsph" : "wcsph";
+    if (!scene.tools.empty()) {
+      summary["tools_file"] = "tools.csv";
+      nlohmann::json names = nlohmann::json::array();
+      for (const auto& t : scene.tools) names.push_back(t.name);
+      summary["tools"] = names;
+    }
     if (const auto* springs = sim.solver().wall()) {
       summary["wall_substeps"] = springs->substeps();
       summary["wall_step_limit_s"] = springs->springTimeStepLimit() * springs->substeps();

@@ -12,7 +12,7 @@
 // The including shader enables GL_KHR_shader_subgroup_basic, _arithmetic and _vote and
 // declares
 //   writeonly buffer { vec2 dtPartials[]; }
-//   writeonly buffer { uint dtCounts[2]; }
+//   writeonly buffer { uint dtCounts[2]; }  (3 in the tools' contact pass, which writes index 2)
 
 // Every invocation of the dispatch calls one of these once, in uniform control flow. An
 // invocation with several limits (the cluster passes) gives their (min, max) ((+inf, -inf)

@@ -329,9 +329,18 @@
 
 // sph/dt_reduce.comp: the time step's reduction's second level (one workgroup).
 #define HEMO_DTREDUCE_BINDING_PARTIALS 0  // texel vec2 (RG32F): HEMO_FORCES_BINDING_DT_PARTIALS
-#define HEMO_DTREDUCE_BINDING_COUNTS 1    // uint[2]
+#define HEMO_DTREDUCE_BINDING_COUNTS 1    // uint[3]
 #define HEMO_DTREDUCE_BINDING_RESULT 2    // vec2 (min, max) of every limit; NaN if any is
-#define HEMO_DTREDUCE_BINDING_COUNT 3
+// texel vec2: the tools' contact pass's partials (tool/contact.comp; from index 0), pass 2
+#define HEMO_DTREDUCE_BINDING_TOOL_PARTIALS 3
+// With tools (interface/tool.h): the tools buffer (uniform), the clock, the contact pass's
+// force and torque partials and their count, and the batch's tool log (placeholders without)
+#define HEMO_DTREDUCE_BINDING_TOOLS 4
+#define HEMO_DTREDUCE_BINDING_CLOCK 5
+#define HEMO_DTREDUCE_BINDING_TOOL_FORCES 6
+#define HEMO_DTREDUCE_BINDING_TOOL_FORCE_COUNT 7
+#define HEMO_DTREDUCE_BINDING_TOOL_LOG 8
+#define HEMO_DTREDUCE_BINDING_COUNT 9
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
 // step, clock, status. Specialization constant 2, the stage:

@@ -4,8 +4,11 @@
 #include "hemo/scene/bifurcation.hpp"
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/tube.hpp"
+#include "interface/tool.h"
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
 #include <array>
@@ -143,6 +146,21 @@ const std::vector<Field>& schema() {
            {"steps_per_batch", Kind::Integer, "1", 1, 4096, false, 64, "Steps recorded into one command buffer per submit."},
            {"settle_damping_1_s", Kind::Number, "1/s", 0, 1e6, false, 0.0, "Velocity damping xi of a settling phase: v <- v / (1 + xi dt)."},
            {"settle_until_s", Kind::Number, "s", 0, 1e6, false, 0.0, "The settling phase lasts while t < this (0: none)."},
+       }},
+      {"tools", Kind::Objects, "", 0, kInf, false, Json::array(), "Surgical tools (at most 8): rigid bodies moved along keyframed paths that push the blood and the vessel wall out of their way and feel the force back (docs/physics.md, \"Tools\"). hemo-run writes each tool's force per step to DIR/tools.csv.", {},
+       {
+           {"name", Kind::String, "", 0, 0, false, nullptr, "The tool's name, reported in outputs."},
+           {"kind", Kind::Choice, "", 0, 0, false, "probe", "A probe: a capsule, the segment from the tip along the tool's +z axis grown by radius_m (a sphere when length_m is 0).", {"probe"}},
+           {"radius_m", Kind::Number, "m", 0, 1e3, true, nullptr, "Radius of the probe's capsule."},
+           {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of its shaft from the tip along the tool's +z axis (0: a sphere)."},
+           {"contact_distance_m", Kind::Number, "m", 0, 1e3, false, 0.0, "D: particles closer than this to the tool's surface (or inside it) are pushed out along its normal (0: the particle spacing dp)."},
+           {"contact_scale", Kind::Number, "1", 0, 1e3, true, 0.01, "Psi = scale c0^2 / (2h) of the push Psi (1 - q) / sqrt(q), q = max(x / 2h, 1e-3), x the distance to the surface: the boundary repulsion's law, on the tool's exact surface."},
+           {"path", Kind::Objects, "", 1, kInf, false, nullptr, "Keyframes, in time order (at most 64): the tool holds the first pose before the first and the last after the last; in between the tip moves linearly and the orientation turns by normalised linear interpolation (under 90 degrees from key to key).", {},
+            {
+                {"time_s", Kind::Number, "s", 0, 1e6, false, nullptr, "Time of the keyframe."},
+                {"position_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Where the tip is; inside the domain."},
+                {"orientation_wxyz", Kind::NumberList, "1", -1e6, 1e6, false, Json::array({1.0, 0.0, 0.0, 0.0}), "The tool's rotation as a quaternion (w, x, y, z), normalised on loading: the default keeps its shaft along +z."},
+            }},
        }},
       {"surface", Kind::Section, "", 0, 0, false, Json::object(), "The blood surface (GPU marching cubes over the particles' volume-fraction field), built only when something asks for it (hemo-run --surface-every, the renderer).", {},
        {
@@ -486,6 +504,79 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   s.vessel = w;
 }
 
+void parseTools(const Checker& c, const Json& tools, Scene& s) {
+  if (tools.size() > HEMO_TOOL_MAX_TOOLS) {
+    c.fail("tools", "at most " + std::to_string(HEMO_TOOL_MAX_TOOLS) + " tools, got " + std::to_string(tools.size()));
+  }
+  const float slack = 1e-6f * s.sph.spacing;
+  for (std::size_t k = 0; k < tools.size(); ++k) {
+    const std::string p = "tools[" + std::to_string(k) + "]";
+    const Json& t = tools[k];
+    sim::ToolSpec tool;
+    tool.name = t["name"].get<std::string>();
+    if (tool.name.empty()) c.fail(p + ".name", "must not be empty");
+    for (const sim::ToolSpec& other : s.tools) {
+      if (other.name == tool.name) c.fail(p + ".name", "\"" + tool.name + "\" names another tool too");
+    }
+    tool.kind = sim::ToolKind::Probe;
+    tool.radius = t["radius_m"].get<float>();
+    tool.length = t["length_m"].get<float>();
+    tool.contactDistance = t["contact_distance_m"].get<float>();
+    if (tool.contactDistance == 0.0f) tool.contactDistance = s.sph.spacing;
+    tool.contactScale = t["contact_scale"].get<float>();
+    if (tool.contactDistance > s.sph.supportRadius()) {
+      c.fail(p + ".contact_distance_m", "must not exceed the kernel support 2h = " + fmt(s.sph.supportRadius()) + " m");
+    }
+    const Json& path = t["path"];
+    if (path.size() > HEMO_TOOL_MAX_KEYS) {
+      c.fail(p + ".path", "at most " + std::to_string(HEMO_TOOL_MAX_KEYS) + " keyframes, got " + std::to_string(path.size()));
+    }
+    const float reach = tool.radius + tool.length + tool.contactDistance;
+    for (int a = 0; a < 3; ++a) {
+      const float period = s.domain.max[a] - s.domain.min[a];
+      if (s.sph.periodic[a] && !(reach < 0.5f * period)) {
+        c.fail(p + ".radius_m", "the tool reaches " + fmt(reach) + " m from its tip, more than half the period along " +
+                                    std::string(1, "xyz"[a]) + " (" + fmt(0.5 * period) + " m)");
+      }
+    }
+    for (std::size_t m = 0; m < path.size(); ++m) {
+      const std::string kp = p + ".path[" + std::to_string(m) + "]";
+      const Json& key = path[m];
+      sim::ToolKey tk;
+      tk.time = key["time_s"].get<double>();
+      tk.position = vec3(key["position_m"]);
+      const Json& q = key["orientation_wxyz"];
+      if (q.size() != 4) c.fail(kp + ".orientation_wxyz", "expected 4 numbers (w, x, y, z), got " + q.dump());
+      const glm::dquat dq(q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>());
+      const double norm = std::sqrt(dq.w * dq.w + dq.x * dq.x + dq.y * dq.y + dq.z * dq.z);
+      if (!(norm > 1e-6)) c.fail(kp + ".orientation_wxyz", "must not be zero (a rotation as a quaternion w, x, y, z)");
+      tk.orientation = glm::quat(float(dq.w / norm), float(dq.x / norm), float(dq.y / norm), float(dq.z / norm));
+      if (m > 0 && !(tk.time > tool.keys.back().time)) {
+        c.fail(kp + ".time_s", "keyframes must be in time order: " + fmt(tk.time) + " s is not after the previous keyframe's " +
+                                   fmt(tool.keys.back().time) + " s");
+      }
+      if (!inside(Box{tk.position, tk.position}, s.domain, slack)) {
+        c.fail(kp + ".position_m", "the tool's tip lies outside the domain");
+      }
+      if (m > 0) {
+        const sim::ToolKey& prev = tool.keys.back();
+        const double speed = double(glm::length(tk.position - prev.position)) / (tk.time - prev.time);
+        if (speed > double(s.sph.soundSpeed)) {
+          c.fail(kp + ".position_m", "the tool's tip moves at " + fmt(speed) + " m/s from the previous keyframe, faster than the speed of sound c0 = " +
+                                         fmt(s.sph.soundSpeed) + " m/s");
+        }
+      }
+      tool.keys.push_back(tk);
+    }
+    try {
+      tool.validate();
+    } catch (const std::invalid_argument& e) {
+      c.fail(p, e.what());
+    }
+    s.tools.push_back(tool);
+  }
+}
+
 }  // namespace
 
 void checkPeriodicAxes(const Scene& s, const std::string& source, int onlyAxis) {
@@ -634,6 +725,7 @@ Scene parseScene(const std::string& text, const std::string& source) {
              "its " + std::to_string(s.tanks[k].layers) + " layers of boundary particles reach outside the domain");
     }
   }
+  parseTools(c, j["tools"], s);
   if (s.vessel && s.vessel->substeps > 1 && s.sph.integrator != sim::Integrator::SymplecticEuler) {
     c.fail("vessel.substeps", "above 1 needs time.integrator \"symplectic_euler\" (the wall's substeps are symplectic Euler)");
   }

@@ -73,6 +73,21 @@ std::uint64_t fingerprintOf(const scene::Scene& scene, const scene::SceneBuild& 
         makeInflowParams(*scene.vessel->inflow, scene.sph.restDensity, scene.sph.particleMass());
     h.add(&inflow, sizeof inflow);
   }
+  // the tools and their paths (a checkpoint carries the keyframes it ran with)
+  h.addValue(std::uint64_t(scene.tools.size()));
+  for (const ToolSpec& t : scene.tools) {
+    h.addValue(std::uint32_t(t.kind));
+    h.addValue(t.radius);
+    h.addValue(t.length);
+    h.addValue(t.contactDistance);
+    h.addValue(t.contactScale);
+    h.addValue(std::uint64_t(t.keys.size()));
+    for (const ToolKey& k : t.keys) {
+      h.addValue(k.time);
+      for (int a = 0; a < 3; ++a) h.addValue(k.position[a]);
+      for (int a = 0; a < 4; ++a) h.addValue(k.orientation[a]);
+    }
+  }
   return h.value();
 }
 
@@ -101,6 +116,13 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
                                         scene.stepsPerBatch);
   if (build.network) solver_->attachWall(*build.network);  // a scene without walls runs no wall stage
   if (scene.vessel && scene.vessel->inflow) solver_->setInflow(*scene.vessel->inflow);
+  if (!scene.tools.empty()) {  // (after the wall: the tools push its free points)
+    try {
+      solver_->attachTools(scene.tools);
+    } catch (const std::invalid_argument& e) {
+      throw scene::SceneError(scene.name + ": tools: " + e.what());
+    }
+  }
   minStep_ = scene.minTimeStep > 0.0 ? scene.minTimeStep : 1.0e-4 * designTimeStep();
   recorder_ = std::make_unique<gpu::CommandRecorder>(context);
   recorder_->begin();
@@ -170,6 +192,19 @@ RunResult Simulation::run(const RunOptions& options) {
     clock = solver_->readClock();
     checkStatus(steps_);
     if (clock.steps - before == batch) checkStep(clock, steps_, endTime);
+    if (options.onToolLog && solver_->tools() && clock.steps > before) {
+      // the steps that advanced the clock (later ones of the batch changed nothing)
+      const auto steps = static_cast<std::uint32_t>(clock.steps - before);
+      const auto samples = solver_->tools()->readLog(steps);
+      const auto log = solver_->stepLog().readback<glm::vec2>(steps);
+      const std::uint32_t tools = solver_->tools()->count();
+      std::vector<ToolLogRow> rows;
+      rows.reserve(samples.size());
+      for (std::uint32_t k = 0; k < steps; ++k) {
+        for (std::uint32_t t = 0; t < tools; ++t) rows.push_back({steps_ + k, log[k].y, t, samples[std::size_t(k) * tools + t]});
+      }
+      options.onToolLog(rows);
+    }
     if (statsRows > 0 && options.onStepStats) {
       std::vector<StepStatsRow> rows;
       std::uint32_t last = static_cast<std::uint32_t>(before);

@@ -4,6 +4,7 @@
 #include "hemo/reference/sph.hpp"
 #include "interface/scan.h"
 #include "interface/sph.h"
+#include "interface/tool.h"
 #include "interface/grid.h"
 
 #include <algorithm>
@@ -74,7 +75,8 @@ struct DfsphReducePush {  // sph/dfsph_reduce.comp
 };
 struct DtReducePush {  // sph/dt_reduce.comp
   std::uint32_t wallBase;  // the wall stage's first partial
-  std::uint32_t passes;    // bit 0: the force pass ran, bit 1: the wall stage ran
+  std::uint32_t passes;    // bit 0: the force pass ran, bit 1: the wall stage ran, bit 2: the tools' contact
+  std::uint32_t tools, toolStride, clockIn, logIndex;  // the tools' force sums (tools 0: none)
 };
 struct IntegratePush {
   std::uint32_t n, step, logIndex;
@@ -494,7 +496,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       // Partials for the force pass's SIMD groups over all slots and the wall stage's over the
       // non-fluid ones.
       dtPartials_(context, 2 * partialsPerPass(particles) * 8, gpu::MemoryUse::Device, "time-step partials"),
-      dtCounts_(context, 8, gpu::MemoryUse::Device, "time-step partials written"),
+      dtCounts_(context, 16, gpu::MemoryUse::Device, "time-step partials written"),
       dtResult_(context, 8, gpu::MemoryUse::Device, "time-step limits (min, max)"),
       // One partial per SIMD group of the integrator.
       checkPartials_(context, partialsPerPass(particles) * 16,
@@ -618,8 +620,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
                                1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
   // constant 1: the SPS term compiled in or out; 2: the list's read width
-  dtReduce_ = &cache.get({"sph/dt_reduce", HEMO_DTREDUCE_BINDING_COUNT, sizeof(DtReducePush), kWorkgroup, {}, 0u,
-                          1u << HEMO_DTREDUCE_BINDING_PARTIALS});
+  dtReduce_ = &cache.get({"sph/dt_reduce", HEMO_DTREDUCE_BINDING_COUNT, sizeof(DtReducePush), kWorkgroup, {},
+                          1u << HEMO_DTREDUCE_BINDING_TOOLS,
+                          1u << HEMO_DTREDUCE_BINDING_PARTIALS | 1u << HEMO_DTREDUCE_BINDING_TOOL_PARTIALS});
   forces_ = &cache.get({pairPass("sph/forces"), HEMO_FORCES_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup,
                         pairSpecialization({settings.sps ? 1u : 0u, listWidth_}), 1u << HEMO_FORCES_BINDING_PARAMS,
                         1u << HEMO_FORCES_BINDING_POSITIONS | 1u << HEMO_FORCES_BINDING_VELOCITIES | 1u << HEMO_FORCES_BINDING_STATE |
@@ -787,9 +790,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                             {HEMO_SPS_BINDING_TAU_A, &tauA_},
                                             {HEMO_SPS_BINDING_TAU_B, &tauB_}}));
   }
-  dtReduceSet_ = dtReduce_->makeSet({gpu::texelBinding(HEMO_DTREDUCE_BINDING_PARTIALS, &dtPartials_, gpu::texel::kVec2),
-                                     {HEMO_DTREDUCE_BINDING_COUNTS, &dtCounts_},
-                                     {HEMO_DTREDUCE_BINDING_RESULT, &dtResult_}});
+  makeDtReduceSet();
   for (std::uint32_t p = 0; p < pages; ++p) {
     forcesSets_.push_back(forces_->makeSet({gpu::texelBinding(HEMO_FORCES_BINDING_POSITIONS, &a.positions, gpu::texel::kVec4),
                                             gpu::texelBinding(HEMO_FORCES_BINDING_VELOCITIES, &a.velocities, gpu::texel::kVec4),
@@ -897,7 +898,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   solveStats_.upload(std::vector<std::uint32_t>(2 * HEMO_DFSPH_STAT_COUNT, 0u));
   solveDepth_.upload(std::vector<std::uint32_t>(HEMO_DFSPH_DEPTH_COUNT, 0u));
   checkCount_.upload(std::vector<std::uint32_t>{0u});
-  dtCounts_.upload(std::vector<std::uint32_t>{0u, 0u});
+  dtCounts_.upload(std::vector<std::uint32_t>{0u, 0u, 0u, 0u});
   checkResult_.upload(std::vector<float>{0.0f, 0.0f, 0.0f, 0.0f});
   tileGrid_.upload(std::vector<TileGrid>{tileSpec_});
   tileBoxes_.upload(std::vector<std::uint32_t>(std::size_t(tileSpec_.tiles()) * HEMO_TILE_WORDS, 0u));
@@ -930,6 +931,42 @@ void SphSolver::attachWall(const SpringNetwork& network) {
   }
   wall_ = std::make_unique<MassSpring>(*context_, *particles_, fluid, network, settings_.gravity,
                                        params_.cflAcoustic * params_.h, params_.c0);
+}
+
+void SphSolver::attachTools(const std::vector<ToolSpec>& tools) {
+  const ToolBuffers buffers{&accel_,
+                            &paramsBuffer_,
+                            &clock_,
+                            &dtCounts_,
+                            wall_ ? &wall_->pointInfo() : nullptr,
+                            wall_ ? wall_->pointCount() : 0u,
+                            wall_ && wall_->substeps() > 1 ? &wall_->held() : nullptr};
+  // Psi per unit scale, c0^2 / 2h, from the scene's sound speed (under DFSPH too, as the
+  // boundary repulsion's)
+  const double c0 = settings_.soundSpeed;
+  tools_ = std::make_unique<ToolContact>(*context_, *particles_, buffers, tools, float(c0 * c0 / (2.0 * settings_.h())),
+                                         settings_.spacing, maxStepsPerBatch_);
+  makeDtReduceSet();
+  toolPlaceholder_ = gpu::Buffer();  // no longer bound
+}
+
+void SphSolver::makeDtReduceSet() {
+  // Without tools the tools' slots hold placeholders (the uniform one the block's full size).
+  if (!tools_ && !toolPlaceholder_.valid()) {
+    toolPlaceholder_ = gpu::Buffer(*context_, HEMO_TOOL_DATA_VEC4S * 16, gpu::MemoryUse::Device, "tool placeholder");
+  }
+  const gpu::Buffer* data = tools_ ? &tools_->data() : &toolPlaceholder_;
+  dtReduceSet_ = dtReduce_->makeSet(
+      {gpu::texelBinding(HEMO_DTREDUCE_BINDING_PARTIALS, &dtPartials_, gpu::texel::kVec2),
+       {HEMO_DTREDUCE_BINDING_COUNTS, &dtCounts_},
+       {HEMO_DTREDUCE_BINDING_RESULT, &dtResult_},
+       gpu::texelBinding(HEMO_DTREDUCE_BINDING_TOOL_PARTIALS, tools_ ? &tools_->dtPartials() : &dtPartials_,
+                         gpu::texel::kVec2),
+       {HEMO_DTREDUCE_BINDING_TOOLS, data},
+       {HEMO_DTREDUCE_BINDING_CLOCK, &clock_},
+       {HEMO_DTREDUCE_BINDING_TOOL_FORCES, tools_ ? &tools_->partials() : data},
+       {HEMO_DTREDUCE_BINDING_TOOL_FORCE_COUNT, tools_ ? &tools_->partialCount() : data},
+       {HEMO_DTREDUCE_BINDING_TOOL_LOG, tools_ ? &tools_->log() : data}});
 }
 
 const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, bool inflow, bool collect) {
@@ -1148,8 +1185,16 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
     wall_->record(rec, first, n, wallBase);  // the wall, solved after the fluid in every force evaluation
     if (timestamps) timestamps->mark(rec, "wall");
   }
-  const std::uint32_t passes = (groups.total() > 0 ? 1u : 0u) | (wallRuns ? 2u : 0u);
-  rec.dispatch(*dtReduce_, dtReduceSet_, DtReducePush{wallBase, passes}, dtReduce_->groupsFor(1u));
+  if (tools_) {  // the tools press on what the fluid's forces and the springs have moved
+    tools_->record(rec, fluidSlots, clockParity_, wall_ && wall_->substeps() > 1);
+    rec.computeToCompute();
+    if (timestamps) timestamps->mark(rec, "tools");
+  }
+  const std::uint32_t passes = (groups.total() > 0 ? 1u : 0u) | (wallRuns ? 2u : 0u) | (tools_ ? 4u : 0u);
+  rec.dispatch(*dtReduce_, dtReduceSet_,
+               DtReducePush{wallBase, passes, tools_ ? tools_->count() : 0u, tools_ ? tools_->partialStride() : 0u,
+                            clockParity_, toolLogIndex_},
+               dtReduce_->groupsFor(1u));
   rec.computeToCompute();
 }
 
@@ -1347,6 +1392,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   // The slots to sort, as the last build left them (the first build after an upload sorts
   // them all).
   const std::uint32_t sorted = movingSlots();
+  toolLogIndex_ = logIndex;
   if (armPending_) {  // after a reset or a rebuild request; else the last step's check armed it
     rebuildGate_.recordArm(rec, HEMO_CHECK_RESULT_REACH, rebuildThreshold());
     armPending_ = false;
@@ -1410,6 +1456,7 @@ void SphSolver::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
                          &tileGrid_, &tileBoxes_, &tileResult_, &tileOccupied_, &kappa_, &solvePartials_, &solveStats_});
   pressureGate_.checkpointBuffers(out);
   if (wall_) wall_->checkpointBuffers(out);
+  if (tools_) tools_->checkpointBuffers(out);
 }
 
 namespace {

@@ -258,6 +258,59 @@ TEST(Scene, ShippedScenesLoad) {
   EXPECT_GE(scenes, 7);
 }
 
+// Tools: a probe with a keyframed path loads (orientation normalised, contact distance dp by
+// default); keyframes out of order, an unknown kind, a tip outside the domain, a non-positive
+// radius, a zero or non-4 orientation, a turn of 90 degrees between keys, a tip faster than
+// sound, a duplicate name and more than 8 tools each get an error naming the field.
+TEST(Scene, ToolsAreParsedAndBadOnesNamed) {
+  Json j = validScene();
+  j["tools"] = Json::parse(R"([{ "name": "probe", "radius_m": 0.003, "length_m": 0.02,
+      "path": [ { "time_s": 0, "position_m": [0.05, 0.02, 0.25] },
+                { "time_s": 0.5, "position_m": [0.05, 0.02, 0.15], "orientation_wxyz": [2, 0, 0, 0] } ] }])");
+  const Scene s = parseScene(j.dump(), "ok.json");
+  ASSERT_EQ(s.tools.size(), 1u);
+  EXPECT_EQ(s.tools[0].name, "probe");
+  EXPECT_FLOAT_EQ(s.tools[0].contactDistance, 0.01f);
+  ASSERT_EQ(s.tools[0].keys.size(), 2u);
+  EXPECT_FLOAT_EQ(s.tools[0].keys[1].orientation.w, 1.0f);
+  EXPECT_FLOAT_EQ(s.tools[0].keys[1].position.z, 0.15f);
+
+  auto with = [&](const char* path, const Json& value) {
+    Json k = j;
+    k["tools"][0] = Json(j["tools"][0]).patch(Json::array({{{"op", "replace"}, {"path", path}, {"value", value}}}));
+    return k;
+  };
+  auto added = [&](const char* path, const Json& value) {
+    Json k = j;
+    k["tools"][0] = Json(j["tools"][0]).patch(Json::array({{{"op", "add"}, {"path", path}, {"value", value}}}));
+    return k;
+  };
+  expectError(with("/path/1/time_s", 0.0), {"tools[0].path[1].time_s", "time order"});
+  expectError(added("/kind", "scalpel"), {"tools[0].kind", "scalpel", "probe"});
+  expectError(with("/path/0/position_m", Json::array({0.05, 0.02, 2.0})), {"tools[0].path[0].position_m", "outside the domain"});
+  expectError(with("/radius_m", 0.0), {"tools[0].radius_m"});
+  expectError(with("/radius_m", -0.001), {"tools[0].radius_m"});
+  expectError(added("/path/0/orientation_wxyz", Json::array({0, 0, 0, 0})), {"tools[0].path[0].orientation_wxyz", "zero"});
+  expectError(added("/path/0/orientation_wxyz", Json::array({1, 0, 0})), {"tools[0].path[0].orientation_wxyz", "4 numbers"});
+  expectError(added("/path/0/orientation_wxyz", Json::array({0, 1, 0, 0})), {"tools[0]", "90 degrees"});
+  expectError(with("/path/1/time_s", 1e-3), {"tools[0].path[1].position_m", "faster than the speed of sound"});
+  expectError(with("/path", Json::array()), {"tools[0].path", "at least 1"});
+  expectError(added("/contact_distance_m", 0.5), {"tools[0].contact_distance_m", "kernel support"});
+  {
+    Json k = j;
+    k["tools"].push_back(j["tools"][0]);
+    expectError(k, {"tools[1].name", "another tool"});
+  }
+  {
+    Json k = j;
+    for (int t = 1; t < 9; ++t) {
+      k["tools"].push_back(j["tools"][0]);
+      k["tools"][t]["name"] = "probe" + std::to_string(t);
+    }
+    expectError(k, {"tools", "at most 8"});
+  }
+}
+
 TEST(Scene, SchemaDocsAreUpToDate) {
   std::ifstream in(std::string(HEMO_SOURCE_DIR) + "/docs/scene-format.md");
   ASSERT_TRUE(in) << "docs/scene-format.md is missing";

@@ -107,6 +107,8 @@ struct Scene {
   double minTimeStep = 0.0;         // s; the run stops when the step falls below it (0: automatic)
   std::uint32_t stepsPerBatch = 64;  // steps recorded per submit
   SurfaceSpec surface;
+  // Surgical tools (hemo/sim/tools.hpp), with their keyframed paths; none: no tool stage runs.
+  std::vector<sim::ToolSpec> tools;
 };
 
 Scene parseScene(const std::string& jsonText, const std::string& sourceName);

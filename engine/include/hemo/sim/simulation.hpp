@@ -32,6 +32,15 @@ struct Progress {
   double wallSeconds = 0.0;
 };
 
+// One tool's record of one step (with tools): the step's index (0 = the run's first step
+// ever), its dt (s) and the tool's index in the scene.
+struct ToolLogRow {
+  std::uint64_t step = 0;
+  float dt = 0.0f;
+  std::uint32_t tool = 0;
+  ToolSample sample{};
+};
+
 struct RunOptions {
   std::optional<std::uint64_t> steps;  // run this many steps ...
   std::optional<double> until;         // ... or until this simulated time (s); default: scene end time
@@ -40,6 +49,9 @@ struct RunOptions {
   std::function<void(const Progress&)> onOutput;
   // With enableStepStats: the rows of each batch (steps that changed nothing are left out).
   std::function<void(const std::vector<StepStatsRow>&)> onStepStats;
+  // With tools: every step's force, torque and pose of each tool, once per batch (the GPU
+  // logs them inside the batch; no host wait per step).
+  std::function<void(const std::vector<ToolLogRow>&)> onToolLog;
   // DFSPH: the (correction, prediction) regions recorded per solve (SphSolver::
   // setRecordedIterations), 1 to the cap. Unset: chosen per batch from what the last batch's
   // solves took. Any depth gives the same results bit for bit; a shallow one costs batches run

@@ -19,6 +19,7 @@
 #include "hemo/sim/list_pages.hpp"
 #include "hemo/sim/neighbour_grid.hpp"
 #include "hemo/sim/particles.hpp"
+#include "hemo/sim/tools.hpp"
 #include "hemo/sim/wall.hpp"
 
 #include <glm/vec3.hpp>
@@ -263,6 +264,14 @@ class SphSolver {
   void attachWall(const SpringNetwork& network);
   const MassSpring* wall() const { return wall_.get(); }
   MassSpring* wall() { return wall_.get(); }
+  // Tools that press on the fluid and the wall (hemo/sim/tools.hpp): every force evaluation
+  // then runs their contact pass after the wall's, and every step logs their force and pose
+  // at its index in the batch (ToolContact::readLog). Set-up only, after attachWall (the
+  // tools push the wall's free points) and before the first step; throws
+  // std::invalid_argument for bad tools.
+  void attachTools(const std::vector<ToolSpec>& tools);
+  const ToolContact* tools() const { return tools_.get(); }
+  ToolContact* tools() { return tools_.get(); }
   // Drives the fluid in a vessel's inflow zone (hemo/sim/inflow.hpp). Set-up only (an upload);
   // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
   void setInflow(const Inflow& inflow);
@@ -390,6 +399,10 @@ class SphSolver {
   void recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
                         gpu::TimestampQueries* timestamps = nullptr);
   NeighbourGrid grid_;
+  std::unique_ptr<ToolContact> tools_;
+  std::uint32_t toolLogIndex_ = 0;  // the step's index in the batch, for the tools' log
+  gpu::Buffer toolPlaceholder_;     // bound to the time-step reduction's tool slots without tools
+  void makeDtReduceSet();
   gpu::Buffer paramsBuffer_;
   std::uint32_t listWidth_ = 1;  // list entries per texel read (1 or 4)
   bool cellWalk_ = false;        // NeighbourSearch::Cells in effect (walksCells())

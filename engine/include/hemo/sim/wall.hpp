@@ -139,6 +139,9 @@ class MassSpring {
   std::uint32_t workgroups(std::uint32_t first, std::uint32_t n) const;
 
   std::uint32_t springCount() const { return springCount_; }
+  // vec4 per point id below pointCount(): (mass kg, anchored 0/1, 0, 0).
+  const gpu::Buffer& pointInfo() const { return wallInfo_; }
+  std::uint32_t pointCount() const { return idCount_; }
   std::uint32_t readBrokenCount() const;             // since the last reset (a readback)
   // Wall particles detached since the last reset: all their springs broken, so their SPH mass
   // is set to zero (by the integrator, at the end of that step) and the fluid no longer sees

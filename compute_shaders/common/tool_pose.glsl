@@ -1,0 +1,59 @@
+// A tool's pose at a time (interface/tool.h): the including shader declares the tools buffer
+// as the uniform array `toolData` (HEMO_TOOL_DATA_VEC4S vec4: HEMO_TOOL_MAX_TOOLS records of
+// two vec4, then the keyframes, two vec4 each).
+//   layout(std140, binding = ...) uniform Tools { vec4 toolData[HEMO_TOOL_DATA_VEC4S]; };
+// A uniform block: every lane of a dispatch reads the same keys, which devices read once per
+// SIMD group (from a storage buffer llvmpipe loads them lane by lane).
+
+struct HemoToolPose {
+  vec3 position;     // m: the tip
+  vec4 orientation;  // unit quaternion (x, y, z, w)
+  vec3 axis;         // the shaft's direction: orientation applied to (0, 0, 1)
+  float speed;       // m/s: a bound on the speed of the tool's surface between the two keys
+};
+
+vec4 hemo_tool_shape(uint tool) { return toolData[2u * tool]; }
+vec4 hemo_tool_contact(uint tool) { return toolData[2u * tool + 1u]; }
+vec4 hemo_tool_key(uint key, uint part) { return toolData[2u * HEMO_TOOL_MAX_TOOLS + 2u * key + part]; }
+
+vec3 hemo_quat_rotate(vec4 q, vec3 v) {
+  const vec3 t = 2.0 * cross(q.xyz, v);
+  return v + q.w * t + cross(q.xyz, t);
+}
+
+HemoToolPose hemo_tool_pose(uint tool, float t) {
+  const vec4 shape = hemo_tool_shape(tool);
+  const vec4 contact = hemo_tool_contact(tool);
+  const uint first = uint(contact.y);
+  const uint count = uint(contact.z);
+  // the last key at or before t (the first when t precedes them all): binary search
+  uint lo = 0u, hi = count;  // keys [lo, hi) hold the answer's successor
+  while (hi - lo > 1u) {
+    const uint mid = (lo + hi) / 2u;
+    if (hemo_tool_key(first + mid, 0u).x <= t) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  const uint a = lo;
+  const uint b = min(a + 1u, count - 1u);
+  const vec4 ka = hemo_tool_key(first + a, 0u), kb = hemo_tool_key(first + b, 0u);
+  const vec4 qa = hemo_tool_key(first + a, 1u);
+  vec4 qb = hemo_tool_key(first + b, 1u);
+  if (dot(qa, qb) < 0.0) {
+    qb = -qb;
+  }
+  const float span = kb.x - ka.x;
+  const bool moving = b != a && t >= ka.x && t < kb.x && span > 0.0;
+  const float s = moving ? clamp((t - ka.x) / span, 0.0, 1.0) : 0.0;
+  HemoToolPose p;
+  p.position = mix(ka.yzw, kb.yzw, s);
+  p.orientation = normalize(mix(qa, qb, s));
+  p.axis = hemo_quat_rotate(p.orientation, vec3(0.0, 0.0, 1.0));
+  // the angle between the keys' orientations; normalised linear interpolation turns at most
+  // 1.25 times its mean rate for the key-to-key turns of under 90 degrees the scene allows
+  const float turn = 2.0 * acos(clamp(abs(dot(qa, qb)), 0.0, 1.0));
+  p.speed = moving ? (length(kb.yzw - ka.yzw) + 1.25 * turn * (shape.y + shape.z)) / span : 0.0;
+  return p;
+}

@@ -1,0 +1,61 @@
+// Surgical tools (compute_shaders/tool/). Shared by GLSL and C++.
+#ifndef HEMO_INTERFACE_TOOL_H
+#define HEMO_INTERFACE_TOOL_H
+
+// A tool is a rigid body that the scene (keyframes) or the user moves. Its shape in its own
+// frame: a capsule, the segment from the origin (the tip) to length * (0, 0, 1) grown by
+// radius (length 0: a sphere). Its pose at time t: position and orientation (a unit
+// quaternion) interpolated between the two keyframes around t (linear, and normalised linear
+// for the quaternion), held before the first and after the last.
+#define HEMO_TOOL_MAX_TOOLS 8
+#define HEMO_TOOL_MAX_KEYS 63  // per tool
+#define HEMO_TOOL_KIND_PROBE 0
+
+// The tools buffer, read as a uniform block of HEMO_TOOL_DATA_VEC4S vec4 (16 KiB, the least
+// maxUniformBufferRange Vulkan allows): every invocation evaluates the poses it needs from it
+// (a few uniform reads), so no pass of its own computes them.
+//   [2k], [2k + 1] for tool k < HEMO_TOOL_MAX_TOOLS:
+//           vec4 shape (kind, radius m, length m, contact distance D m)
+//           vec4 contact (Psi m/s^2, first key, key count, 0)  (first key and count as floats)
+//   [2 HEMO_TOOL_MAX_TOOLS + 2j], [... + 1] for key j:
+//           vec4 (t s, position xyz m), vec4 orientation (x, y, z, w)
+#define HEMO_TOOL_DATA_VEC4S 1024
+// The contact force (docs/physics.md, "Tools"): a particle whose distance x to the tool's
+// surface is below D (inside the tool: x <= 0) is pushed along the surface normal with the
+// acceleration Psi (1 - q) / sqrt(q), q = max(x / 2h, 1e-3): the normal part of the boundary
+// repulsion, on an exact surface (so no tangential weight). The tool takes the opposite force.
+
+// tool/contact.comp: one invocation per slot of the moving ones (fluid and wall particles;
+// anchored wall points are left out). Adds the tools' accelerations to accel (and, with the
+// wall's substeps, to its held record), writes the force condition's time-step limit
+// C_f sqrt(h / |a|) of the particles it touched into the time step's reduction (pass 2,
+// common/dt_fold.glsl), and invocation 0 the tools' own limit (a tool surface moves at most
+// D / 4 per step). Each SIMD group stores its sums of the force and torque the tools take,
+// per tool k: vec4 (F, 0) and vec4 (torque about the tool's position, 0) at
+// partials[(k * stride + group * gl_NumSubgroups + subgroup) * 2 + {0, 1}], and invocation 0
+// the number of partials per tool in partialCount. No barrier inside the workgroup (on CPU
+// devices a barrier costs more than the pass's arithmetic). sph/dt_reduce.comp, the
+// single-workgroup pass after it, sums the partials in a fixed order into the step's log.
+#define HEMO_TOOLC_BINDING_POSITIONS 0   // texel vec4 (x, SPH mass)
+#define HEMO_TOOLC_BINDING_VELOCITIES 1  // texel vec4 (v, kind)
+#define HEMO_TOOLC_BINDING_IDS 2         // texel uint
+#define HEMO_TOOLC_BINDING_WALL_INFO 3   // texel vec4 by id (mass, anchored): interface/wall.h
+#define HEMO_TOOLC_BINDING_PARAMS 4      // SphParams (uniform)
+#define HEMO_TOOLC_BINDING_TOOLS 5       // the tools buffer (uniform)
+#define HEMO_TOOLC_BINDING_CLOCK 6       // the solver's clock records (common/clock.glsl)
+#define HEMO_TOOLC_BINDING_ACCEL 7       // vec4 per slot, read and written
+#define HEMO_TOOLC_BINDING_HELD 8        // vec4 per slot (the wall's held force; written with substeps only)
+#define HEMO_TOOLC_BINDING_PARTIALS 9
+#define HEMO_TOOLC_BINDING_PARTIAL_COUNT 10  // uint
+#define HEMO_TOOLC_BINDING_DT_PARTIALS 11
+#define HEMO_TOOLC_BINDING_DT_COUNTS 12
+#define HEMO_TOOLC_BINDING_COUNT 13
+
+// A log record (std430, 64 bytes), mirrored by hemo::sim::ToolSample:
+//   vec4 force     (F on the tool, N; w: the time t of the force evaluation, s)
+//   vec4 torque    (about the tool's position, N m; w: 0)
+//   vec4 position  (m; w: the tool's surface speed bound, m/s)
+//   vec4 orientation (x, y, z, w)
+#define HEMO_TOOL_LOG_VEC4S 4
+
+#endif

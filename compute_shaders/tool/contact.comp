@@ -1,0 +1,148 @@
+#version 450
+// The tools' contact with the fluid and the wall (interface/tool.h): each particle within the
+// contact distance D of a tool's surface is pushed out along the surface normal, and the tool
+// takes the opposite force (and its torque about the tool's position), summed per SIMD group
+// for tool/reduce.comp (no float atomics: the sums' order is fixed).
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_vote : require
+#include "interface/sph.h"
+#include "interface/tool.h"
+#include "common/index.glsl"
+#include "common/sph_params.glsl"
+#include "common/clock.glsl"
+
+layout(binding = HEMO_TOOLC_BINDING_POSITIONS) uniform samplerBuffer positionsT;
+layout(binding = HEMO_TOOLC_BINDING_VELOCITIES) uniform samplerBuffer velocitiesT;
+layout(binding = HEMO_TOOLC_BINDING_IDS) uniform usamplerBuffer idsT;
+layout(binding = HEMO_TOOLC_BINDING_WALL_INFO) uniform samplerBuffer wallInfoT;
+HEMO_SPH_PARAMS_UNIFORM(HEMO_TOOLC_BINDING_PARAMS);
+layout(std140, binding = HEMO_TOOLC_BINDING_TOOLS) uniform Tools { vec4 toolData[HEMO_TOOL_DATA_VEC4S]; };
+layout(std430, binding = HEMO_TOOLC_BINDING_CLOCK) readonly buffer Clock { ClockRecord clocks[2]; };
+layout(std430, binding = HEMO_TOOLC_BINDING_ACCEL) buffer Accel { vec4 accel[]; };
+layout(std430, binding = HEMO_TOOLC_BINDING_HELD) buffer Held { vec4 held[]; };
+layout(std430, binding = HEMO_TOOLC_BINDING_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
+layout(std430, binding = HEMO_TOOLC_BINDING_PARTIAL_COUNT) writeonly buffer PartialCount { uint partialCount; };
+layout(std430, binding = HEMO_TOOLC_BINDING_DT_PARTIALS) writeonly buffer DtPartials { vec2 dtPartials[]; };
+layout(std430, binding = HEMO_TOOLC_BINDING_DT_COUNTS) writeonly buffer DtCounts { uint dtCounts[3]; };
+layout(push_constant) uniform Push {
+  uint n;        // the moving slots [0, n)
+  uint idCount;  // wall points (ids below it have a record in wallInfo)
+  uint tools;
+  uint held;     // 1: the wall takes substeps (add to its held record too)
+  uint stride;   // partials per tool
+  uint clockIn;  // the clock record that holds the time of this force evaluation
+} pc;
+
+#include "common/dt_fold.glsl"
+#include "common/tool_pose.glsl"
+
+
+// The acceleration tool k gives a particle at x (m/s^2), and the particle's separation from
+// the tool's tip (for the torque).
+vec3 contactAccel(uint k, HemoToolPose pose, vec3 x, out vec3 arm) {
+  const vec4 shape = hemo_tool_shape(k);  // (kind, radius, length, D)
+  const float psi = hemo_tool_contact(k).x;
+  const vec3 tip = pose.position;
+  const vec3 axis = pose.axis;
+  const vec3 d = x - tip;
+  arm = d - params.period.xyz * round(d * params.invPeriod.xyz);  // minimum image (period 0: none)
+  const float along = clamp(dot(arm, axis), 0.0, shape.z);
+  const vec3 off = arm - along * axis;  // from the nearest point of the tool's segment
+  const float dist = length(off);
+  const float gap = dist - shape.y;     // to the surface; <= 0 inside
+  if (!(gap < shape.w)) {
+    return vec3(0.0);
+  }
+  vec3 normal;
+  if (dist > 1.0e-6 * shape.y) {
+    normal = off / dist;
+  } else {  // on the segment itself: out along a direction normal to the shaft
+    const vec3 other = abs(axis.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+    normal = normalize(cross(axis, other));
+  }
+  const float q = max(gap / (2.0 * params.h), 1.0e-3);
+  return (psi * (1.0 - q) * inversesqrt(q)) * normal;
+}
+
+void main() {
+  const uint slot = hemo_global_index();
+  // The tools' poses at this force evaluation's time: every invocation evaluates them (a few
+  // uniform reads), where they are needed (an array of them costs CPU devices private memory
+  // per workgroup).
+  const float t = clocks[pc.clockIn].time;
+  float mass = 0.0;
+  bool wall = false;
+  vec3 x = vec3(0.0);
+  if (slot < pc.n) {
+    const uint kind = uint(texelFetch(velocitiesT, int(slot)).w);
+    const vec4 xm = texelFetch(positionsT, int(slot));
+    x = xm.xyz;
+    if (kind == HEMO_KIND_FLUID) {
+      mass = xm.w;
+    } else if (kind == HEMO_KIND_WALL) {
+      wall = true;
+      const uint id = texelFetch(idsT, int(slot)).x;
+      mass = xm.w;
+      if (id < pc.idCount) {
+        const vec4 info = texelFetch(wallInfoT, int(id));
+        mass = info.y != 0.0 ? 0.0 : info.x;  // anchored points do not move
+      }
+    }
+  }
+  vec3 total = vec3(0.0);
+  uint touched = 0u;
+  for (uint k = 0u; k < pc.tools; ++k) {
+    vec3 arm;
+    const vec3 push = mass > 0.0 ? contactAccel(k, hemo_tool_pose(k, t), x, arm) : vec3(0.0);
+    if (push != vec3(0.0)) {
+      touched |= 1u << k;
+      total += push;
+    }
+  }
+  float limit = 0.0;
+  bool valid = false;
+  if (touched != 0u) {
+    const vec4 before = accel[slot];
+    const vec3 after = before.xyz + total;
+    accel[slot] = vec4(after, before.w);
+    if (pc.held != 0u && wall) {
+      held[slot].xyz += total;
+    }
+    limit = params.cflForce * sqrt(params.h / max(length(after), 1.0e-30));
+    valid = true;
+  }
+  if (slot == 0u) {  // the tools' own limit: a surface moves at most D / 4 per step
+    for (uint k = 0u; k < pc.tools; ++k) {
+      const float speed = hemo_tool_pose(k, t).speed;
+      if (speed > 0.0) {
+        const float own = 0.25 * hemo_tool_shape(k).w / speed;
+        limit = valid ? min(limit, own) : own;
+        valid = true;
+      }
+    }
+  }
+  // every invocation, in uniform control flow: subgroup operations
+  hemo_dt_partial(limit, valid, 0u, 2u, 0u, true);
+  const uint partial = hemo_group_index() * gl_NumSubgroups + gl_SubgroupID;
+  for (uint k = 0u; k < pc.tools; ++k) {
+    vec4 force = vec4(0.0), torque = vec4(0.0);
+    if (subgroupAny((touched & (1u << k)) != 0u)) {
+      // (computed again: an array of the pushes indexed by tool costs CPU devices more)
+      vec3 arm = vec3(0.0);
+      const vec3 push = (touched & (1u << k)) != 0u ? contactAccel(k, hemo_tool_pose(k, t), x, arm) : vec3(0.0);
+      const vec3 onTool = -mass * push;
+      force = vec4(subgroupAdd(onTool), 0.0);
+      torque = vec4(subgroupAdd(cross(arm, onTool)), 0.0);
+    }
+    if (subgroupElect()) {
+      const uint at = (k * pc.stride + partial) * 2u;
+      partials[at] = force;
+      partials[at + 1u] = torque;
+    }
+  }
+  if (slot == 0u) {
+    partialCount = gl_NumWorkGroups.x * gl_NumWorkGroups.y * gl_NumSubgroups;
+  }
+}

@@ -1,0 +1,43 @@
+#pragma once
+// CPU double-precision twin of the tools' contact (tool/contact.comp, tool/reduce.comp).
+#include "hemo/sim/tools.hpp"
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/vec3.hpp>
+
+#include <vector>
+
+namespace hemo::reference {
+
+struct RefToolPose {
+  glm::dvec3 position{0.0};     // m: the tip
+  glm::dquat orientation{1.0, 0.0, 0.0, 0.0};
+  glm::dvec3 axis{0.0, 0.0, 1.0};  // the shaft's direction
+  double speed = 0.0;           // m/s: the bound on the surface's speed between the keys around t
+};
+
+// The tool's pose at time t (s): held before the first key and after the last, else
+// interpolated between the two keys around t (interface/tool.h).
+RefToolPose toolPose(const sim::ToolSpec& tool, double t);
+
+// The push a tool at `pose` gives a particle at x (m/s^2): along the surface normal,
+// psi (1 - q) / sqrt(q), q = max(gap / 2h, 1e-3), where the gap to the capsule's surface is
+// below the contact distance; else 0. `arm` gets x - position (minimum image on axes with
+// a non-zero period).
+glm::dvec3 toolAcceleration(const sim::ToolSpec& tool, const RefToolPose& pose, double psi, double h,
+                            const glm::dvec3& x, const glm::dvec3& period, glm::dvec3* arm = nullptr);
+
+struct RefToolContact {
+  std::vector<glm::dvec3> accel;   // per particle: the sum of the tools' pushes (m/s^2)
+  std::vector<glm::dvec3> force;   // per tool: -sum m a (N)
+  std::vector<glm::dvec3> torque;  // per tool: about its position (N m)
+  std::vector<RefToolPose> poses;
+};
+
+// Every tool against every particle; a particle of mass 0 is left alone (rigid boundary
+// particles and anchored wall points). psi_k = contactScale_k psiPerScale.
+RefToolContact toolContact(const std::vector<sim::ToolSpec>& tools, double t, const std::vector<glm::dvec3>& x,
+                           const std::vector<double>& mass, double psiPerScale, double h,
+                           const glm::dvec3& period = glm::dvec3(0.0));
+
+}  // namespace hemo::reference

@@ -1,0 +1,118 @@
+#pragma once
+// Surgical tools on the GPU (compute_shaders/tool/, interface/tool.h): rigid bodies that the
+// scene's keyframes (or the user, between batches) move, pressing on the fluid and the vessel
+// wall. Per force evaluation, after the fluid's forces and the wall's springs:
+//   contact .. every fluid and free wall particle within the contact distance of a tool's
+//              surface gets the tool's push (added to its acceleration); the tool takes the
+//              opposite force and its torque, summed per SIMD group; the particles it touched
+//              and the tools' own motion bound the time step
+//   reduce ... the solver's time-step reduction (one workgroup) also sums each tool's
+//              partials in a fixed order into the batch's tool log (force, torque, pose per
+//              step), which the host reads once per batch
+// Attach tools to an SphSolver with SphSolver::attachTools. docs/physics.md, "Tools".
+#include "hemo/gpu/pipeline.hpp"
+#include "hemo/sim/particles.hpp"
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace hemo::gpu {
+class CommandRecorder;
+}
+
+namespace hemo::sim {
+
+enum class ToolKind : std::uint32_t { Probe = 0 };
+
+// A pose of the tool at a time. The tool's own frame: the tip at the origin, the shaft along +z.
+struct ToolKey {
+  double time = 0.0;                                 // s
+  glm::vec3 position{0.0f};                          // m: where the tip is
+  glm::quat orientation{1.0f, 0.0f, 0.0f, 0.0f};     // rotation of the tool's frame (unit)
+};
+
+struct ToolSpec {
+  std::string name;
+  ToolKind kind = ToolKind::Probe;
+  float radius = 0.0f;           // m: the capsule's radius (a probe's tip)
+  float length = 0.0f;           // m: its shaft from the tip along +z (0: a sphere)
+  float contactDistance = 0.0f;  // m: D, the push's reach beyond the surface
+  float contactScale = 0.01f;    // Psi = scale c0^2 / (2h), as the boundary repulsion's
+  // At least one; times strictly increasing. Before the first key the tool holds the first
+  // pose, after the last the last; in between the pose is interpolated (position linearly,
+  // orientation by normalised linear interpolation, which needs a turn of under 90 degrees
+  // from key to key).
+  std::vector<ToolKey> keys;
+  // Throws std::invalid_argument naming the tool and the problem (no keys, too many, times
+  // out of order, a turn of 90 degrees or more between keys, a non-unit orientation,
+  // non-positive radius or contact distance, negative length, non-finite values).
+  void validate() const;
+};
+
+// One tool's record of one step (interface/tool.h, the log record).
+struct ToolSample {
+  glm::vec4 force;        // xyz: the force on the tool (N); w: the time of the force evaluation (s)
+  glm::vec4 torque;       // xyz: about the tool's position (N m)
+  glm::vec4 position;     // xyz: the tip (m); w: a bound on the tool's surface speed (m/s)
+  glm::vec4 orientation;  // quaternion (x, y, z, w)
+};
+static_assert(sizeof(ToolSample) == 64);
+
+// The solver's buffers the contact pass reads and writes.
+struct ToolBuffers {
+  const gpu::Buffer* accel;
+  const gpu::Buffer* params;
+  const gpu::Buffer* clock;
+  const gpu::Buffer* dtCounts;      // uint[3]: the tools' pass writes index 2
+  const gpu::Buffer* wallInfo;      // vec4 per wall point id (mass, anchored); null without a wall
+  std::uint32_t wallPoints;         // ids with a record in wallInfo
+  const gpu::Buffer* held;          // the wall's held force (substeps); null without
+};
+
+class ToolContact {
+ public:
+  // `psiPerScale` is c0^2 / (2h) (m/s^2), `spacing` dp (m): a tool without a contact distance
+  // gets dp. Throws std::invalid_argument for bad tools or more than HEMO_TOOL_MAX_TOOLS.
+  ToolContact(gpu::Context& context, const ParticleStore& particles, const ToolBuffers& buffers,
+              std::vector<ToolSpec> tools, float psiPerScale, float spacing, std::uint32_t maxStepsPerBatch);
+
+  // The contact pass over the slots [0, n) at the time of clock record `clockIn` (no barrier
+  // after it). The solver's time-step reduction (sph/dt_reduce.comp), after a barrier, reads
+  // its time-step partials and sums its force partials into the log.
+  void record(gpu::CommandRecorder& rec, std::uint32_t n, std::uint32_t clockIn, bool held);
+  // (min, max) partials of the time step the contact pass wrote (pass 2 of the reduction).
+  const gpu::Buffer& dtPartials() const { return dtPartials_; }
+  // The tools buffer (interface/tool.h), the force and torque partials with their count and
+  // the partials per tool, and the log (maxStepsPerBatch rows of count() ToolSample).
+  const gpu::Buffer& data() const { return toolData_; }
+  const gpu::Buffer& partials() const { return partials_; }
+  const gpu::Buffer& partialCount() const { return partialCount_; }
+  std::uint32_t partialStride() const { return stride_; }
+  const gpu::Buffer& log() const { return log_; }
+  std::uint32_t logRows() const { return maxSteps_; }
+  // Replaces a tool's keyframes (validated as ToolSpec::validate; between batches: an upload).
+  void setKeys(std::uint32_t tool, const std::vector<ToolKey>& keys);
+  // The log rows [0, steps) of the last batch: steps x tools samples, row-major (a readback).
+  std::vector<ToolSample> readLog(std::uint32_t steps) const;
+  const std::vector<ToolSpec>& tools() const { return tools_; }
+  std::uint32_t count() const { return static_cast<std::uint32_t>(tools_.size()); }
+  // Its buffers, for a checkpoint (the keyframes may have been changed since the scene's).
+  void checkpointBuffers(std::vector<gpu::Buffer*>& out) { out.insert(out.end(), {&toolData_}); }
+
+ private:
+  void upload();
+  const ParticleStore* particles_;
+  std::vector<ToolSpec> tools_;
+  float psiPerScale_, spacing_;
+  std::uint32_t maxSteps_, wallPoints_, stride_;
+  gpu::Buffer toolData_, partials_, partialCount_, dtPartials_, log_, placeholder_;
+  const gpu::ComputePipeline* contact_;
+  gpu::DescriptorSet contactSet_;
+};
+
+}  // namespace hemo::sim

@@ -1,0 +1,83 @@
+#include "hemo/reference/tools.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace hemo::reference {
+
+namespace {
+glm::dquat toDouble(const glm::quat& q) { return glm::dquat(q.w, q.x, q.y, q.z); }
+double dot4(const glm::dquat& a, const glm::dquat& b) { return a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z; }
+}  // namespace
+
+RefToolPose toolPose(const sim::ToolSpec& tool, double t) {
+  const auto& keys = tool.keys;
+  std::size_t a = 0;
+  for (std::size_t k = 1; k < keys.size(); ++k) {
+    if (keys[k].time <= t) a = k;
+  }
+  const std::size_t b = std::min(a + 1, keys.size() - 1);
+  const glm::dquat qa = glm::normalize(toDouble(keys[a].orientation));
+  glm::dquat qb = glm::normalize(toDouble(keys[b].orientation));
+  if (dot4(qa, qb) < 0.0) qb = -qb;
+  const double span = keys[b].time - keys[a].time;
+  const bool moving = b != a && t >= keys[a].time && t < keys[b].time && span > 0.0;
+  const double s = moving ? std::clamp((t - keys[a].time) / span, 0.0, 1.0) : 0.0;
+  RefToolPose p;
+  const glm::dvec3 pa(keys[a].position), pb(keys[b].position);
+  p.position = pa + s * (pb - pa);
+  glm::dquat q(qa.w + s * (qb.w - qa.w), qa.x + s * (qb.x - qa.x), qa.y + s * (qb.y - qa.y), qa.z + s * (qb.z - qa.z));
+  p.orientation = glm::normalize(q);
+  p.axis = p.orientation * glm::dvec3(0.0, 0.0, 1.0);
+  const double turn = 2.0 * std::acos(std::clamp(std::abs(dot4(qa, qb)), 0.0, 1.0));
+  p.speed = moving ? (glm::length(pb - pa) + 1.25 * turn * (double(tool.radius) + tool.length)) / span : 0.0;
+  return p;
+}
+
+glm::dvec3 toolAcceleration(const sim::ToolSpec& tool, const RefToolPose& pose, double psi, double h,
+                            const glm::dvec3& x, const glm::dvec3& period, glm::dvec3* armOut) {
+  glm::dvec3 arm = x - pose.position;
+  for (int a = 0; a < 3; ++a) {
+    if (period[a] > 0.0) arm[a] -= period[a] * std::round(arm[a] / period[a]);
+  }
+  if (armOut) *armOut = arm;
+  const double along = std::clamp(glm::dot(arm, pose.axis), 0.0, double(tool.length));
+  const glm::dvec3 off = arm - along * pose.axis;
+  const double dist = glm::length(off);
+  const double gap = dist - tool.radius;
+  if (!(gap < tool.contactDistance)) return glm::dvec3(0.0);
+  glm::dvec3 normal;
+  if (dist > 1e-6 * tool.radius) {
+    normal = off / dist;
+  } else {
+    const glm::dvec3 other = std::abs(pose.axis.x) < 0.9 ? glm::dvec3(1.0, 0.0, 0.0) : glm::dvec3(0.0, 1.0, 0.0);
+    normal = glm::normalize(glm::cross(pose.axis, other));
+  }
+  const double q = std::max(gap / (2.0 * h), 1e-3);
+  return psi * (1.0 - q) / std::sqrt(q) * normal;
+}
+
+RefToolContact toolContact(const std::vector<sim::ToolSpec>& tools, double t, const std::vector<glm::dvec3>& x,
+                           const std::vector<double>& mass, double psiPerScale, double h, const glm::dvec3& period) {
+  RefToolContact r;
+  r.accel.assign(x.size(), glm::dvec3(0.0));
+  r.force.assign(tools.size(), glm::dvec3(0.0));
+  r.torque.assign(tools.size(), glm::dvec3(0.0));
+  for (const sim::ToolSpec& tool : tools) r.poses.push_back(toolPose(tool, t));
+  for (std::size_t i = 0; i < x.size(); ++i) {
+    if (!(mass[i] > 0.0)) continue;
+    for (std::size_t k = 0; k < tools.size(); ++k) {
+      glm::dvec3 arm;
+      const glm::dvec3 a =
+          toolAcceleration(tools[k], r.poses[k], double(tools[k].contactScale) * psiPerScale, h, x[i], period, &arm);
+      r.accel[i] += a;
+      r.force[k] -= mass[i] * a;
+      r.torque[k] += glm::cross(arm, -mass[i] * a);
+    }
+  }
+  return r;
+}
+
+}  // namespace hemo::reference
