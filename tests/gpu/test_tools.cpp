@@ -7,6 +7,7 @@
 #include "hemo/sim/simulation.hpp"
 #include "hemo/sim/sph.hpp"
 #include "hemo/sim/tools.hpp"
+#include "hemo/sim/wall.hpp"
 #include "interface/sph.h"
 #include "interface/tool.h"
 
@@ -18,6 +19,7 @@
 #include <cstdio>
 #include <cstring>
 #include <numbers>
+#include <vector>
 
 namespace hemo::test {
 namespace {
@@ -239,6 +241,145 @@ TEST_F(ToolTest, ToolForceIsMinusTheMomentumGivenToTheParticles) {
   }
   ASSERT_EQ(std::memcmp(a.snap.positions.data(), b.snap.positions.data(), a.snap.positions.size() * 16), 0);
   ASSERT_EQ(std::memcmp(a.snap.velocities.data(), b.snap.velocities.data(), a.snap.velocities.size() * 16), 0);
+}
+
+// The stiffness of a pre-tensioned square sheet of springs (11 x 11 points, edges anchored,
+// rest length 0.9 of the spacing) under a push on its centre point, from the linearised
+// statics: each spring of tension T and length s resists a sideways offset of its ends with
+// T / s, so the out-of-plane displacements solve a weighted graph Laplacian; K = 1 / C_cc.
+double sheetCentreStiffness(int n, double tension, double spacing) {
+  // unknowns: the interior points, row-major
+  const int m = n - 2, count = m * m;
+  std::vector<double> a(std::size_t(count) * count, 0.0), b(count, 0.0);
+  const double w = tension / spacing;
+  auto at = [&](int i, int j) { return (j - 1) * m + (i - 1); };
+  for (int j = 1; j <= m; ++j) {
+    for (int i = 1; i <= m; ++i) {
+      const int r = at(i, j);
+      const int di[4] = {1, -1, 0, 0}, dj[4] = {0, 0, 1, -1};
+      for (int e = 0; e < 4; ++e) {
+        a[std::size_t(r) * count + r] += w;
+        const int ni = i + di[e], nj = j + dj[e];
+        if (ni >= 1 && ni <= m && nj >= 1 && nj <= m) a[std::size_t(r) * count + at(ni, nj)] -= w;
+      }
+    }
+  }
+  const int c = at(n / 2, n / 2);
+  b[c] = 1.0;
+  // Gaussian elimination (symmetric positive definite: no pivoting needed)
+  for (int k = 0; k < count; ++k) {
+    for (int r = k + 1; r < count; ++r) {
+      const double f = a[std::size_t(r) * count + k] / a[std::size_t(k) * count + k];
+      if (f == 0.0) continue;
+      for (int q = k; q < count; ++q) a[std::size_t(r) * count + q] -= f * a[std::size_t(k) * count + q];
+      b[r] -= f * b[k];
+    }
+  }
+  std::vector<double> x(count, 0.0);
+  for (int r = count - 1; r >= 0; --r) {
+    double sum = b[r];
+    for (int q = r + 1; q < count; ++q) sum -= a[std::size_t(r) * count + q] * x[q];
+    x[r] = sum / a[std::size_t(r) * count + r];
+  }
+  return 1.0 / x[c];
+}
+
+// A sphere pressed onto the centre of that sheet, held at two depths (the wall points' own
+// dynamics, damped, with the contact's push): the force the tool log reports over the centre
+// point's displacement is the sheet's stiffness from the linearised statics within 5% at both
+// depths (Hooke: the same K at twice the displacement). Only the centre point is within the
+// contact distance, so the force is the sheet's reaction at that point alone.
+TEST_F(ToolTest, ProbePressedIntoASpringSheetMeetsItsStiffness) {
+  const int n = 11;
+  // The sheet's spacing is 4 dp: the contact's reach (2 dp) then takes in the centre point
+  // alone, and the push's whole range (from its weakest at the reach to its strongest) holds
+  // the sheet at both depths.
+  const float dp = 0.01f, spacing = 4.0f * dp, z0 = 0.05f, k = 10.0f, mass = 1e-4f;
+  const double tension = double(k) * 0.1 * spacing;
+  sim::SphSettings s;
+  s.spacing = dp;
+  s.soundSpeed = 1.0f;
+  s.gravity = glm::vec3(0.0f);
+  s.maxTimeStep = 1.0f;
+  s.dampingRate = 60.0f;  // the sheet's transverse modes settle (the springs damp along themselves only)
+  s.dampingUntil = 1e6f;
+  std::vector<glm::vec4> pos, vel;
+  sim::SpringNetwork net;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      pos.emplace_back(float(i) * spacing, float(j) * spacing, z0, s.particleMass());
+      vel.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL));
+      net.points.push_back({mass, i == 0 || j == 0 || i == n - 1 || j == n - 1});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t id = std::uint32_t(j * n + i);
+      if (i + 1 < n) net.springs.push_back({id, id + 1, 0.9f * spacing, k, 0.0f, 3e38f});
+      if (j + 1 < n) net.springs.push_back({id, id + std::uint32_t(n), 0.9f * spacing, k, 0.0f, 3e38f});
+    }
+  }
+  const std::uint32_t centre = std::uint32_t((n / 2) * n + n / 2);
+  // The sphere's bottom held where the centre point settles about 0.2 and 0.45 mm down (the
+  // point sits 11-17 mm below the sphere, where the push balances the sheet's reaction)
+  const float radius = 0.004f, mid = 5.0f * spacing;
+  const float hold1 = z0 + 0.0170f + radius, hold2 = z0 + 0.0112f + radius;
+  sim::ToolSpec probe;
+  probe.name = "probe";
+  probe.radius = radius;
+  probe.contactDistance = 2.0f * dp;
+  probe.contactScale = 0.26f;  // Psi = 10 m/s^2
+  probe.keys = {{0.0, {mid, mid, z0 + 0.03f + radius}, glm::quat(1, 0, 0, 0)},
+                {0.15, {mid, mid, hold1}, glm::quat(1, 0, 0, 0)},
+                {0.5, {mid, mid, hold1}, glm::quat(1, 0, 0, 0)},
+                {0.65, {mid, mid, hold2}, glm::quat(1, 0, 0, 0)}};
+
+  sim::ParticleStore store(ctx(), std::uint32_t(pos.size()));
+  store.upload(pos, vel);
+  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.45f), s, 256);
+  solver.attachWall(net);
+  solver.attachTools({probe});
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  solver.recordReset(rec);
+  rec.end();
+  rec.submitAndWait();
+  std::uint32_t step = 0;
+  // Runs to `until` (s); over the last `window` s the mean tool force and centre displacement.
+  auto runTo = [&](double until, double window, double& force, double& displacement) {
+    double fSum = 0.0, wSum = 0.0;
+    int fCount = 0, wCount = 0;
+    while (solver.readClock().time < until) {
+      const double t0 = solver.readClock().time;
+      const std::uint32_t batch = t0 < until - window ? 256u : 16u;
+      rec.begin();
+      for (std::uint32_t b = 0; b < batch; ++b) solver.recordStep(rec, step++, b, float(until));
+      rec.end();
+      rec.submitAndWait();
+      if (t0 >= until - window) {
+        for (const sim::ToolSample& sample : solver.tools()->readLog(batch)) {
+          if (sample.force.w >= until - window && sample.force.w < until) fSum += sample.force.z, ++fCount;
+        }
+        const auto p = store.readPositions();
+        const auto ids = store.readIds();
+        for (std::size_t slot = 0; slot < ids.size(); ++slot) {
+          if (ids[slot] == centre) wSum += double(z0) - p[slot].z, ++wCount;
+        }
+      }
+    }
+    ASSERT_GT(fCount, 10);
+    force = fSum / fCount;
+    displacement = wSum / wCount;
+  };
+  const double expected = sheetCentreStiffness(n, tension, spacing);
+  double f1 = 0, w1 = 0, f2 = 0, w2 = 0;
+  runTo(0.5, 0.05, f1, w1);
+  runTo(1.0, 0.05, f2, w2);
+  std::printf("[tools] sheet K from the statics %.5g N/m; pressed %.3g mm: %.4g N, K %.5g; %.3g mm: %.4g N, K %.5g\n",
+              expected, w1 * 1e3, f1, f1 / w1, w2 * 1e3, f2, f2 / w2);
+  EXPECT_GT(w2, 1.5 * w1);
+  EXPECT_NEAR(f1 / w1, expected, 0.05 * expected);
+  EXPECT_NEAR(f2 / w2, expected, 0.05 * expected);
 }
 
 }  // namespace
