@@ -1,6 +1,6 @@
 // A tool's pose at a time (interface/tool.h): the including shader declares the tools buffer
 // as the uniform array `toolData` (HEMO_TOOL_DATA_VEC4S vec4: HEMO_TOOL_MAX_TOOLS records of
-// two vec4, then the keyframes, two vec4 each).
+// two vec4, then the keyframes, HEMO_TOOL_KEY_VEC4S vec4 each).
 //   layout(std140, binding = ...) uniform Tools { vec4 toolData[HEMO_TOOL_DATA_VEC4S]; };
 // A uniform block: every lane of a dispatch reads the same keys, which devices read once per
 // SIMD group (from a storage buffer llvmpipe loads them lane by lane).
@@ -10,11 +10,14 @@ struct HemoToolPose {
   vec4 orientation;  // unit quaternion (x, y, z, w)
   vec3 axis;         // the shaft's direction: orientation applied to (0, 0, 1)
   float speed;       // m/s: a bound on the speed of the tool's surface between the two keys
+  bool cutting;      // a blade: the last key at or before t says it cuts
 };
 
 vec4 hemo_tool_shape(uint tool) { return toolData[2u * tool]; }
 vec4 hemo_tool_contact(uint tool) { return toolData[2u * tool + 1u]; }
-vec4 hemo_tool_key(uint key, uint part) { return toolData[2u * HEMO_TOOL_MAX_TOOLS + 2u * key + part]; }
+vec4 hemo_tool_key(uint key, uint part) {
+  return toolData[2u * HEMO_TOOL_MAX_TOOLS + HEMO_TOOL_KEY_VEC4S * key + part];
+}
 
 vec3 hemo_quat_rotate(vec4 q, vec3 v) {
   const vec3 t = 2.0 * cross(q.xyz, v);
@@ -55,5 +58,6 @@ HemoToolPose hemo_tool_pose(uint tool, float t) {
   // 1.25 times its mean rate for the key-to-key turns of under 90 degrees the scene allows
   const float turn = 2.0 * acos(clamp(abs(dot(qa, qb)), 0.0, 1.0));
   p.speed = moving ? (length(kb.yzw - ka.yzw) + 1.25 * turn * (shape.y + shape.z)) / span : 0.0;
+  p.cutting = uint(shape.x) == HEMO_TOOL_KIND_BLADE && t >= ka.x && hemo_tool_key(first + a, 2u).y != 0.0;
   return p;
 }

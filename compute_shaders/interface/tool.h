@@ -8,8 +8,9 @@
 // quaternion) interpolated between the two keyframes around t (linear, and normalised linear
 // for the quaternion), held before the first and after the last.
 #define HEMO_TOOL_MAX_TOOLS 8
-#define HEMO_TOOL_MAX_KEYS 63  // per tool
+#define HEMO_TOOL_MAX_KEYS 42  // per tool
 #define HEMO_TOOL_KIND_PROBE 0
+#define HEMO_TOOL_KIND_BLADE 1  // a capsule whose segment (the edge) cuts while its keys say so
 
 // The tools buffer, read as a uniform block of HEMO_TOOL_DATA_VEC4S vec4 (16 KiB, the least
 // maxUniformBufferRange Vulkan allows): every invocation evaluates the poses it needs from it
@@ -17,8 +18,11 @@
 //   [2k], [2k + 1] for tool k < HEMO_TOOL_MAX_TOOLS:
 //           vec4 shape (kind, radius m, length m, contact distance D m)
 //           vec4 contact (Psi m/s^2, first key, key count, 0)  (first key and count as floats)
-//   [2 HEMO_TOOL_MAX_TOOLS + 2j], [... + 1] for key j:
-//           vec4 (t s, position xyz m), vec4 orientation (x, y, z, w)
+//   [2 HEMO_TOOL_MAX_TOOLS + 3j], [... + 1], [... + 2] for key j:
+//           vec4 (t s, position xyz m), vec4 orientation (x, y, z, w),
+//           vec4 (jaw opening m, cutting 0/1, 0, 0): a blade cuts from a key with cutting 1 to
+//           the next key
+#define HEMO_TOOL_KEY_VEC4S 3
 #define HEMO_TOOL_DATA_VEC4S 1024
 // The contact force (docs/physics.md, "Tools"): a particle whose distance x to the tool's
 // surface is below D (inside the tool: x <= 0) is pushed along the surface normal with the
@@ -50,6 +54,20 @@
 #define HEMO_TOOLC_BINDING_DT_PARTIALS 11
 #define HEMO_TOOLC_BINDING_DT_COUNTS 12
 #define HEMO_TOOLC_BINDING_COUNT 13
+
+// tool/cut.comp (scenes with a blade and a vessel): one invocation per spring; an unbroken
+// spring whose segment (its ends' positions, minimum image) crosses the surface a cutting
+// blade's edge swept since the last step (the two triangles between the edge at t - lastDt and
+// at t) breaks for good, counted with the wall's broken springs. Before the wall's spring pass,
+// so a cut spring pulls no more in that force evaluation.
+#define HEMO_TOOLCUT_BINDING_POSITIONS 0   // texel vec4
+#define HEMO_TOOLCUT_BINDING_SLOT_OF_ID 1  // texel uint
+#define HEMO_TOOLCUT_BINDING_SPRINGS 2     // the wall's Spring records (interface/wall.h), broken flags written
+#define HEMO_TOOLCUT_BINDING_COUNTERS 3    // the wall's counters (interface/wall.h)
+#define HEMO_TOOLCUT_BINDING_PARAMS 4      // SphParams (uniform): the periods
+#define HEMO_TOOLCUT_BINDING_TOOLS 5       // the tools buffer (uniform)
+#define HEMO_TOOLCUT_BINDING_CLOCK 6
+#define HEMO_TOOLCUT_BINDING_COUNT 7
 
 // A log record (std430, 64 bytes), mirrored by hemo::sim::ToolSample:
 //   vec4 force     (F on the tool, N; w: the time t of the force evaluation, s)

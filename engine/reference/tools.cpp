@@ -33,7 +33,41 @@ RefToolPose toolPose(const sim::ToolSpec& tool, double t) {
   p.axis = p.orientation * glm::dvec3(0.0, 0.0, 1.0);
   const double turn = 2.0 * std::acos(std::clamp(std::abs(dot4(qa, qb)), 0.0, 1.0));
   p.speed = moving ? (glm::length(pb - pa) + 1.25 * turn * (double(tool.radius) + tool.length)) / span : 0.0;
+  p.cutting = tool.kind == sim::ToolKind::Blade && t >= keys[a].time && keys[a].cutting;
   return p;
+}
+
+namespace {
+// Moeller and Trumbore's segment-triangle test in double; `margin` the least distance of the
+// parameters from their bounds (negative when outside).
+bool segmentMeetsTriangle(const glm::dvec3& p, const glm::dvec3& d, const glm::dvec3& v0, const glm::dvec3& v1,
+                          const glm::dvec3& v2, double& margin) {
+  const glm::dvec3 e1 = v1 - v0, e2 = v2 - v0;
+  const glm::dvec3 pv = glm::cross(d, e2);
+  const double det = glm::dot(e1, pv);
+  if (det == 0.0) {
+    margin = 0.0;
+    return false;
+  }
+  const glm::dvec3 tv = p - v0;
+  const double u = glm::dot(tv, pv) / det;
+  const glm::dvec3 qv = glm::cross(tv, e1);
+  const double v = glm::dot(d, qv) / det;
+  const double s = glm::dot(e2, qv) / det;
+  margin = std::min({u, v, 1.0 - u - v, s, 1.0 - s});
+  return margin >= 0.0;
+}
+}  // namespace
+
+bool sweptEdgeCrosses(const glm::dvec3& a0, const glm::dvec3& b0, const glm::dvec3& a1, const glm::dvec3& b1,
+                      const glm::dvec3& p, const glm::dvec3& q, double* margin) {
+  double m1 = 0.0, m2 = 0.0;
+  const bool hit1 = segmentMeetsTriangle(p, q - p, a0, b0, b1, m1);
+  const bool hit2 = segmentMeetsTriangle(p, q - p, a0, b1, a1, m2);
+  // the two triangles share the diagonal a0-b1: a crossing on it counts once, and is far
+  // from both tests' outer bounds
+  if (margin) *margin = hit1 || hit2 ? std::max(m1, m2) : std::min(std::abs(m1), std::abs(m2));
+  return hit1 || hit2;
 }
 
 glm::dvec3 toolAcceleration(const sim::ToolSpec& tool, const RefToolPose& pose, double psi, double h,

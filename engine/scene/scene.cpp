@@ -150,16 +150,17 @@ const std::vector<Field>& schema() {
       {"tools", Kind::Objects, "", 0, kInf, false, Json::array(), "Surgical tools (at most 8): rigid bodies moved along keyframed paths that push the blood and the vessel wall out of their way and feel the force back (docs/physics.md, \"Tools\"). hemo-run writes each tool's force per step to DIR/tools.csv.", {},
        {
            {"name", Kind::String, "", 0, 0, false, nullptr, "The tool's name, reported in outputs."},
-           {"kind", Kind::Choice, "", 0, 0, false, "probe", "A probe: a capsule, the segment from the tip along the tool's +z axis grown by radius_m (a sphere when length_m is 0).", {"probe"}},
+           {"kind", Kind::Choice, "", 0, 0, false, "probe", "A probe: a capsule, the segment from the tip along the tool's +z axis grown by radius_m (a sphere when length_m is 0). A blade: a probe whose segment, of length_m > 0, is an edge that cuts every spring it sweeps through while its keyframes say so (path[].cutting).", {"probe", "blade"}},
            {"radius_m", Kind::Number, "m", 0, 1e3, true, nullptr, "Radius of the probe's capsule."},
            {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of its shaft from the tip along the tool's +z axis (0: a sphere)."},
            {"contact_distance_m", Kind::Number, "m", 0, 1e3, false, 0.0, "D: particles closer than this to the tool's surface (or inside it) are pushed out along its normal (0: the particle spacing dp)."},
            {"contact_scale", Kind::Number, "1", 0, 1e3, true, 0.01, "Psi = scale c0^2 / (2h) of the push Psi (1 - q) / sqrt(q), q = max(x / 2h, 1e-3), x the distance to the surface: the boundary repulsion's law, on the tool's exact surface."},
-           {"path", Kind::Objects, "", 1, kInf, false, nullptr, "Keyframes, in time order (at most 64): the tool holds the first pose before the first and the last after the last; in between the tip moves linearly and the orientation turns by normalised linear interpolation (under 90 degrees from key to key).", {},
+           {"path", Kind::Objects, "", 1, kInf, false, nullptr, "Keyframes, in time order (at most 42): the tool holds the first pose before the first and the last after the last; in between the tip moves linearly and the orientation turns by normalised linear interpolation (under 90 degrees from key to key).", {},
             {
                 {"time_s", Kind::Number, "s", 0, 1e6, false, nullptr, "Time of the keyframe."},
                 {"position_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Where the tip is; inside the domain."},
                 {"orientation_wxyz", Kind::NumberList, "1", -1e6, 1e6, false, Json::array({1.0, 0.0, 0.0, 0.0}), "The tool's rotation as a quaternion (w, x, y, z), normalised on loading: the default keeps its shaft along +z."},
+                {"cutting", Kind::Bool, "", 0, 0, false, false, "A blade cuts from this keyframe to the next (after the last: for good)."},
             }},
        }},
       {"surface", Kind::Section, "", 0, 0, false, Json::object(), "The blood surface (GPU marching cubes over the particles' volume-fraction field), built only when something asks for it (hemo-run --surface-every, the renderer).", {},
@@ -518,7 +519,10 @@ void parseTools(const Checker& c, const Json& tools, Scene& s) {
     for (const sim::ToolSpec& other : s.tools) {
       if (other.name == tool.name) c.fail(p + ".name", "\"" + tool.name + "\" names another tool too");
     }
-    tool.kind = sim::ToolKind::Probe;
+    tool.kind = t["kind"].get<std::string>() == "blade" ? sim::ToolKind::Blade : sim::ToolKind::Probe;
+    if (tool.kind == sim::ToolKind::Blade && !(t["length_m"].get<double>() > 0.0)) {
+      c.fail(p + ".length_m", "a blade needs an edge: length_m must be positive");
+    }
     tool.radius = t["radius_m"].get<float>();
     tool.length = t["length_m"].get<float>();
     tool.contactDistance = t["contact_distance_m"].get<float>();
@@ -545,6 +549,8 @@ void parseTools(const Checker& c, const Json& tools, Scene& s) {
       sim::ToolKey tk;
       tk.time = key["time_s"].get<double>();
       tk.position = vec3(key["position_m"]);
+      tk.cutting = key["cutting"].get<bool>();
+      if (tk.cutting && tool.kind != sim::ToolKind::Blade) c.fail(kp + ".cutting", "only a blade cuts (tools[].kind \"blade\")");
       const Json& q = key["orientation_wxyz"];
       if (q.size() != 4) c.fail(kp + ".orientation_wxyz", "expected 4 numbers (w, x, y, z), got " + q.dump());
       const glm::dquat dq(q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>());

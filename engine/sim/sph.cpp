@@ -940,7 +940,11 @@ void SphSolver::attachTools(const std::vector<ToolSpec>& tools) {
                             &dtCounts_,
                             wall_ ? &wall_->pointInfo() : nullptr,
                             wall_ ? wall_->pointCount() : 0u,
-                            wall_ && wall_->substeps() > 1 ? &wall_->held() : nullptr};
+                            wall_ && wall_->substeps() > 1 ? &wall_->held() : nullptr,
+                            wall_ ? &wall_->springs() : nullptr,
+                            wall_ ? &wall_->counters() : nullptr,
+                            &grid_.slotOfId(),
+                            wall_ ? wall_->springCount() : 0u};
   // Psi per unit scale, c0^2 / 2h, from the scene's sound speed (under DFSPH too, as the
   // boundary repulsion's)
   const double c0 = settings_.soundSpeed;
@@ -1181,6 +1185,10 @@ void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidS
   }
   rec.computeToCompute();
   if (timestamps) timestamps->mark(rec, "forces");
+  if (tools_ && tools_->cuts()) {  // the blades cut before the springs pull
+    tools_->recordCut(rec, clockParity_);
+    rec.computeToCompute();
+  }
   if (wall_) {
     wall_->record(rec, first, n, wallBase);  // the wall, solved after the fluid in every force evaluation
     if (timestamps) timestamps->mark(rec, "wall");

@@ -18,6 +18,9 @@ static_assert((kWorkgroup & (kWorkgroup - 1)) == 0);
 struct ContactPush {  // tool/contact.comp
   std::uint32_t n, idCount, tools, held, stride, clockIn;
 };
+struct CutPush {  // tool/cut.comp
+  std::uint32_t springCount, tools, clockIn;
+};
 // SIMD groups of at least this many lanes (the engine's assumption for every device; a
 // device reporting fewer gets that many)
 constexpr std::uint32_t kMinSubgroup = 4;
@@ -62,7 +65,13 @@ void ToolSpec::validate() const {
     throw std::invalid_argument(n + ": contact distance must be >= 0 (m)");
   }
   if (!(std::isfinite(contactScale) && contactScale > 0.0f)) throw std::invalid_argument(n + ": contact scale must be positive");
+  if (kind == ToolKind::Blade && !(length > 0.0f)) throw std::invalid_argument(n + ": a blade needs an edge (length > 0 m)");
   validateKeys(n, keys);
+  if (kind != ToolKind::Blade) {
+    for (std::size_t k = 0; k < keys.size(); ++k) {
+      if (keys[k].cutting) throw std::invalid_argument(n + ": keyframe " + std::to_string(k) + " cuts, but only a blade cuts");
+    }
+  }
 }
 
 ToolContact::ToolContact(gpu::Context& context, const ParticleStore& particles, const ToolBuffers& buffers,
@@ -82,7 +91,7 @@ ToolContact::ToolContact(gpu::Context& context, const ParticleStore& particles, 
     if (t.contactDistance == 0.0f) t.contactDistance = spacing_;
     t.validate();
   }
-  static_assert(2 * HEMO_TOOL_MAX_TOOLS * (1 + HEMO_TOOL_MAX_KEYS) <= HEMO_TOOL_DATA_VEC4S);
+  static_assert(HEMO_TOOL_MAX_TOOLS * (2 + HEMO_TOOL_KEY_VEC4S * HEMO_TOOL_MAX_KEYS) <= HEMO_TOOL_DATA_VEC4S);
   toolData_ = gpu::Buffer(context, HEMO_TOOL_DATA_VEC4S * 16, gpu::MemoryUse::Device, "tools and keyframes");
   log_ = gpu::Buffer(context, std::uint64_t(maxSteps_) * tools_.size() * sizeof(ToolSample), gpu::MemoryUse::Device,
                      "tool log");
@@ -122,6 +131,25 @@ ToolContact::ToolContact(gpu::Context& context, const ParticleStore& particles, 
        {HEMO_TOOLC_BINDING_PARTIAL_COUNT, &partialCount_},
        {HEMO_TOOLC_BINDING_DT_PARTIALS, &dtPartials_},
        {HEMO_TOOLC_BINDING_DT_COUNTS, buffers.dtCounts}});
+  const bool blade = std::any_of(tools_.begin(), tools_.end(), [](const ToolSpec& t) { return t.kind == ToolKind::Blade; });
+  if (blade && buffers.springs && buffers.springCount > 0) {
+    springCount_ = buffers.springCount;
+    cut_ = &cache.get({"tool/cut", HEMO_TOOLCUT_BINDING_COUNT, sizeof(CutPush), kWorkgroup, {},
+                       1u << HEMO_TOOLCUT_BINDING_PARAMS | 1u << HEMO_TOOLCUT_BINDING_TOOLS,
+                       1u << HEMO_TOOLCUT_BINDING_POSITIONS | 1u << HEMO_TOOLCUT_BINDING_SLOT_OF_ID});
+    cutSet_ = cut_->makeSet({texelBinding(HEMO_TOOLCUT_BINDING_POSITIONS, &a.positions, kVec4),
+                             texelBinding(HEMO_TOOLCUT_BINDING_SLOT_OF_ID, buffers.slotOfId, kUint),
+                             {HEMO_TOOLCUT_BINDING_SPRINGS, buffers.springs},
+                             {HEMO_TOOLCUT_BINDING_COUNTERS, buffers.wallCounters},
+                             {HEMO_TOOLCUT_BINDING_PARAMS, buffers.params},
+                             {HEMO_TOOLCUT_BINDING_TOOLS, &toolData_},
+                             {HEMO_TOOLCUT_BINDING_CLOCK, buffers.clock}});
+  }
+}
+
+void ToolContact::recordCut(gpu::CommandRecorder& rec, std::uint32_t clockIn) {
+  if (!cut_) return;
+  rec.dispatch(*cut_, cutSet_, CutPush{springCount_, count(), clockIn}, cut_->groupsFor(springCount_));
 }
 
 void ToolContact::upload() {
@@ -133,10 +161,11 @@ void ToolContact::upload() {
     data[2 * k + 1] = glm::vec4(t.contactScale * psiPerScale_, float(first), float(t.keys.size()), 0.0f);
     for (std::size_t j = 0; j < t.keys.size(); ++j) {
       const ToolKey& key = t.keys[j];
-      const std::size_t at = 2 * HEMO_TOOL_MAX_TOOLS + 2 * (first + j);
+      const std::size_t at = 2 * HEMO_TOOL_MAX_TOOLS + HEMO_TOOL_KEY_VEC4S * (first + j);
       data[at] = glm::vec4(float(key.time), key.position);
       const glm::quat q = glm::normalize(key.orientation);
       data[at + 1] = glm::vec4(q.x, q.y, q.z, q.w);
+      data[at + 2] = glm::vec4(0.0f, key.cutting ? 1.0f : 0.0f, 0.0f, 0.0f);
     }
   }
   toolData_.upload(data);

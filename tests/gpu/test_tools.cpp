@@ -382,5 +382,174 @@ TEST_F(ToolTest, ProbePressedIntoASpringSheetMeetsItsStiffness) {
   EXPECT_NEAR(f2 / w2, expected, 0.05 * expected);
 }
 
+// A blade's cut against the twin: 4,000 random springs (some broken already) in a box periodic
+// along x; a blade whose edge moves and turns between two keys, cutting, and a probe that does
+// not cut. Every spring the edge swept through between the clock's last two times breaks
+// (except those the float test may decide either way: within 1e-4 of a boundary of the test's
+// parameters), no other does, and the wall's counter counts exactly the new breaks.
+TEST_F(ToolTest, BladeCutsExactlyTheSpringsItsEdgeSweeps) {
+  auto rng = rngFor();
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  sim::SphSettings s;
+  s.spacing = 0.002f;
+  s.soundSpeed = 5.0f;
+  const glm::dvec3 period(0.04, 0.0, 0.0);
+  std::vector<sim::ToolSpec> tools(2);
+  tools[0].name = "probe";
+  tools[0].radius = 0.003f;
+  tools[0].keys = {{0.0, {0.02f, 0.02f, 0.02f}, glm::quat(1, 0, 0, 0)}};
+  tools[1].name = "blade";
+  tools[1].kind = sim::ToolKind::Blade;
+  tools[1].radius = 0.0005f;
+  tools[1].length = 0.025f;
+  tools[1].keys = {{0.0, {0.005f, 0.01f, 0.005f}, axisAngle({1, 0, 0}, -0.2f), true},
+                   {1.0, {0.035f, 0.03f, 0.01f}, axisAngle({1, 1, 0}, 0.8f), false}};
+  const float t1 = 0.6f, lastDt = 0.35f;
+
+  const std::uint32_t points = 2000, springs = 4000;
+  std::vector<glm::vec4> pos(points), vel(points, glm::vec4(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL)));
+  std::vector<std::uint32_t> slotOfId(points);
+  for (std::uint32_t i = 0; i < points; ++i) {
+    pos[i] = glm::vec4(glm::vec3(u(rng) * 0.04, u(rng) * 0.04, u(rng) * 0.04), 1e-5f);
+    slotOfId[i] = i;
+  }
+  std::vector<sim::GpuSpring> records(springs);
+  for (std::uint32_t k = 0; k < springs; ++k) {
+    const std::uint32_t a = std::uint32_t(u(rng) * points) % points;
+    const std::uint32_t b = (a + 1 + std::uint32_t(u(rng) * (points - 1))) % points;
+    records[k] = {std::min(a, b), std::max(a, b), 0.005f, 1.0f, 0.0f, 1.0f, u(rng) < 0.05 ? 1u : 0u, 0u};
+  }
+  sim::ParticleStore store(ctx(), points);
+  store.upload(pos, vel);
+  sim::SphParams params = sim::makeParams(s);
+  params.period[0] = float(period.x);
+  params.invPeriod[0] = float(1.0 / period.x);
+  gpu::Buffer paramsBuffer(ctx(), sizeof(params), gpu::MemoryUse::Device, "params");
+  paramsBuffer.upload(std::vector<sim::SphParams>{params});
+  struct Clock {
+    float time, compensation, lastDt;
+    std::uint32_t steps;
+  };
+  gpu::Buffer clock(ctx(), 2 * sizeof(Clock), gpu::MemoryUse::Device, "clock");
+  clock.upload(std::vector<Clock>{{t1, 0.0f, lastDt, 9u}, {0.9f, 0.0f, 0.0f, 0u}});
+  gpu::Buffer accel(ctx(), points * 16, gpu::MemoryUse::Device, "accel");
+  gpu::Buffer dtCounts(ctx(), 16, gpu::MemoryUse::Device, "dt counts");
+  gpu::Buffer springBuffer(ctx(), springs * sizeof(sim::GpuSpring), gpu::MemoryUse::Device, "springs");
+  springBuffer.upload(records);
+  gpu::Buffer counters(ctx(), 16, gpu::MemoryUse::Device, "wall counters");
+  counters.upload(std::vector<std::uint32_t>{7, 0, 0, 0});
+  gpu::Buffer slots(ctx(), points * 4, gpu::MemoryUse::Device, "slot of id");
+  slots.upload(slotOfId);
+  sim::ToolBuffers buffers{&accel, &paramsBuffer, &clock, &dtCounts, nullptr, 0, nullptr};
+  buffers.springs = &springBuffer;
+  buffers.wallCounters = &counters;
+  buffers.slotOfId = &slots;
+  buffers.springCount = springs;
+  sim::ToolContact contact(ctx(), store, buffers, tools, 1.0f, s.spacing, 4);
+  ASSERT_TRUE(contact.cuts());
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  contact.recordCut(rec, 0u);
+  rec.end();
+  rec.submitAndWait();
+
+  const double t0d = double(t1 - lastDt), t1d = double(t1);
+  const reference::RefToolPose before = reference::toolPose(tools[1], t0d), after = reference::toolPose(tools[1], t1d);
+  ASSERT_TRUE(before.cutting);
+  const glm::dvec3 a0 = before.position, b0 = a0 + double(tools[1].length) * before.axis;
+  const glm::dvec3 a1 = after.position, b1 = a1 + double(tools[1].length) * after.axis;
+  auto image = [&](glm::dvec3 d) {
+    d.x -= period.x * std::round(d.x / period.x);
+    return d;
+  };
+  const auto out = springBuffer.readback<sim::GpuSpring>(springs);
+  std::uint32_t cut = 0, expectedCuts = 0, skipped = 0;
+  for (std::uint32_t k = 0; k < springs; ++k) {
+    const glm::dvec3 xa(pos[records[k].a]), xb(pos[records[k].b]);
+    const glm::dvec3 p = a0 + image(xa - a0);
+    double margin = 0.0;
+    const bool crosses = reference::sweptEdgeCrosses(a0, b0, a1, b1, p, p + image(xb - xa), &margin);
+    if (records[k].broken) {
+      EXPECT_EQ(out[k].broken, 1u) << "spring " << k << " stays broken";
+      continue;
+    }
+    if (out[k].broken) ++cut;
+    if (std::abs(margin) < 1e-4) {
+      ++skipped;
+      continue;
+    }
+    if (crosses) ++expectedCuts;
+    EXPECT_EQ(out[k].broken != 0u, crosses) << "spring " << k << " (margin " << margin << ")";
+  }
+  EXPECT_GT(expectedCuts, 50u);
+  EXPECT_LT(skipped, 10u);
+  EXPECT_EQ(counters.readback<std::uint32_t>(1)[0], 7u + cut) << "the counter adds the cuts";
+}
+
+// A blade drawn along the top of a pressurised tube, its edge through the wall: every spring
+// whose segment crosses the edge's path (from the wall as built; the wall moves a few
+// micrometres before the cut) breaks, and blood leaves through the slit.
+TEST_F(ToolTest, BladeDrawnAcrossATubeCutsItsPathAndTheBloodLeaves) {
+  const nlohmann::json j = nlohmann::json::parse(R"({
+    "scene": "tube_cut",
+    "particles": { "spacing_m": 5e-4 },
+    "fluid": { "density_kg_m3": 1060.0, "viscosity_pa_s": 0.0035, "expected_max_speed_m_s": 0.5,
+               "background_pressure_Pa": 1500.0, "background_pressure_ramp_s": 0.002 },
+    "vessel": { "shape": "tube", "length_m": 0.008, "radius_m": 0.002, "point_mass_kg": 2e-5,
+                "stiffness_N_m": 50.0, "damping_N_s_m": 0.005 },
+    "tools": [ { "name": "blade", "kind": "blade", "radius_m": 1e-4, "length_m": 0.0025,
+                 "path": [ { "time_s": 0.0, "position_m": [0.0005, 0.0, 0.0015] },
+                           { "time_s": 0.003, "position_m": [0.0005, 0.0, 0.0015], "cutting": true },
+                           { "time_s": 0.008, "position_m": [0.0075, 0.0, 0.0015] } ] } ],
+    "forces": { "gravity_m_s2": [0, 0, 0] },
+    "time": { "steps_per_batch": 32, "end_time_s": 0.025 },
+    "domain": { "min_m": [0.0, -0.008, -0.008], "max_m": [0.008, 0.008, 0.012], "periodic": ["x"] }
+  })");
+  const scene::Scene sc = scene::parseScene(j.dump(), "tube_cut.json");
+  sim::Simulation sim(ctx(), sc);
+  ASSERT_NE(sim.solver().wall(), nullptr);
+  // the wall as built, by id
+  const auto pos0 = sim.store().readPositions();
+  const auto ids0 = sim.store().readIds();
+  std::vector<glm::dvec3> byId(pos0.size());
+  for (std::size_t slot = 0; slot < pos0.size(); ++slot) byId[ids0[slot]] = glm::dvec3(pos0[slot]);
+  const auto springs = sim.solver().wall()->readSprings();
+  // the edge's path: from x = 0.5 to 7.5 mm at y = 0, z from 1.5 to 4 mm
+  const glm::dvec3 a0(0.0005, 0.0, 0.0015), b0(0.0005, 0.0, 0.004), a1(0.0075, 0.0, 0.0015), b1(0.0075, 0.0, 0.004);
+  std::vector<std::uint32_t> onPath;
+  for (std::uint32_t k = 0; k < springs.size(); ++k) {
+    double margin = 0.0;
+    // (the spring is the minimum image across the periodic seam at x = 0)
+    const glm::dvec3 p = byId[springs[k].a];
+    glm::dvec3 d = byId[springs[k].b] - p;
+    d.x -= 0.008 * std::round(d.x / 0.008);
+    if (reference::sweptEdgeCrosses(a0, b0, a1, b1, p, p + d, &margin) && margin > 0.05) {
+      onPath.push_back(k);
+    }
+  }
+  ASSERT_GT(onPath.size(), 20u);
+  sim.run({});
+  const auto after = sim.solver().wall()->readSprings();
+  std::uint32_t cut = 0;
+  for (std::uint32_t k : onPath) cut += after[k].broken;
+  EXPECT_EQ(cut, onPath.size()) << "springs on the blade's path left whole";
+  // blood leaves through the slit: fluid beyond the wall's outer layer, all of it on top
+  const sim::Snapshot snap = sim.snapshot();
+  std::uint32_t out = 0, below = 0;
+  for (std::size_t i = 0; i < snap.positions.size(); ++i) {
+    if (std::uint32_t(snap.velocities[i].w) != HEMO_KIND_FLUID) continue;
+    const glm::vec3 x(snap.positions[i]);
+    if (std::hypot(x.y, x.z) > 0.002 + 3 * 5e-4) {
+      ++out;
+      if (x.z < 0.0f) ++below;
+    }
+  }
+  std::printf("[tools] tube cut: %zu springs on the path, %u broken in all; %u fluid particles outside the wall by %.3f s "
+              "(%u escaped)\n",
+              onPath.size(), sim.brokenSprings(), out, sim.time(), sim.escapedParticles());
+  EXPECT_GE(out, 5u) << "blood leaves through the cut";
+  EXPECT_EQ(below, 0u) << "only through the cut";
+}
+
 }  // namespace
 }  // namespace hemo::test

@@ -259,9 +259,10 @@ TEST(Scene, ShippedScenesLoad) {
 }
 
 // Tools: a probe with a keyframed path loads (orientation normalised, contact distance dp by
-// default); keyframes out of order, an unknown kind, a tip outside the domain, a non-positive
-// radius, a zero or non-4 orientation, a turn of 90 degrees between keys, a tip faster than
-// sound, a duplicate name and more than 8 tools each get an error naming the field.
+// default), and a blade with its cutting keys; keyframes out of order, an unknown kind, a tip
+// outside the domain, a non-positive radius, a zero or non-4 orientation, a turn of 90 degrees
+// between keys, a tip faster than sound, a probe's key that cuts, a blade without an edge, a
+// duplicate name and more than 8 tools each get an error naming the field.
 TEST(Scene, ToolsAreParsedAndBadOnesNamed) {
   Json j = validScene();
   j["tools"] = Json::parse(R"([{ "name": "probe", "radius_m": 0.003, "length_m": 0.02,
@@ -296,6 +297,19 @@ TEST(Scene, ToolsAreParsedAndBadOnesNamed) {
   expectError(with("/path/1/time_s", 1e-3), {"tools[0].path[1].position_m", "faster than the speed of sound"});
   expectError(with("/path", Json::array()), {"tools[0].path", "at least 1"});
   expectError(added("/contact_distance_m", 0.5), {"tools[0].contact_distance_m", "kernel support"});
+  expectError(added("/path/0/cutting", true), {"tools[0].path[0].cutting", "only a blade cuts"});
+  {
+    Json k = j;
+    k["tools"][0]["kind"] = "blade";
+    k["tools"][0]["length_m"] = 0.0;
+    expectError(k, {"tools[0].length_m", "a blade needs an edge"});
+    k["tools"][0]["length_m"] = 0.01;
+    k["tools"][0]["path"][0]["cutting"] = true;
+    const Scene b = parseScene(k.dump(), "ok.json");
+    EXPECT_EQ(b.tools[0].kind, sim::ToolKind::Blade);
+    EXPECT_TRUE(b.tools[0].keys[0].cutting);
+    EXPECT_FALSE(b.tools[0].keys[1].cutting);
+  }
   {
     Json k = j;
     k["tools"].push_back(j["tools"][0]);

@@ -14,6 +14,7 @@ struct RefToolPose {
   glm::dquat orientation{1.0, 0.0, 0.0, 0.0};
   glm::dvec3 axis{0.0, 0.0, 1.0};  // the shaft's direction
   double speed = 0.0;           // m/s: the bound on the surface's speed between the keys around t
+  bool cutting = false;         // a blade whose last key at or before t cuts
 };
 
 // The tool's pose at time t (s): held before the first key and after the last, else
@@ -39,5 +40,13 @@ struct RefToolContact {
 RefToolContact toolContact(const std::vector<sim::ToolSpec>& tools, double t, const std::vector<glm::dvec3>& x,
                            const std::vector<double>& mass, double psiPerScale, double h,
                            const glm::dvec3& period = glm::dvec3(0.0));
+
+// Whether the segment from p to q crosses the surface an edge swept from (a0, b0) to
+// (a1, b1), taken as the triangles (a0, b0, b1) and (a0, b1, a1) (tool/cut.comp). `margin`, if
+// given, gets how far the crossing (or the nearest miss) lies from the tests' boundaries in
+// their parameters (barycentric and along the segment; 0 on a boundary), so a caller can leave
+// out cases that float rounding may decide either way.
+bool sweptEdgeCrosses(const glm::dvec3& a0, const glm::dvec3& b0, const glm::dvec3& a1, const glm::dvec3& b1,
+                      const glm::dvec3& p, const glm::dvec3& q, double* margin = nullptr);
 
 }  // namespace hemo::reference

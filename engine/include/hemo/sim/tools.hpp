@@ -27,20 +27,23 @@ class CommandRecorder;
 
 namespace hemo::sim {
 
-enum class ToolKind : std::uint32_t { Probe = 0 };
+// A probe pushes; a blade is a probe whose segment, its edge, also cuts: while its keys say
+// so, every spring the edge sweeps through breaks (interface/tool.h, tool/cut.comp).
+enum class ToolKind : std::uint32_t { Probe = 0, Blade = 1 };
 
 // A pose of the tool at a time. The tool's own frame: the tip at the origin, the shaft along +z.
 struct ToolKey {
   double time = 0.0;                                 // s
   glm::vec3 position{0.0f};                          // m: where the tip is
   glm::quat orientation{1.0f, 0.0f, 0.0f, 0.0f};     // rotation of the tool's frame (unit)
+  bool cutting = false;  // a blade cuts from this key to the next
 };
 
 struct ToolSpec {
   std::string name;
   ToolKind kind = ToolKind::Probe;
   float radius = 0.0f;           // m: the capsule's radius (a probe's tip)
-  float length = 0.0f;           // m: its shaft from the tip along +z (0: a sphere)
+  float length = 0.0f;           // m: its shaft from the tip along +z (0: a sphere); a blade's edge
   float contactDistance = 0.0f;  // m: D, the push's reach beyond the surface
   float contactScale = 0.01f;    // Psi = scale c0^2 / (2h), as the boundary repulsion's
   // At least one; times strictly increasing. Before the first key the tool holds the first
@@ -50,7 +53,8 @@ struct ToolSpec {
   std::vector<ToolKey> keys;
   // Throws std::invalid_argument naming the tool and the problem (no keys, too many, times
   // out of order, a turn of 90 degrees or more between keys, a non-unit orientation,
-  // non-positive radius or contact distance, negative length, non-finite values).
+  // non-positive radius or contact distance, negative length, a blade without an edge, a
+  // probe's key that cuts, non-finite values).
   void validate() const;
 };
 
@@ -72,6 +76,12 @@ struct ToolBuffers {
   const gpu::Buffer* wallInfo;      // vec4 per wall point id (mass, anchored); null without a wall
   std::uint32_t wallPoints;         // ids with a record in wallInfo
   const gpu::Buffer* held;          // the wall's held force (substeps); null without
+  // For blades: the wall's springs (GpuSpring records, broken flags written), its counters, the
+  // slot of each particle id and the number of springs; null / 0 without a wall.
+  const gpu::Buffer* springs = nullptr;
+  const gpu::Buffer* wallCounters = nullptr;
+  const gpu::Buffer* slotOfId = nullptr;
+  std::uint32_t springCount = 0;
 };
 
 class ToolContact {
@@ -85,6 +95,12 @@ class ToolContact {
   // after it). The solver's time-step reduction (sph/dt_reduce.comp), after a barrier, reads
   // its time-step partials and sums its force partials into the log.
   void record(gpu::CommandRecorder& rec, std::uint32_t n, std::uint32_t clockIn, bool held);
+  // Whether a blade can cut: the scene has one and a wall with springs.
+  bool cuts() const { return cut_ != nullptr; }
+  // The blades' cut (tool/cut.comp) at the time of clock record `clockIn`: every unbroken
+  // spring the edge of a cutting blade swept through since the last step breaks. Before the
+  // wall's spring pass (no barrier after it).
+  void recordCut(gpu::CommandRecorder& rec, std::uint32_t clockIn);
   // (min, max) partials of the time step the contact pass wrote (pass 2 of the reduction).
   const gpu::Buffer& dtPartials() const { return dtPartials_; }
   // The tools buffer (interface/tool.h), the force and torque partials with their count and
@@ -112,7 +128,9 @@ class ToolContact {
   std::uint32_t maxSteps_, wallPoints_, stride_;
   gpu::Buffer toolData_, partials_, partialCount_, dtPartials_, log_, placeholder_;
   const gpu::ComputePipeline* contact_;
-  gpu::DescriptorSet contactSet_;
+  const gpu::ComputePipeline* cut_ = nullptr;  // with a blade and springs only
+  std::uint32_t springCount_ = 0;
+  gpu::DescriptorSet contactSet_, cutSet_;
 };
 
 }  // namespace hemo::sim
