@@ -9,6 +9,8 @@ struct HemoToolPose {
   vec3 position;     // m: the tip
   vec4 orientation;  // unit quaternion (x, y, z, w)
   vec3 axis;         // the shaft's direction: orientation applied to (0, 0, 1)
+  vec3 side;         // the jaws' direction: orientation applied to (1, 0, 0)
+  float opening;     // m: a grasper's jaw opening
   float speed;       // m/s: a bound on the speed of the tool's surface between the two keys
   bool cutting;      // a blade: the last key at or before t says it cuts
 };
@@ -54,10 +56,17 @@ HemoToolPose hemo_tool_pose(uint tool, float t) {
   p.position = mix(ka.yzw, kb.yzw, s);
   p.orientation = normalize(mix(qa, qb, s));
   p.axis = hemo_quat_rotate(p.orientation, vec3(0.0, 0.0, 1.0));
+  p.side = hemo_quat_rotate(p.orientation, vec3(1.0, 0.0, 0.0));
+  const float oa = hemo_tool_key(first + a, 2u).x, ob = hemo_tool_key(first + b, 2u).x;
+  p.opening = mix(oa, ob, s);
   // the angle between the keys' orientations; normalised linear interpolation turns at most
   // 1.25 times its mean rate for the key-to-key turns of under 90 degrees the scene allows
   const float turn = 2.0 * acos(clamp(abs(dot(qa, qb)), 0.0, 1.0));
-  p.speed = moving ? (length(kb.yzw - ka.yzw) + 1.25 * turn * (shape.y + shape.z)) / span : 0.0;
+  // (a grasper's jaws reach half the opening, a radius and half their width beyond the axis,
+  // and open or close at half the opening's rate each)
+  const float reach = shape.y + shape.z +
+                      (uint(shape.x) == HEMO_TOOL_KIND_GRASPER ? 0.5 * max(oa, ob) + shape.y + contact.w : 0.0);
+  p.speed = moving ? (length(kb.yzw - ka.yzw) + 1.25 * turn * reach + 0.5 * abs(ob - oa)) / span : 0.0;
   p.cutting = uint(shape.x) == HEMO_TOOL_KIND_BLADE && t >= ka.x && hemo_tool_key(first + a, 2u).y != 0.0;
   return p;
 }

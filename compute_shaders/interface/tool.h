@@ -11,13 +11,18 @@
 #define HEMO_TOOL_MAX_KEYS 42  // per tool
 #define HEMO_TOOL_KIND_PROBE 0
 #define HEMO_TOOL_KIND_BLADE 1  // a capsule whose segment (the edge) cuts while its keys say so
+// Two jaws, rounded plates: the points within radius of the rectangles from the tip
+// +- (opening / 2 + radius) along the tool's x axis, spanned by its z axis (length) and its y
+// axis (the jaw's width): the gap between their faces is the keyed jaw opening.
+#define HEMO_TOOL_KIND_GRASPER 2
 
 // The tools buffer, read as a uniform block of HEMO_TOOL_DATA_VEC4S vec4 (16 KiB, the least
 // maxUniformBufferRange Vulkan allows): every invocation evaluates the poses it needs from it
 // (a few uniform reads), so no pass of its own computes them.
 //   [2k], [2k + 1] for tool k < HEMO_TOOL_MAX_TOOLS:
 //           vec4 shape (kind, radius m, length m, contact distance D m)
-//           vec4 contact (Psi m/s^2, first key, key count, 0)  (first key and count as floats)
+//           vec4 contact (Psi m/s^2, first key, key count, a grasper's jaw half-width m)
+//           (first key and count as floats)
 //   [2 HEMO_TOOL_MAX_TOOLS + 3j], [... + 1], [... + 2] for key j:
 //           vec4 (t s, position xyz m), vec4 orientation (x, y, z, w),
 //           vec4 (jaw opening m, cutting 0/1, 0, 0): a blade cuts from a key with cutting 1 to

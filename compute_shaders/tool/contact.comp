@@ -39,31 +39,45 @@ layout(push_constant) uniform Push {
 #include "common/tool_pose.glsl"
 
 
-// The acceleration tool k gives a particle at x (m/s^2), and the particle's separation from
-// the tool's tip (for the torque).
-vec3 contactAccel(uint k, HemoToolPose pose, vec3 x, out vec3 arm) {
-  const vec4 shape = hemo_tool_shape(k);  // (kind, radius, length, D)
-  const float psi = hemo_tool_contact(k).x;
-  const vec3 tip = pose.position;
-  const vec3 axis = pose.axis;
-  const vec3 d = x - tip;
-  arm = d - params.period.xyz * round(d * params.invPeriod.xyz);  // minimum image (period 0: none)
-  const float along = clamp(dot(arm, axis), 0.0, shape.z);
-  const vec3 off = arm - along * axis;  // from the nearest point of the tool's segment
+// The push of one jaw or capsule on a particle at separation `arm` from the tool's tip
+// (m/s^2): the points within `radius` of the rectangle from `base` spanned by `axis` (length
+// `len`) and `lateral` (half-width `halfWidth` either side); half-width 0: a capsule.
+vec3 slabPush(vec3 arm, vec3 base, vec3 axis, vec3 lateral, float len, float halfWidth, float radius, float reach,
+              float psi) {
+  const vec3 rel = arm - base;
+  const float along = clamp(dot(rel, axis), 0.0, len);
+  const float across = clamp(dot(rel, lateral), -halfWidth, halfWidth);
+  const vec3 off = rel - along * axis - across * lateral;  // from the nearest point of the rectangle
   const float dist = length(off);
-  const float gap = dist - shape.y;     // to the surface; <= 0 inside
-  if (!(gap < shape.w)) {
+  const float gap = dist - radius;      // to the surface; <= 0 inside
+  if (!(gap < reach)) {
     return vec3(0.0);
   }
   vec3 normal;
-  if (dist > 1.0e-6 * shape.y) {
+  if (dist > 1.0e-6 * radius) {
     normal = off / dist;
-  } else {  // on the segment itself: out along a direction normal to the shaft
-    const vec3 other = abs(axis.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+  } else {  // on the rectangle itself: out along its normal (for a segment, one normal to it)
+    const vec3 other = halfWidth > 0.0 ? lateral : (abs(axis.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0));
     normal = normalize(cross(axis, other));
   }
   const float q = max(gap / (2.0 * params.h), 1.0e-3);
   return (psi * (1.0 - q) * inversesqrt(q)) * normal;
+}
+
+// The acceleration tool k gives a particle at x (m/s^2), and the particle's separation from
+// the tool's tip (for the torque). A grasper's two jaws each push as a rounded plate.
+vec3 contactAccel(uint k, HemoToolPose pose, vec3 x, out vec3 arm) {
+  const vec4 shape = hemo_tool_shape(k);  // (kind, radius, length, D)
+  const vec4 contact = hemo_tool_contact(k);  // (Psi, first key, keys, jaw half-width)
+  const vec3 d = x - pose.position;
+  arm = d - params.period.xyz * round(d * params.invPeriod.xyz);  // minimum image (period 0: none)
+  if (uint(shape.x) != HEMO_TOOL_KIND_GRASPER) {
+    return slabPush(arm, vec3(0.0), pose.axis, pose.side, shape.z, 0.0, shape.y, shape.w, contact.x);
+  }
+  const vec3 lateral = cross(pose.axis, pose.side);
+  const vec3 side = (0.5 * pose.opening + shape.y) * pose.side;
+  return slabPush(arm, side, pose.axis, lateral, shape.z, contact.w, shape.y, shape.w, contact.x) +
+         slabPush(arm, -side, pose.axis, lateral, shape.z, contact.w, shape.y, shape.w, contact.x);
 }
 
 void main() {

@@ -31,8 +31,14 @@ RefToolPose toolPose(const sim::ToolSpec& tool, double t) {
   glm::dquat q(qa.w + s * (qb.w - qa.w), qa.x + s * (qb.x - qa.x), qa.y + s * (qb.y - qa.y), qa.z + s * (qb.z - qa.z));
   p.orientation = glm::normalize(q);
   p.axis = p.orientation * glm::dvec3(0.0, 0.0, 1.0);
+  p.side = p.orientation * glm::dvec3(1.0, 0.0, 0.0);
+  const double oa = keys[a].jawOpening, ob = keys[b].jawOpening;
+  p.opening = oa + s * (ob - oa);
   const double turn = 2.0 * std::acos(std::clamp(std::abs(dot4(qa, qb)), 0.0, 1.0));
-  p.speed = moving ? (glm::length(pb - pa) + 1.25 * turn * (double(tool.radius) + tool.length)) / span : 0.0;
+  const bool grasper = tool.kind == sim::ToolKind::Grasper;
+  const double reach = double(tool.radius) + tool.length +
+                       (grasper ? 0.5 * std::max(oa, ob) + tool.radius + 0.5 * double(tool.jawWidth) : 0.0);
+  p.speed = moving ? (glm::length(pb - pa) + 1.25 * turn * reach + 0.5 * std::abs(ob - oa)) / span : 0.0;
   p.cutting = tool.kind == sim::ToolKind::Blade && t >= keys[a].time && keys[a].cutting;
   return p;
 }
@@ -70,6 +76,32 @@ bool sweptEdgeCrosses(const glm::dvec3& a0, const glm::dvec3& b0, const glm::dve
   return hit1 || hit2;
 }
 
+namespace {
+// The points within `radius` of the rectangle from `base` spanned by `axis` (length `len`)
+// and `lateral` (half-width either side; 0: a capsule), as tool/contact.comp.
+glm::dvec3 slabPush(const glm::dvec3& arm, const glm::dvec3& base, const glm::dvec3& axis, const glm::dvec3& lateral,
+                    double len, double halfWidth, double radius, double reach, double psi, double h) {
+  const glm::dvec3 rel = arm - base;
+  const double along = std::clamp(glm::dot(rel, axis), 0.0, len);
+  const double across = std::clamp(glm::dot(rel, lateral), -halfWidth, halfWidth);
+  const glm::dvec3 off = rel - along * axis - across * lateral;
+  const double dist = glm::length(off);
+  const double gap = dist - radius;
+  if (!(gap < reach)) return glm::dvec3(0.0);
+  glm::dvec3 normal;
+  if (dist > 1e-6 * radius) {
+    normal = off / dist;
+  } else {
+    const glm::dvec3 other = halfWidth > 0.0 ? lateral
+                             : std::abs(axis.x) < 0.9 ? glm::dvec3(1.0, 0.0, 0.0)
+                                                      : glm::dvec3(0.0, 1.0, 0.0);
+    normal = glm::normalize(glm::cross(axis, other));
+  }
+  const double q = std::max(gap / (2.0 * h), 1e-3);
+  return psi * (1.0 - q) / std::sqrt(q) * normal;
+}
+}  // namespace
+
 glm::dvec3 toolAcceleration(const sim::ToolSpec& tool, const RefToolPose& pose, double psi, double h,
                             const glm::dvec3& x, const glm::dvec3& period, glm::dvec3* armOut) {
   glm::dvec3 arm = x - pose.position;
@@ -77,20 +109,15 @@ glm::dvec3 toolAcceleration(const sim::ToolSpec& tool, const RefToolPose& pose, 
     if (period[a] > 0.0) arm[a] -= period[a] * std::round(arm[a] / period[a]);
   }
   if (armOut) *armOut = arm;
-  const double along = std::clamp(glm::dot(arm, pose.axis), 0.0, double(tool.length));
-  const glm::dvec3 off = arm - along * pose.axis;
-  const double dist = glm::length(off);
-  const double gap = dist - tool.radius;
-  if (!(gap < tool.contactDistance)) return glm::dvec3(0.0);
-  glm::dvec3 normal;
-  if (dist > 1e-6 * tool.radius) {
-    normal = off / dist;
-  } else {
-    const glm::dvec3 other = std::abs(pose.axis.x) < 0.9 ? glm::dvec3(1.0, 0.0, 0.0) : glm::dvec3(0.0, 1.0, 0.0);
-    normal = glm::normalize(glm::cross(pose.axis, other));
+  const double len = tool.length, radius = tool.radius, reach = tool.contactDistance;
+  if (tool.kind != sim::ToolKind::Grasper) {
+    return slabPush(arm, glm::dvec3(0.0), pose.axis, pose.side, len, 0.0, radius, reach, psi, h);
   }
-  const double q = std::max(gap / (2.0 * h), 1e-3);
-  return psi * (1.0 - q) / std::sqrt(q) * normal;
+  const glm::dvec3 lateral = glm::cross(pose.axis, pose.side);
+  const glm::dvec3 side = (0.5 * pose.opening + radius) * pose.side;
+  const double halfWidth = 0.5 * double(tool.jawWidth);
+  return slabPush(arm, side, pose.axis, lateral, len, halfWidth, radius, reach, psi, h) +
+         slabPush(arm, -side, pose.axis, lateral, len, halfWidth, radius, reach, psi, h);
 }
 
 RefToolContact toolContact(const std::vector<sim::ToolSpec>& tools, double t, const std::vector<glm::dvec3>& x,

@@ -150,10 +150,11 @@ const std::vector<Field>& schema() {
       {"tools", Kind::Objects, "", 0, kInf, false, Json::array(), "Surgical tools (at most 8): rigid bodies moved along keyframed paths that push the blood and the vessel wall out of their way and feel the force back (docs/physics.md, \"Tools\"). hemo-run writes each tool's force per step to DIR/tools.csv.", {},
        {
            {"name", Kind::String, "", 0, 0, false, nullptr, "The tool's name, reported in outputs."},
-           {"kind", Kind::Choice, "", 0, 0, false, "probe", "A probe: a capsule, the segment from the tip along the tool's +z axis grown by radius_m (a sphere when length_m is 0). A blade: a probe whose segment, of length_m > 0, is an edge that cuts every spring it sweeps through while its keyframes say so (path[].cutting).", {"probe", "blade"}},
+           {"kind", Kind::Choice, "", 0, 0, false, "probe", "A probe: a capsule, the segment from the tip along the tool's +z axis grown by radius_m (a sphere when length_m is 0). A blade: a probe whose segment, of length_m > 0, is an edge that cuts every spring it sweeps through while its keyframes say so (path[].cutting). A grasper: two such capsules, the jaws, along the tool's +z axis on either side of it along its +x axis, the gap between their surfaces keyed (path[].jaw_opening_m): closing them squeezes what lies between (a clamp).", {"probe", "blade", "grasper"}},
            {"radius_m", Kind::Number, "m", 0, 1e3, true, nullptr, "Radius of the probe's capsule."},
            {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of its shaft from the tip along the tool's +z axis (0: a sphere)."},
            {"contact_distance_m", Kind::Number, "m", 0, 1e3, false, 0.0, "D: particles closer than this to the tool's surface (or inside it) are pushed out along its normal (0: the particle spacing dp)."},
+           {"jaw_width_m", Kind::Number, "m", 0, 1e3, false, 0.0, "A grasper's jaws are rounded plates this wide (along the tool's y axis), each the points within radius_m of a rectangle length_m by jaw_width_m; 0: capsules. Flat jaws squeeze what they hold instead of pushing it aside."},
            {"contact_scale", Kind::Number, "1", 0, 1e3, true, 0.01, "Psi = scale c0^2 / (2h) of the push Psi (1 - q) / sqrt(q), q = max(x / 2h, 1e-3), x the distance to the surface: the boundary repulsion's law, on the tool's exact surface."},
            {"path", Kind::Objects, "", 1, kInf, false, nullptr, "Keyframes, in time order (at most 42): the tool holds the first pose before the first and the last after the last; in between the tip moves linearly and the orientation turns by normalised linear interpolation (under 90 degrees from key to key).", {},
             {
@@ -161,6 +162,7 @@ const std::vector<Field>& schema() {
                 {"position_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Where the tip is; inside the domain."},
                 {"orientation_wxyz", Kind::NumberList, "1", -1e6, 1e6, false, Json::array({1.0, 0.0, 0.0, 0.0}), "The tool's rotation as a quaternion (w, x, y, z), normalised on loading: the default keeps its shaft along +z."},
                 {"cutting", Kind::Bool, "", 0, 0, false, false, "A blade cuts from this keyframe to the next (after the last: for good)."},
+                {"jaw_opening_m", Kind::Number, "m", 0, 1e3, false, 0.0, "A grasper's gap between its jaws at this keyframe (linear in between)."},
             }},
        }},
       {"surface", Kind::Section, "", 0, 0, false, Json::object(), "The blood surface (GPU marching cubes over the particles' volume-fraction field), built only when something asks for it (hemo-run --surface-every, the renderer).", {},
@@ -519,7 +521,8 @@ void parseTools(const Checker& c, const Json& tools, Scene& s) {
     for (const sim::ToolSpec& other : s.tools) {
       if (other.name == tool.name) c.fail(p + ".name", "\"" + tool.name + "\" names another tool too");
     }
-    tool.kind = t["kind"].get<std::string>() == "blade" ? sim::ToolKind::Blade : sim::ToolKind::Probe;
+    const std::string kind = t["kind"].get<std::string>();
+    tool.kind = kind == "blade" ? sim::ToolKind::Blade : kind == "grasper" ? sim::ToolKind::Grasper : sim::ToolKind::Probe;
     if (tool.kind == sim::ToolKind::Blade && !(t["length_m"].get<double>() > 0.0)) {
       c.fail(p + ".length_m", "a blade needs an edge: length_m must be positive");
     }
@@ -528,20 +531,14 @@ void parseTools(const Checker& c, const Json& tools, Scene& s) {
     tool.contactDistance = t["contact_distance_m"].get<float>();
     if (tool.contactDistance == 0.0f) tool.contactDistance = s.sph.spacing;
     tool.contactScale = t["contact_scale"].get<float>();
+    tool.jawWidth = t["jaw_width_m"].get<float>();
+    if (tool.jawWidth > 0.0f && tool.kind != sim::ToolKind::Grasper) c.fail(p + ".jaw_width_m", "only a grasper has jaws");
     if (tool.contactDistance > s.sph.supportRadius()) {
       c.fail(p + ".contact_distance_m", "must not exceed the kernel support 2h = " + fmt(s.sph.supportRadius()) + " m");
     }
     const Json& path = t["path"];
     if (path.size() > HEMO_TOOL_MAX_KEYS) {
       c.fail(p + ".path", "at most " + std::to_string(HEMO_TOOL_MAX_KEYS) + " keyframes, got " + std::to_string(path.size()));
-    }
-    const float reach = tool.radius + tool.length + tool.contactDistance;
-    for (int a = 0; a < 3; ++a) {
-      const float period = s.domain.max[a] - s.domain.min[a];
-      if (s.sph.periodic[a] && !(reach < 0.5f * period)) {
-        c.fail(p + ".radius_m", "the tool reaches " + fmt(reach) + " m from its tip, more than half the period along " +
-                                    std::string(1, "xyz"[a]) + " (" + fmt(0.5 * period) + " m)");
-      }
     }
     for (std::size_t m = 0; m < path.size(); ++m) {
       const std::string kp = p + ".path[" + std::to_string(m) + "]";
@@ -551,6 +548,10 @@ void parseTools(const Checker& c, const Json& tools, Scene& s) {
       tk.position = vec3(key["position_m"]);
       tk.cutting = key["cutting"].get<bool>();
       if (tk.cutting && tool.kind != sim::ToolKind::Blade) c.fail(kp + ".cutting", "only a blade cuts (tools[].kind \"blade\")");
+      tk.jawOpening = key["jaw_opening_m"].get<float>();
+      if (key.contains("jaw_opening_m") && tk.jawOpening != 0.0f && tool.kind != sim::ToolKind::Grasper) {
+        c.fail(kp + ".jaw_opening_m", "only a grasper has jaws (tools[].kind \"grasper\")");
+      }
       const Json& q = key["orientation_wxyz"];
       if (q.size() != 4) c.fail(kp + ".orientation_wxyz", "expected 4 numbers (w, x, y, z), got " + q.dump());
       const glm::dquat dq(q[0].get<double>(), q[1].get<double>(), q[2].get<double>(), q[3].get<double>());
@@ -573,6 +574,31 @@ void parseTools(const Checker& c, const Json& tools, Scene& s) {
         }
       }
       tool.keys.push_back(tk);
+    }
+    // On a periodic axis the contact takes the minimum image of a particle's offset from the
+    // tip: the tool's reach along that axis (at its keys' orientations and halfway between
+    // them) must stay under half the period.
+    glm::vec3 reach(0.0f);
+    for (std::size_t m = 0; m < tool.keys.size(); ++m) {
+      std::vector<glm::quat> turns{tool.keys[m].orientation};
+      if (m > 0) turns.push_back(glm::normalize(tool.keys[m - 1].orientation + tool.keys[m].orientation));
+      float opening = tool.keys[m].jawOpening;
+      if (m > 0) opening = std::max(opening, tool.keys[m - 1].jawOpening);
+      for (const glm::quat& q : turns) {
+        const glm::vec3 axis = q * glm::vec3(0.0f, 0.0f, 1.0f), side = q * glm::vec3(1.0f, 0.0f, 0.0f);
+        const glm::vec3 lateral = glm::cross(axis, side);
+        const glm::vec3 jaws = tool.kind == sim::ToolKind::Grasper
+                                   ? (0.5f * opening + tool.radius) * glm::abs(side) + 0.5f * tool.jawWidth * glm::abs(lateral)
+                                   : glm::vec3(0.0f);
+        reach = glm::max(reach, tool.radius + tool.contactDistance + tool.length * glm::abs(axis) + jaws);
+      }
+    }
+    for (int a = 0; a < 3; ++a) {
+      const float period = s.domain.max[a] - s.domain.min[a];
+      if (s.sph.periodic[a] && !(reach[a] < 0.5f * period)) {
+        c.fail(p + ".radius_m", "the tool reaches " + fmt(reach[a]) + " m from its tip along " + std::string(1, "xyz"[a]) +
+                                    ", more than half the period there (" + fmt(0.5 * period) + " m)");
+      }
     }
     try {
       tool.validate();

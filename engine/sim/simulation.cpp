@@ -81,11 +81,14 @@ std::uint64_t fingerprintOf(const scene::Scene& scene, const scene::SceneBuild& 
     h.addValue(t.length);
     h.addValue(t.contactDistance);
     h.addValue(t.contactScale);
+    h.addValue(t.jawWidth);
     h.addValue(std::uint64_t(t.keys.size()));
     for (const ToolKey& k : t.keys) {
       h.addValue(k.time);
       for (int a = 0; a < 3; ++a) h.addValue(k.position[a]);
       for (int a = 0; a < 4; ++a) h.addValue(k.orientation[a]);
+      h.addValue(std::uint32_t(k.cutting ? 1 : 0));
+      h.addValue(k.jawOpening);
     }
   }
   return h.value();

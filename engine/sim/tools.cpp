@@ -66,10 +66,17 @@ void ToolSpec::validate() const {
   }
   if (!(std::isfinite(contactScale) && contactScale > 0.0f)) throw std::invalid_argument(n + ": contact scale must be positive");
   if (kind == ToolKind::Blade && !(length > 0.0f)) throw std::invalid_argument(n + ": a blade needs an edge (length > 0 m)");
+  if (!(std::isfinite(jawWidth) && jawWidth >= 0.0f)) throw std::invalid_argument(n + ": the jaw width must be >= 0 (m)");
+  if (kind != ToolKind::Grasper && jawWidth != 0.0f) throw std::invalid_argument(n + ": only a grasper has jaws (a jaw width)");
   validateKeys(n, keys);
-  if (kind != ToolKind::Blade) {
-    for (std::size_t k = 0; k < keys.size(); ++k) {
-      if (keys[k].cutting) throw std::invalid_argument(n + ": keyframe " + std::to_string(k) + " cuts, but only a blade cuts");
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    const std::string at = n + ": keyframe " + std::to_string(k);
+    if (kind != ToolKind::Blade && keys[k].cutting) throw std::invalid_argument(at + " cuts, but only a blade cuts");
+    if (!(std::isfinite(keys[k].jawOpening) && keys[k].jawOpening >= 0.0f)) {
+      throw std::invalid_argument(at + ": the jaw opening must be >= 0 (m)");
+    }
+    if (kind != ToolKind::Grasper && keys[k].jawOpening != 0.0f) {
+      throw std::invalid_argument(at + " has a jaw opening, but only a grasper has jaws");
     }
   }
 }
@@ -158,14 +165,14 @@ void ToolContact::upload() {
     const ToolSpec& t = tools_[k];
     const std::uint32_t first = static_cast<std::uint32_t>(k * HEMO_TOOL_MAX_KEYS);
     data[2 * k] = glm::vec4(float(static_cast<std::uint32_t>(t.kind)), t.radius, t.length, t.contactDistance);
-    data[2 * k + 1] = glm::vec4(t.contactScale * psiPerScale_, float(first), float(t.keys.size()), 0.0f);
+    data[2 * k + 1] = glm::vec4(t.contactScale * psiPerScale_, float(first), float(t.keys.size()), 0.5f * t.jawWidth);
     for (std::size_t j = 0; j < t.keys.size(); ++j) {
       const ToolKey& key = t.keys[j];
       const std::size_t at = 2 * HEMO_TOOL_MAX_TOOLS + HEMO_TOOL_KEY_VEC4S * (first + j);
       data[at] = glm::vec4(float(key.time), key.position);
       const glm::quat q = glm::normalize(key.orientation);
       data[at + 1] = glm::vec4(q.x, q.y, q.z, q.w);
-      data[at + 2] = glm::vec4(0.0f, key.cutting ? 1.0f : 0.0f, 0.0f, 0.0f);
+      data[at + 2] = glm::vec4(key.jawOpening, key.cutting ? 1.0f : 0.0f, 0.0f, 0.0f);
     }
   }
   toolData_.upload(data);

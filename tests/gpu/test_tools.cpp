@@ -29,8 +29,9 @@ glm::quat axisAngle(glm::vec3 axis, float angle) { return glm::angleAxis(angle, 
 class ToolTest : public GpuTest {};
 
 // 3,000 particles in a box periodic along x: fluid (mass), wall points (their own mass; some
-// anchored, some past the network's ids) and rigid boundary particles, around two tools: a
-// tilted capsule moving and turning between keyframes, and a sphere across the periodic seam.
+// anchored, some past the network's ids) and rigid boundary particles, around three tools: a
+// tilted capsule moving and turning between keyframes, a sphere across the periodic seam, and
+// a grasper whose flat jaws close while it moves and turns.
 // The pushes (added to random accelerations), the wall's held record, the time step's partials
 // and each tool's force, torque and pose match the twin.
 TEST_F(ToolTest, ContactMatchesReference) {
@@ -55,7 +56,17 @@ TEST_F(ToolTest, ContactMatchesReference) {
   tools[1].contactDistance = 0.003f;
   tools[1].contactScale = 0.03f;
   tools[1].keys = {{0.0, {0.039f, 0.02f, 0.02f}, glm::quat(1, 0, 0, 0)}};
-  const double t = 0.13;  // between the capsule's first two keys
+  sim::ToolSpec grasper;
+  grasper.name = "grasper";
+  grasper.kind = sim::ToolKind::Grasper;
+  grasper.radius = 0.0015f;
+  grasper.length = 0.015f;
+  grasper.contactDistance = 0.002f;
+  grasper.jawWidth = 0.006f;
+  grasper.keys = {{0.0, {0.025f, 0.03f, 0.01f}, axisAngle({0, 0, 1}, 0.4f), false, 0.012f},
+                  {0.3, {0.025f, 0.032f, 0.012f}, axisAngle({0, 1, 0}, 0.5f), false, 0.002f}};
+  tools.push_back(grasper);
+  const double t = 0.13;  // between the capsule's first two keys (and the grasper's)
 
   const std::uint32_t n = 3000, wallPoints = 900;
   std::vector<glm::vec4> pos(n), vel(n), acc(n), held(n);

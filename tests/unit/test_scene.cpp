@@ -298,6 +298,17 @@ TEST(Scene, ToolsAreParsedAndBadOnesNamed) {
   expectError(with("/path", Json::array()), {"tools[0].path", "at least 1"});
   expectError(added("/contact_distance_m", 0.5), {"tools[0].contact_distance_m", "kernel support"});
   expectError(added("/path/0/cutting", true), {"tools[0].path[0].cutting", "only a blade cuts"});
+  expectError(added("/path/0/jaw_opening_m", 0.002), {"tools[0].path[0].jaw_opening_m", "only a grasper"});
+  {
+    Json k = j;
+    k["tools"][0]["kind"] = "grasper";
+    k["tools"][0]["path"][0]["jaw_opening_m"] = -0.001;
+    expectError(k, {"tools[0].path[0].jaw_opening_m", "[0, 1000]"});
+    k["tools"][0]["path"][0]["jaw_opening_m"] = 0.004;
+    const Scene g = parseScene(k.dump(), "ok.json");
+    EXPECT_EQ(g.tools[0].kind, sim::ToolKind::Grasper);
+    EXPECT_FLOAT_EQ(g.tools[0].keys[0].jawOpening, 0.004f);
+  }
   {
     Json k = j;
     k["tools"][0]["kind"] = "blade";

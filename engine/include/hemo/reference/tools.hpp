@@ -13,6 +13,8 @@ struct RefToolPose {
   glm::dvec3 position{0.0};     // m: the tip
   glm::dquat orientation{1.0, 0.0, 0.0, 0.0};
   glm::dvec3 axis{0.0, 0.0, 1.0};  // the shaft's direction
+  glm::dvec3 side{1.0, 0.0, 0.0};  // the jaws' direction
+  double opening = 0.0;            // m: a grasper's jaw opening
   double speed = 0.0;           // m/s: the bound on the surface's speed between the keys around t
   bool cutting = false;         // a blade whose last key at or before t cuts
 };

@@ -29,7 +29,9 @@ namespace hemo::sim {
 
 // A probe pushes; a blade is a probe whose segment, its edge, also cuts: while its keys say
 // so, every spring the edge sweeps through breaks (interface/tool.h, tool/cut.comp).
-enum class ToolKind : std::uint32_t { Probe = 0, Blade = 1 };
+// A grasper has two capsule jaws side by side, the gap between them keyed (its jaw opening):
+// closing it squeezes what lies between, a vessel clamped shut for one.
+enum class ToolKind : std::uint32_t { Probe = 0, Blade = 1, Grasper = 2 };
 
 // A pose of the tool at a time. The tool's own frame: the tip at the origin, the shaft along +z.
 struct ToolKey {
@@ -37,15 +39,17 @@ struct ToolKey {
   glm::vec3 position{0.0f};                          // m: where the tip is
   glm::quat orientation{1.0f, 0.0f, 0.0f, 0.0f};     // rotation of the tool's frame (unit)
   bool cutting = false;  // a blade cuts from this key to the next
+  float jawOpening = 0.0f;  // m: a grasper's gap between its jaws (linear between keys)
 };
 
 struct ToolSpec {
   std::string name;
   ToolKind kind = ToolKind::Probe;
-  float radius = 0.0f;           // m: the capsule's radius (a probe's tip)
+  float radius = 0.0f;           // m: the capsule's radius (a probe's tip; each of a grasper's jaws)
   float length = 0.0f;           // m: its shaft from the tip along +z (0: a sphere); a blade's edge
   float contactDistance = 0.0f;  // m: D, the push's reach beyond the surface
   float contactScale = 0.01f;    // Psi = scale c0^2 / (2h), as the boundary repulsion's
+  float jawWidth = 0.0f;         // m: a grasper's jaws are rounded plates this wide (0: capsules)
   // At least one; times strictly increasing. Before the first key the tool holds the first
   // pose, after the last the last; in between the pose is interpolated (position linearly,
   // orientation by normalised linear interpolation, which needs a turn of under 90 degrees
@@ -54,7 +58,8 @@ struct ToolSpec {
   // Throws std::invalid_argument naming the tool and the problem (no keys, too many, times
   // out of order, a turn of 90 degrees or more between keys, a non-unit orientation,
   // non-positive radius or contact distance, negative length, a blade without an edge, a
-  // probe's key that cuts, non-finite values).
+  // key that cuts on a tool other than a blade, a negative jaw opening or one on a tool other
+  // than a grasper, non-finite values).
   void validate() const;
 };
 
