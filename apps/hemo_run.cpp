@@ -33,6 +33,32 @@ namespace {
 
 using Json = nlohmann::json;
 
+// A per-step CSV (written under a temporary name, renamed when the run ends): its header, and
+// on a resumed run the rows of the run it continues up to the checkpoint's step (rows start
+// with the step count), then 9 significant digits.
+std::unique_ptr<hemo::io::AtomicFile> openStepCsv(const std::filesystem::path& path, const std::string& header,
+                                                  bool resumed, std::uint64_t firstStep) {
+  std::vector<std::string> kept;
+  if (resumed) {
+    std::ifstream old(path);
+    std::string line;
+    if (std::getline(old, line) && line == header) {
+      while (std::getline(old, line)) {
+        char* end = nullptr;
+        const unsigned long long step = std::strtoull(line.c_str(), &end, 10);
+        if (end == line.c_str() || *end != ',' || step > firstStep) break;
+        kept.push_back(line);
+      }
+    }
+  }
+  auto file = std::make_unique<hemo::io::AtomicFile>(path);
+  std::ostream& csv = file->stream();
+  csv << header << "\n";
+  for (const std::string& line : kept) csv << line << "\n";
+  csv.precision(9);
+  return file;
+}
+
 const char* kUsage =
     "usage: hemo-run SCENE.json [--out DIR] [--steps N | --until SECONDS] [--device SEL] [--vtk-every N]\n"
     "                [--vtk-format xml|legacy] [--stats-every N] [--surface-every N] [--png-every N]\n"
@@ -230,26 +256,10 @@ int main(int argc, char** argv) {
     // (written under a temporary name during the run, renamed when it ends: hemo/io/atomic_file.hpp)
     std::unique_ptr<hemo::io::AtomicFile> csvFile;
     if (statsEvery) {
-      // A resumed run keeps the rows of the run it continues, up to the checkpoint's step.
-      std::vector<std::string> kept;
-      const char* header = "step,time_s,dt_s,max_speed_m_s,max_density_error,broken_springs,detached_particles";
-      if (resumed) {
-        std::ifstream old(out / "steps.csv");
-        std::string line;
-        if (std::getline(old, line) && line == header) {
-          while (std::getline(old, line)) {
-            char* end = nullptr;
-            const unsigned long long step = std::strtoull(line.c_str(), &end, 10);
-            if (end == line.c_str() || *end != ',' || step > firstStep) break;
-            kept.push_back(line);
-          }
-        }
-      }
-      csvFile = std::make_unique<hemo::io::AtomicFile>(out / "steps.csv");
+      csvFile = openStepCsv(out / "steps.csv",
+                            "step,time_s,dt_s,max_speed_m_s,max_density_error,broken_springs,detached_particles",
+                            resumed, firstStep);
       std::ostream& csv = csvFile->stream();
-      csv << header << "\n";
-      for (const std::string& line : kept) csv << line << "\n";
-      csv.precision(9);
       sim.enableStepStats(statsEvery);
       options.onStepStats = [&](const std::vector<hemo::sim::StepStatsRow>& rows) {
         for (const auto& r : rows) {
@@ -266,24 +276,8 @@ int main(int argc, char** argv) {
       const char* header =
           "step,time_s,dt_s,tool,force_x_N,force_y_N,force_z_N,torque_x_N_m,torque_y_N_m,torque_z_N_m,"
           "position_x_m,position_y_m,position_z_m";
-      std::vector<std::string> kept;
-      if (resumed) {
-        std::ifstream old(out / "tools.csv");
-        std::string line;
-        if (std::getline(old, line) && line == header) {
-          while (std::getline(old, line)) {
-            char* end = nullptr;
-            const unsigned long long step = std::strtoull(line.c_str(), &end, 10);
-            if (end == line.c_str() || *end != ',' || step > firstStep) break;
-            kept.push_back(line);
-          }
-        }
-      }
-      toolFile = std::make_unique<hemo::io::AtomicFile>(out / "tools.csv");
+      toolFile = openStepCsv(out / "tools.csv", header, resumed, firstStep);
       std::ostream& csv = toolFile->stream();
-      csv << header << "\n";
-      for (const std::string& line : kept) csv << line << "\n";
-      csv.precision(9);
       options.onToolLog = [&](const std::vector<hemo::sim::ToolLogRow>& rows) {
         for (const auto& r : rows) {
           const auto& f = r.sample;

@@ -28,6 +28,27 @@ glm::quat axisAngle(glm::vec3 axis, float angle) { return glm::angleAxis(angle, 
 
 class ToolTest : public GpuTest {};
 
+// The SPH parameters of `s` in a device buffer, with x periodic over `period` (m).
+gpu::Buffer periodicParams(gpu::Context& context, const sim::SphSettings& s, float period) {
+  sim::SphParams params = sim::makeParams(s);
+  params.period[0] = period;
+  params.invPeriod[0] = 1.0f / period;
+  gpu::Buffer buffer(context, sizeof(params), gpu::MemoryUse::Device, "params");
+  buffer.upload(std::vector<sim::SphParams>{params});
+  return buffer;
+}
+
+// The solver's two clock records (common/clock.glsl), as given.
+struct ClockRecord {
+  float time, compensation, lastDt;
+  std::uint32_t steps;
+};
+gpu::Buffer clockAt(gpu::Context& context, const std::vector<ClockRecord>& records) {
+  gpu::Buffer buffer(context, records.size() * sizeof(ClockRecord), gpu::MemoryUse::Device, "clock");
+  buffer.upload(records);
+  return buffer;
+}
+
 // 3,000 particles in a box periodic along x: fluid (mass), wall points (their own mass; some
 // anchored, some past the network's ids) and rigid boundary particles, around three tools: a
 // tilted capsule moving and turning between keyframes, a sphere across the periodic seam, and
@@ -97,17 +118,9 @@ TEST_F(ToolTest, ContactMatchesReference) {
 
   sim::ParticleStore store(ctx(), n);
   store.upload(pos, vel, ids);
-  sim::SphParams params = sim::makeParams(s);
-  params.period[0] = float(period.x);
-  params.invPeriod[0] = float(1.0 / period.x);
-  gpu::Buffer paramsBuffer(ctx(), sizeof(params), gpu::MemoryUse::Device, "params");
-  paramsBuffer.upload(std::vector<sim::SphParams>{params});
-  struct Clock {
-    float time, compensation, lastDt;
-    std::uint32_t steps;
-  };
-  gpu::Buffer clock(ctx(), 2 * sizeof(Clock), gpu::MemoryUse::Device, "clock");
-  clock.upload(std::vector<Clock>{{0.9f, 0.0f, 0.0f, 0u}, {float(t), 0.0f, 1e-4f, 7u}});
+  gpu::Buffer paramsBuffer = periodicParams(ctx(), s, float(period.x));
+  // the force evaluation's time in record 1
+  gpu::Buffer clock = clockAt(ctx(), {{0.9f, 0.0f, 0.0f, 0u}, {float(t), 0.0f, 1e-4f, 7u}});
   gpu::Buffer accel(ctx(), n * 16, gpu::MemoryUse::Device, "accel");
   accel.upload(acc);
   gpu::Buffer heldBuffer(ctx(), n * 16, gpu::MemoryUse::Device, "held");
@@ -432,17 +445,8 @@ TEST_F(ToolTest, BladeCutsExactlyTheSpringsItsEdgeSweeps) {
   }
   sim::ParticleStore store(ctx(), points);
   store.upload(pos, vel);
-  sim::SphParams params = sim::makeParams(s);
-  params.period[0] = float(period.x);
-  params.invPeriod[0] = float(1.0 / period.x);
-  gpu::Buffer paramsBuffer(ctx(), sizeof(params), gpu::MemoryUse::Device, "params");
-  paramsBuffer.upload(std::vector<sim::SphParams>{params});
-  struct Clock {
-    float time, compensation, lastDt;
-    std::uint32_t steps;
-  };
-  gpu::Buffer clock(ctx(), 2 * sizeof(Clock), gpu::MemoryUse::Device, "clock");
-  clock.upload(std::vector<Clock>{{t1, 0.0f, lastDt, 9u}, {0.9f, 0.0f, 0.0f, 0u}});
+  gpu::Buffer paramsBuffer = periodicParams(ctx(), s, float(period.x));
+  gpu::Buffer clock = clockAt(ctx(), {{t1, 0.0f, lastDt, 9u}, {0.9f, 0.0f, 0.0f, 0u}});
   gpu::Buffer accel(ctx(), points * 16, gpu::MemoryUse::Device, "accel");
   gpu::Buffer dtCounts(ctx(), 16, gpu::MemoryUse::Device, "dt counts");
   gpu::Buffer springBuffer(ctx(), springs * sizeof(sim::GpuSpring), gpu::MemoryUse::Device, "springs");

@@ -109,13 +109,12 @@ class ToolContact {
   // (min, max) partials of the time step the contact pass wrote (pass 2 of the reduction).
   const gpu::Buffer& dtPartials() const { return dtPartials_; }
   // The tools buffer (interface/tool.h), the force and torque partials with their count and
-  // the partials per tool, and the log (maxStepsPerBatch rows of count() ToolSample).
+  // the partials per tool, and the log (maxStepsPerBatch rows of count() ToolSample, readLog).
   const gpu::Buffer& data() const { return toolData_; }
   const gpu::Buffer& partials() const { return partials_; }
   const gpu::Buffer& partialCount() const { return partialCount_; }
   std::uint32_t partialStride() const { return stride_; }
   const gpu::Buffer& log() const { return log_; }
-  std::uint32_t logRows() const { return maxSteps_; }
   // Replaces a tool's keyframes (validated as ToolSpec::validate; between batches: an upload).
   void setKeys(std::uint32_t tool, const std::vector<ToolKey>& keys);
   // The log rows [0, steps) of the last batch: steps x tools samples, row-major (a readback).
