@@ -1,6 +1,6 @@
 // A tool's pose at a time (interface/tool.h): the including shader declares the tools buffer
 // as the uniform array `toolData` (HEMO_TOOL_DATA_VEC4S vec4: HEMO_TOOL_MAX_TOOLS records of
-// two vec4, then the keyframes, HEMO_TOOL_KEY_VEC4S vec4 each).
+// HEMO_TOOL_RECORD_VEC4S vec4, then the keyframes, HEMO_TOOL_KEY_VEC4S vec4 each).
 //   layout(std140, binding = ...) uniform Tools { vec4 toolData[HEMO_TOOL_DATA_VEC4S]; };
 // A uniform block: every lane of a dispatch reads the same keys, which devices read once per
 // SIMD group (from a storage buffer llvmpipe loads them lane by lane).
@@ -12,13 +12,16 @@ struct HemoToolPose {
   vec3 side;         // the jaws' direction: orientation applied to (1, 0, 0)
   float opening;     // m: a grasper's jaw opening
   float speed;       // m/s: a bound on the speed of the tool's surface between the two keys
+  vec3 velocity;     // m/s: of the tip
+  vec3 spin;         // rad/s: the angular velocity (the material point at arm r moves at velocity + spin x r)
   bool cutting;      // a blade: the last key at or before t says it cuts
 };
 
-vec4 hemo_tool_shape(uint tool) { return toolData[2u * tool]; }
-vec4 hemo_tool_contact(uint tool) { return toolData[2u * tool + 1u]; }
+vec4 hemo_tool_shape(uint tool) { return toolData[HEMO_TOOL_RECORD_VEC4S * tool]; }
+vec4 hemo_tool_contact(uint tool) { return toolData[HEMO_TOOL_RECORD_VEC4S * tool + 1u]; }
+vec4 hemo_tool_grip(uint tool) { return toolData[HEMO_TOOL_RECORD_VEC4S * tool + 2u]; }
 vec4 hemo_tool_key(uint key, uint part) {
-  return toolData[2u * HEMO_TOOL_MAX_TOOLS + HEMO_TOOL_KEY_VEC4S * key + part];
+  return toolData[HEMO_TOOL_RECORD_VEC4S * HEMO_TOOL_MAX_TOOLS + HEMO_TOOL_KEY_VEC4S * key + part];
 }
 
 vec3 hemo_quat_rotate(vec4 q, vec3 v) {
@@ -54,7 +57,18 @@ HemoToolPose hemo_tool_pose(uint tool, float t) {
   const float s = moving ? clamp((t - ka.x) / span, 0.0, 1.0) : 0.0;
   HemoToolPose p;
   p.position = mix(ka.yzw, kb.yzw, s);
-  p.orientation = normalize(mix(qa, qb, s));
+  const vec4 m = mix(qa, qb, s);
+  p.orientation = normalize(m);
+  p.velocity = vec3(0.0);
+  p.spin = vec3(0.0);
+  if (moving) {
+    p.velocity = (kb.yzw - ka.yzw) / span;
+    // q = m / |m|: dq/dt = (dm - q (q . dm)) / |m|, dm = (qb - qa) / span; spin = 2 (dq/dt q*)
+    const vec4 dm = (qb - qa) / span;
+    const vec4 q = p.orientation;
+    const vec4 dq = (dm - q * dot(q, dm)) / length(m);
+    p.spin = 2.0 * (q.w * dq.xyz - dq.w * q.xyz + cross(q.xyz, dq.xyz));
+  }
   p.axis = hemo_quat_rotate(p.orientation, vec3(0.0, 0.0, 1.0));
   p.side = hemo_quat_rotate(p.orientation, vec3(1.0, 0.0, 0.0));
   const float oa = hemo_tool_key(first + a, 2u).x, ob = hemo_tool_key(first + b, 2u).x;

@@ -8,7 +8,7 @@
 // quaternion) interpolated between the two keyframes around t (linear, and normalised linear
 // for the quaternion), held before the first and after the last.
 #define HEMO_TOOL_MAX_TOOLS 8
-#define HEMO_TOOL_MAX_KEYS 42  // per tool
+#define HEMO_TOOL_MAX_KEYS 41  // per tool
 #define HEMO_TOOL_KIND_PROBE 0
 #define HEMO_TOOL_KIND_BLADE 1  // a capsule whose segment (the edge) cuts while its keys say so
 // Two jaws, rounded plates: the points within radius of the rectangles from the tip
@@ -19,20 +19,34 @@
 // The tools buffer, read as a uniform block of HEMO_TOOL_DATA_VEC4S vec4 (16 KiB, the least
 // maxUniformBufferRange Vulkan allows): every invocation evaluates the poses it needs from it
 // (a few uniform reads), so no pass of its own computes them.
-//   [2k], [2k + 1] for tool k < HEMO_TOOL_MAX_TOOLS:
+//   [3k], [3k + 1], [3k + 2] for tool k < HEMO_TOOL_MAX_TOOLS:
 //           vec4 shape (kind, radius m, length m, contact distance D m)
 //           vec4 contact (Psi m/s^2, first key, key count, a grasper's jaw half-width m)
 //           (first key and count as floats)
-//   [2 HEMO_TOOL_MAX_TOOLS + 3j], [... + 1], [... + 2] for key j:
+//           vec4 grip (a grasper's grip stiffness k_g N/m (0: it does not grip), the wall's
+//           time-step factor C, 0, 0)
+//   [3 HEMO_TOOL_MAX_TOOLS + 3j], [... + 1], [... + 2] for key j:
 //           vec4 (t s, position xyz m), vec4 orientation (x, y, z, w),
 //           vec4 (jaw opening m, cutting 0/1, 0, 0): a blade cuts from a key with cutting 1 to
 //           the next key
+#define HEMO_TOOL_RECORD_VEC4S 3
 #define HEMO_TOOL_KEY_VEC4S 3
 #define HEMO_TOOL_DATA_VEC4S 1024
 // The contact force (docs/physics.md, "Tools"): a particle whose distance x to the tool's
 // surface is below D (inside the tool: x <= 0) is pushed along the surface normal with the
 // acceleration Psi (1 - q) / sqrt(q), q = max(x / 2h, 1e-3): the normal part of the boundary
 // repulsion, on an exact surface (so no tangential weight). The tool takes the opposite force.
+//
+// Grasping: a free wall point within D of both jaws of a grasper that grips (k_g > 0) is held
+// by it. Its grip record (by wall id) then keeps where, in the jaws' plane, it was first
+// squeezed: (a, b), its coordinates along the tool's axis and across the jaws (along
+// axis x side), and the tool. While it stays squeezed, a critically damped spring pulls it
+// to that anchor within the jaws' plane, a = P (w^2 (anchor - x) + 2 w (v_anchor - v)),
+// w^2 = k_g / m, P the projection onto the plane, v_anchor the velocity of the tool's
+// material point at x; across the plane only the jaws' push acts. Out of the squeeze, the
+// record is cleared (the jaws let go). The tool takes the opposite force, and the gripped
+// point's own limit C sqrt(m / k_g) bounds the time step. Record: vec4 (a m, b m, 0, tool + 1;
+// 0: not gripped).
 
 // tool/contact.comp: one invocation per slot of the moving ones (fluid and wall particles;
 // anchored wall points are left out). Adds the tools' accelerations to accel (and, with the
@@ -58,7 +72,8 @@
 #define HEMO_TOOLC_BINDING_PARTIAL_COUNT 10  // uint
 #define HEMO_TOOLC_BINDING_DT_PARTIALS 11
 #define HEMO_TOOLC_BINDING_DT_COUNTS 12
-#define HEMO_TOOLC_BINDING_COUNT 13
+#define HEMO_TOOLC_BINDING_GRIPS 13       // vec4 per wall point id (the grip record), read and written
+#define HEMO_TOOLC_BINDING_COUNT 14
 
 // tool/cut.comp (scenes with a blade and a vessel): one invocation per spring; an unbroken
 // spring whose segment (its ends' positions, minimum image) crosses the surface a cutting

@@ -2,7 +2,8 @@
 // The tools' contact with the fluid and the wall (interface/tool.h): each particle within the
 // contact distance D of a tool's surface is pushed out along the surface normal, and the tool
 // takes the opposite force (and its torque about the tool's position), summed per SIMD group
-// for tool/reduce.comp (no float atomics: the sums' order is fixed).
+// for sph/dt_reduce.comp (no float atomics: the sums' order is fixed). A grasper's jaws grip
+// the free wall points they squeeze (interface/tool.h, "Grasping").
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -26,6 +27,7 @@ layout(std430, binding = HEMO_TOOLC_BINDING_PARTIALS) writeonly buffer Partials 
 layout(std430, binding = HEMO_TOOLC_BINDING_PARTIAL_COUNT) writeonly buffer PartialCount { uint partialCount; };
 layout(std430, binding = HEMO_TOOLC_BINDING_DT_PARTIALS) writeonly buffer DtPartials { vec2 dtPartials[]; };
 layout(std430, binding = HEMO_TOOLC_BINDING_DT_COUNTS) writeonly buffer DtCounts { uint dtCounts[3]; };
+layout(std430, binding = HEMO_TOOLC_BINDING_GRIPS) buffer Grips { vec4 grips[]; };
 layout(push_constant) uniform Push {
   uint n;        // the moving slots [0, n)
   uint idCount;  // wall points (ids below it have a record in wallInfo)
@@ -42,14 +44,15 @@ layout(push_constant) uniform Push {
 // The push of one jaw or capsule on a particle at separation `arm` from the tool's tip
 // (m/s^2): the points within `radius` of the rectangle from `base` spanned by `axis` (length
 // `len`) and `lateral` (half-width `halfWidth` either side); half-width 0: a capsule.
+// `gap` gets the distance to the surface.
 vec3 slabPush(vec3 arm, vec3 base, vec3 axis, vec3 lateral, float len, float halfWidth, float radius, float reach,
-              float psi) {
+              float psi, out float gap) {
   const vec3 rel = arm - base;
   const float along = clamp(dot(rel, axis), 0.0, len);
   const float across = clamp(dot(rel, lateral), -halfWidth, halfWidth);
   const vec3 off = rel - along * axis - across * lateral;  // from the nearest point of the rectangle
   const float dist = length(off);
-  const float gap = dist - radius;      // to the surface; <= 0 inside
+  gap = dist - radius;  // to the surface; <= 0 inside
   if (!(gap < reach)) {
     return vec3(0.0);
   }
@@ -65,19 +68,35 @@ vec3 slabPush(vec3 arm, vec3 base, vec3 axis, vec3 lateral, float len, float hal
 }
 
 // The acceleration tool k gives a particle at x (m/s^2), and the particle's separation from
-// the tool's tip (for the torque). A grasper's two jaws each push as a rounded plate.
-vec3 contactAccel(uint k, HemoToolPose pose, vec3 x, out vec3 arm) {
+// the tool's tip (for the torque). A grasper's two jaws each push as a rounded plate;
+// `squeezed` says whether the point lies within the contact distance of both.
+vec3 contactAccel(uint k, HemoToolPose pose, vec3 x, out vec3 arm, out bool squeezed) {
   const vec4 shape = hemo_tool_shape(k);  // (kind, radius, length, D)
   const vec4 contact = hemo_tool_contact(k);  // (Psi, first key, keys, jaw half-width)
   const vec3 d = x - pose.position;
   arm = d - params.period.xyz * round(d * params.invPeriod.xyz);  // minimum image (period 0: none)
+  float gap, other;
+  squeezed = false;
   if (uint(shape.x) != HEMO_TOOL_KIND_GRASPER) {
-    return slabPush(arm, vec3(0.0), pose.axis, pose.side, shape.z, 0.0, shape.y, shape.w, contact.x);
+    return slabPush(arm, vec3(0.0), pose.axis, pose.side, shape.z, 0.0, shape.y, shape.w, contact.x, gap);
   }
   const vec3 lateral = cross(pose.axis, pose.side);
   const vec3 side = (0.5 * pose.opening + shape.y) * pose.side;
-  return slabPush(arm, side, pose.axis, lateral, shape.z, contact.w, shape.y, shape.w, contact.x) +
-         slabPush(arm, -side, pose.axis, lateral, shape.z, contact.w, shape.y, shape.w, contact.x);
+  const vec3 push = slabPush(arm, side, pose.axis, lateral, shape.z, contact.w, shape.y, shape.w, contact.x, gap) +
+                    slabPush(arm, -side, pose.axis, lateral, shape.z, contact.w, shape.y, shape.w, contact.x, other);
+  squeezed = gap < shape.w && other < shape.w;
+  return push;
+}
+
+// The grip's pull on a point of mass `mass` at separation `arm` from the tip, moving at v,
+// held at `anchor` (along the axis, across the jaws) by grasper k (interface/tool.h).
+vec3 gripAccel(uint k, HemoToolPose pose, vec3 arm, vec3 v, vec2 anchor, float mass) {
+  const float omega = sqrt(hemo_tool_grip(k).x / mass);
+  const vec3 lateral = cross(pose.axis, pose.side);
+  const vec3 slip = pose.velocity + cross(pose.spin, arm) - v;  // the jaw's material point against the point
+  const float along = omega * omega * (anchor.x - dot(arm, pose.axis)) + 2.0 * omega * dot(slip, pose.axis);
+  const float across = omega * omega * (anchor.y - dot(arm, lateral)) + 2.0 * omega * dot(slip, lateral);
+  return along * pose.axis + across * lateral;
 }
 
 void main() {
@@ -88,6 +107,7 @@ void main() {
   const float t = clocks[pc.clockIn].time;
   float mass = 0.0;
   bool wall = false;
+  uint id = ~0u;
   vec3 x = vec3(0.0);
   if (slot < pc.n) {
     const uint kind = uint(texelFetch(velocitiesT, int(slot)).w);
@@ -97,26 +117,59 @@ void main() {
       mass = xm.w;
     } else if (kind == HEMO_KIND_WALL) {
       wall = true;
-      const uint id = texelFetch(idsT, int(slot)).x;
+      id = texelFetch(idsT, int(slot)).x;
       mass = xm.w;
       if (id < pc.idCount) {
         const vec4 info = texelFetch(wallInfoT, int(id));
         mass = info.y != 0.0 ? 0.0 : info.x;  // anchored points do not move
+      } else {
+        id = ~0u;
       }
     }
   }
+  // a free wall point of the network may be gripped: its record, and the grasper that squeezes it
+  const bool grippable = id != ~0u && mass > 0.0;
+  const vec4 record = grippable ? grips[id] : vec4(0.0);
+  const uint holder = uint(record.w);  // tool + 1, 0: none
+  uint gripper = 0u;                 // tool + 1 that grips it now
   vec3 total = vec3(0.0);
   uint touched = 0u;
   for (uint k = 0u; k < pc.tools; ++k) {
     vec3 arm;
-    const vec3 push = mass > 0.0 ? contactAccel(k, hemo_tool_pose(k, t), x, arm) : vec3(0.0);
+    bool squeezed = false;
+    const vec3 push = mass > 0.0 ? contactAccel(k, hemo_tool_pose(k, t), x, arm, squeezed) : vec3(0.0);
     if (push != vec3(0.0)) {
       touched |= 1u << k;
       total += push;
     }
+    // the grasper that holds it keeps it while it squeezes it, else the first that squeezes it
+    if (grippable && squeezed && hemo_tool_grip(k).x > 0.0 && (gripper == 0u || k + 1u == holder)) {
+      gripper = k + 1u;
+    }
   }
+  vec3 grip = vec3(0.0);
   float limit = 0.0;
   bool valid = false;
+  if (grippable) {
+    vec2 anchor = record.xy;
+    if (gripper != 0u) {
+      const uint k = gripper - 1u;
+      const HemoToolPose pose = hemo_tool_pose(k, t);
+      vec3 d = x - pose.position;
+      d -= params.period.xyz * round(d * params.invPeriod.xyz);
+      if (gripper != holder) {  // gripped now: where it is
+        anchor = vec2(dot(d, pose.axis), dot(d, cross(pose.axis, pose.side)));
+      }
+      grip = gripAccel(k, pose, d, texelFetch(velocitiesT, int(slot)).xyz, anchor, mass);
+      touched |= 1u << k;
+      total += grip;
+      limit = hemo_tool_grip(k).y * sqrt(mass / hemo_tool_grip(k).x);
+      valid = true;
+    }
+    if (gripper != holder) {
+      grips[id] = gripper != 0u ? vec4(anchor, 0.0, float(gripper)) : vec4(0.0);
+    }
+  }
   if (touched != 0u) {
     const vec4 before = accel[slot];
     const vec3 after = before.xyz + total;
@@ -124,7 +177,8 @@ void main() {
     if (pc.held != 0u && wall) {
       held[slot].xyz += total;
     }
-    limit = params.cflForce * sqrt(params.h / max(length(after), 1.0e-30));
+    const float force = params.cflForce * sqrt(params.h / max(length(after), 1.0e-30));
+    limit = valid ? min(limit, force) : force;
     valid = true;
   }
   if (slot == 0u) {  // the tools' own limit: a surface moves at most D / 4 per step
@@ -145,7 +199,11 @@ void main() {
     if (subgroupAny((touched & (1u << k)) != 0u)) {
       // (computed again: an array of the pushes indexed by tool costs CPU devices more)
       vec3 arm = vec3(0.0);
-      const vec3 push = (touched & (1u << k)) != 0u ? contactAccel(k, hemo_tool_pose(k, t), x, arm) : vec3(0.0);
+      bool squeezed;
+      vec3 push = (touched & (1u << k)) != 0u ? contactAccel(k, hemo_tool_pose(k, t), x, arm, squeezed) : vec3(0.0);
+      if (k + 1u == gripper) {
+        push += grip;
+      }
       const vec3 onTool = -mass * push;
       force = vec4(subgroupAdd(onTool), 0.0);
       torque = vec4(subgroupAdd(cross(arm, onTool)), 0.0);

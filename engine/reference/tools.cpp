@@ -30,6 +30,17 @@ RefToolPose toolPose(const sim::ToolSpec& tool, double t) {
   p.position = pa + s * (pb - pa);
   glm::dquat q(qa.w + s * (qb.w - qa.w), qa.x + s * (qb.x - qa.x), qa.y + s * (qb.y - qa.y), qa.z + s * (qb.z - qa.z));
   p.orientation = glm::normalize(q);
+  if (moving) {
+    p.velocity = (pb - pa) / span;
+    // the derivative of q / |q| along the keys, and the spin 2 (dq/dt) q*
+    const glm::dquat dm((qb.w - qa.w) / span, (qb.x - qa.x) / span, (qb.y - qa.y) / span, (qb.z - qa.z) / span);
+    const glm::dquat& n = p.orientation;
+    const double along = dot4(n, dm), len = std::sqrt(dot4(q, q));
+    const glm::dquat dq((dm.w - n.w * along) / len, (dm.x - n.x * along) / len, (dm.y - n.y * along) / len,
+                        (dm.z - n.z * along) / len);
+    const glm::dquat w = dq * glm::conjugate(n);
+    p.spin = 2.0 * glm::dvec3(w.x, w.y, w.z);
+  }
   p.axis = p.orientation * glm::dvec3(0.0, 0.0, 1.0);
   p.side = p.orientation * glm::dvec3(1.0, 0.0, 0.0);
   const double oa = keys[a].jawOpening, ob = keys[b].jawOpening;
@@ -80,13 +91,13 @@ namespace {
 // The points within `radius` of the rectangle from `base` spanned by `axis` (length `len`)
 // and `lateral` (half-width either side; 0: a capsule), as tool/contact.comp.
 glm::dvec3 slabPush(const glm::dvec3& arm, const glm::dvec3& base, const glm::dvec3& axis, const glm::dvec3& lateral,
-                    double len, double halfWidth, double radius, double reach, double psi, double h) {
+                    double len, double halfWidth, double radius, double reach, double psi, double h, double& gap) {
   const glm::dvec3 rel = arm - base;
   const double along = std::clamp(glm::dot(rel, axis), 0.0, len);
   const double across = std::clamp(glm::dot(rel, lateral), -halfWidth, halfWidth);
   const glm::dvec3 off = rel - along * axis - across * lateral;
   const double dist = glm::length(off);
-  const double gap = dist - radius;
+  gap = dist - radius;
   if (!(gap < reach)) return glm::dvec3(0.0);
   glm::dvec3 normal;
   if (dist > 1e-6 * radius) {
@@ -103,40 +114,75 @@ glm::dvec3 slabPush(const glm::dvec3& arm, const glm::dvec3& base, const glm::dv
 }  // namespace
 
 glm::dvec3 toolAcceleration(const sim::ToolSpec& tool, const RefToolPose& pose, double psi, double h,
-                            const glm::dvec3& x, const glm::dvec3& period, glm::dvec3* armOut) {
+                            const glm::dvec3& x, const glm::dvec3& period, glm::dvec3* armOut, bool* squeezed) {
   glm::dvec3 arm = x - pose.position;
   for (int a = 0; a < 3; ++a) {
     if (period[a] > 0.0) arm[a] -= period[a] * std::round(arm[a] / period[a]);
   }
   if (armOut) *armOut = arm;
+  if (squeezed) *squeezed = false;
   const double len = tool.length, radius = tool.radius, reach = tool.contactDistance;
+  double gap = 0.0, other = 0.0;
   if (tool.kind != sim::ToolKind::Grasper) {
-    return slabPush(arm, glm::dvec3(0.0), pose.axis, pose.side, len, 0.0, radius, reach, psi, h);
+    return slabPush(arm, glm::dvec3(0.0), pose.axis, pose.side, len, 0.0, radius, reach, psi, h, gap);
   }
   const glm::dvec3 lateral = glm::cross(pose.axis, pose.side);
   const glm::dvec3 side = (0.5 * pose.opening + radius) * pose.side;
   const double halfWidth = 0.5 * double(tool.jawWidth);
-  return slabPush(arm, side, pose.axis, lateral, len, halfWidth, radius, reach, psi, h) +
-         slabPush(arm, -side, pose.axis, lateral, len, halfWidth, radius, reach, psi, h);
+  const glm::dvec3 push = slabPush(arm, side, pose.axis, lateral, len, halfWidth, radius, reach, psi, h, gap) +
+                          slabPush(arm, -side, pose.axis, lateral, len, halfWidth, radius, reach, psi, h, other);
+  if (squeezed) *squeezed = gap < reach && other < reach;
+  return push;
 }
 
 RefToolContact toolContact(const std::vector<sim::ToolSpec>& tools, double t, const std::vector<glm::dvec3>& x,
-                           const std::vector<double>& mass, double psiPerScale, double h, const glm::dvec3& period) {
+                           const std::vector<double>& mass, double psiPerScale, double h, const glm::dvec3& period,
+                           RefGrips* grips) {
   RefToolContact r;
   r.accel.assign(x.size(), glm::dvec3(0.0));
   r.force.assign(tools.size(), glm::dvec3(0.0));
   r.torque.assign(tools.size(), glm::dvec3(0.0));
   for (const sim::ToolSpec& tool : tools) r.poses.push_back(toolPose(tool, t));
+  if (grips) grips->limit.assign(x.size(), 0.0);
   for (std::size_t i = 0; i < x.size(); ++i) {
     if (!(mass[i] > 0.0)) continue;
+    const bool grippable = grips && grips->grippable[i];
+    const std::size_t holder = grippable ? std::size_t(grips->record[i].w) : 0;  // tool + 1
+    std::size_t gripper = 0;
     for (std::size_t k = 0; k < tools.size(); ++k) {
       glm::dvec3 arm;
-      const glm::dvec3 a =
-          toolAcceleration(tools[k], r.poses[k], double(tools[k].contactScale) * psiPerScale, h, x[i], period, &arm);
+      bool squeezed = false;
+      const glm::dvec3 a = toolAcceleration(tools[k], r.poses[k], double(tools[k].contactScale) * psiPerScale, h, x[i],
+                                            period, &arm, &squeezed);
       r.accel[i] += a;
       r.force[k] -= mass[i] * a;
       r.torque[k] += glm::cross(arm, -mass[i] * a);
+      // the holder keeps it while it squeezes it, else the first grasper that squeezes it
+      if (grippable && squeezed && tools[k].gripStiffness > 0.0f && (gripper == 0 || k + 1 == holder)) gripper = k + 1;
     }
+    if (!grippable) continue;
+    if (gripper == 0) {
+      grips->record[i] = glm::dvec4(0.0);
+      continue;
+    }
+    const std::size_t k = gripper - 1;
+    const RefToolPose& pose = r.poses[k];
+    glm::dvec3 arm = x[i] - pose.position;
+    for (int a = 0; a < 3; ++a) {
+      if (period[a] > 0.0) arm[a] -= period[a] * std::round(arm[a] / period[a]);
+    }
+    const glm::dvec3 lateral = glm::cross(pose.axis, pose.side);
+    if (gripper != holder) grips->record[i] = glm::dvec4(glm::dot(arm, pose.axis), glm::dot(arm, lateral), 0.0, double(gripper));
+    const glm::dvec4& anchor = grips->record[i];
+    const double omega = std::sqrt(double(tools[k].gripStiffness) / mass[i]);
+    const glm::dvec3 slip = pose.velocity + glm::cross(pose.spin, arm) - grips->velocity[i];
+    const glm::dvec3 a =
+        (omega * omega * (anchor.x - glm::dot(arm, pose.axis)) + 2.0 * omega * glm::dot(slip, pose.axis)) * pose.axis +
+        (omega * omega * (anchor.y - glm::dot(arm, lateral)) + 2.0 * omega * glm::dot(slip, lateral)) * lateral;
+    r.accel[i] += a;
+    r.force[k] -= mass[i] * a;
+    r.torque[k] += glm::cross(arm, -mass[i] * a);
+    grips->limit[i] = grips->timeStepFactor * std::sqrt(mass[i] / tools[k].gripStiffness);
   }
   return r;
 }

@@ -150,13 +150,15 @@ const std::vector<Field>& schema() {
       {"tools", Kind::Objects, "", 0, kInf, false, Json::array(), "Surgical tools (at most 8): rigid bodies moved along keyframed paths that push the blood and the vessel wall out of their way and feel the force back (docs/physics.md, \"Tools\"). hemo-run writes each tool's force per step to DIR/tools.csv.", {},
        {
            {"name", Kind::String, "", 0, 0, false, nullptr, "The tool's name, reported in outputs."},
-           {"kind", Kind::Choice, "", 0, 0, false, "probe", "A probe: a capsule, the segment from the tip along the tool's +z axis grown by radius_m (a sphere when length_m is 0). A blade: a probe whose segment, of length_m > 0, is an edge that cuts every spring it sweeps through while its keyframes say so (path[].cutting). A grasper: two such capsules, the jaws, along the tool's +z axis on either side of it along its +x axis, the gap between their surfaces keyed (path[].jaw_opening_m): closing them squeezes what lies between (a clamp).", {"probe", "blade", "grasper"}},
+           {"kind", Kind::Choice, "", 0, 0, false, "probe", "A probe: a capsule, the segment from the tip along the tool's +z axis grown by radius_m (a sphere when length_m is 0). A blade: a probe whose segment, of length_m > 0, is an edge that cuts every spring it sweeps through while its keyframes say so (path[].cutting). A grasper: two jaws (capsules, or rounded plates with jaw_width_m) along the tool's +z axis on either side of it along its +x axis, the gap between their surfaces keyed (path[].jaw_opening_m): closing them squeezes what lies between (a clamp) and grips the wall points they squeeze (grip).", {"probe", "blade", "grasper"}},
            {"radius_m", Kind::Number, "m", 0, 1e3, true, nullptr, "Radius of the probe's capsule."},
            {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of its shaft from the tip along the tool's +z axis (0: a sphere)."},
            {"contact_distance_m", Kind::Number, "m", 0, 1e3, false, 0.0, "D: particles closer than this to the tool's surface (or inside it) are pushed out along its normal (0: the particle spacing dp)."},
            {"jaw_width_m", Kind::Number, "m", 0, 1e3, false, 0.0, "A grasper's jaws are rounded plates this wide (along the tool's y axis), each the points within radius_m of a rectangle length_m by jaw_width_m; 0: capsules. Flat jaws squeeze what they hold instead of pushing it aside."},
+           {"grip", Kind::Bool, "", 0, 0, false, true, "A grasper grips the free wall points that lie within contact_distance_m of both its jaws: each is held where the jaws took it, in the jaws' plane, by a critically damped spring of grip_stiffness_N_m, so it follows the jaws until they open again. false: the jaws squeeze but do not hold. Only for graspers."},
+           {"grip_stiffness_N_m", Kind::Number, "N/m", 0, 1e12, false, 0.0, "The grip's spring (0: the vessel's spring stiffness, vessel.stiffness_N_m or the one fitted to youngs_modulus_Pa). A gripped point's step is at most vessel.time_step_factor sqrt(m / k)."},
            {"contact_scale", Kind::Number, "1", 0, 1e3, true, 0.01, "Psi = scale c0^2 / (2h) of the push Psi (1 - q) / sqrt(q), q = max(x / 2h, 1e-3), x the distance to the surface: the boundary repulsion's law, on the tool's exact surface."},
-           {"path", Kind::Objects, "", 1, kInf, false, nullptr, "Keyframes, in time order (at most 42): the tool holds the first pose before the first and the last after the last; in between the tip moves linearly and the orientation turns by normalised linear interpolation (under 90 degrees from key to key).", {},
+           {"path", Kind::Objects, "", 1, kInf, false, nullptr, "Keyframes, in time order (at most 41): the tool holds the first pose before the first and the last after the last; in between the tip moves linearly and the orientation turns by normalised linear interpolation (under 90 degrees from key to key).", {},
             {
                 {"time_s", Kind::Number, "s", 0, 1e6, false, nullptr, "Time of the keyframe."},
                 {"position_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Where the tip is; inside the domain."},
@@ -507,7 +509,7 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   s.vessel = w;
 }
 
-void parseTools(const Checker& c, const Json& tools, Scene& s) {
+void parseTools(const Checker& c, const Json& tools, const Json& raw, Scene& s) {
   if (tools.size() > HEMO_TOOL_MAX_TOOLS) {
     c.fail("tools", "at most " + std::to_string(HEMO_TOOL_MAX_TOOLS) + " tools, got " + std::to_string(tools.size()));
   }
@@ -533,6 +535,15 @@ void parseTools(const Checker& c, const Json& tools, Scene& s) {
     tool.contactScale = t["contact_scale"].get<float>();
     tool.jawWidth = t["jaw_width_m"].get<float>();
     if (tool.jawWidth > 0.0f && tool.kind != sim::ToolKind::Grasper) c.fail(p + ".jaw_width_m", "only a grasper has jaws");
+    const bool grip = t["grip"].get<bool>();
+    const float gripStiffness = t["grip_stiffness_N_m"].get<float>();
+    const bool gripGiven = k < raw.size() && raw[k].is_object() && raw[k].contains("grip");
+    if (tool.kind != sim::ToolKind::Grasper && ((gripGiven && grip) || gripStiffness != 0.0f)) {
+      c.fail(p + (gripStiffness != 0.0f ? ".grip_stiffness_N_m" : ".grip"), "only a grasper grips (tools[].kind \"grasper\")");
+    }
+    if (tool.kind == sim::ToolKind::Grasper && grip) {  // (without a vessel there is nothing to grip)
+      tool.gripStiffness = gripStiffness > 0.0f ? gripStiffness : s.vessel ? s.vessel->stiffness : 0.0f;
+    }
     if (tool.contactDistance > s.sph.supportRadius()) {
       c.fail(p + ".contact_distance_m", "must not exceed the kernel support 2h = " + fmt(s.sph.supportRadius()) + " m");
     }
@@ -757,7 +768,7 @@ Scene parseScene(const std::string& text, const std::string& source) {
              "its " + std::to_string(s.tanks[k].layers) + " layers of boundary particles reach outside the domain");
     }
   }
-  parseTools(c, j["tools"], s);
+  parseTools(c, j["tools"], raw.contains("tools") ? raw["tools"] : Json::array(), s);
   if (s.vessel && s.vessel->substeps > 1 && s.sph.integrator != sim::Integrator::SymplecticEuler) {
     c.fail("vessel.substeps", "above 1 needs time.integrator \"symplectic_euler\" (the wall's substeps are symplectic Euler)");
   }

@@ -941,6 +941,7 @@ void SphSolver::attachTools(const std::vector<ToolSpec>& tools) {
                             wall_ ? &wall_->pointInfo() : nullptr,
                             wall_ ? wall_->pointCount() : 0u,
                             wall_ && wall_->substeps() > 1 ? &wall_->held() : nullptr,
+                            wall_ ? wall_->timeStepFactor() : 0.1f,
                             wall_ ? &wall_->springs() : nullptr,
                             wall_ ? &wall_->counters() : nullptr,
                             &grid_.slotOfId(),

@@ -68,6 +68,10 @@ void ToolSpec::validate() const {
   if (kind == ToolKind::Blade && !(length > 0.0f)) throw std::invalid_argument(n + ": a blade needs an edge (length > 0 m)");
   if (!(std::isfinite(jawWidth) && jawWidth >= 0.0f)) throw std::invalid_argument(n + ": the jaw width must be >= 0 (m)");
   if (kind != ToolKind::Grasper && jawWidth != 0.0f) throw std::invalid_argument(n + ": only a grasper has jaws (a jaw width)");
+  if (!(std::isfinite(gripStiffness) && gripStiffness >= 0.0f)) {
+    throw std::invalid_argument(n + ": the grip stiffness must be >= 0 (N/m)");
+  }
+  if (kind != ToolKind::Grasper && gripStiffness != 0.0f) throw std::invalid_argument(n + ": only a grasper grips (a grip stiffness)");
   validateKeys(n, keys);
   for (std::size_t k = 0; k < keys.size(); ++k) {
     const std::string at = n + ": keyframe " + std::to_string(k);
@@ -87,6 +91,7 @@ ToolContact::ToolContact(gpu::Context& context, const ParticleStore& particles, 
       tools_(std::move(tools)),
       psiPerScale_(psiPerScale),
       spacing_(spacing),
+      timeStepFactor_(buffers.timeStepFactor),
       maxSteps_(std::max(maxStepsPerBatch, 1u)),
       wallPoints_(buffers.wallInfo ? buffers.wallPoints : 0u),
       stride_(0) {
@@ -98,13 +103,21 @@ ToolContact::ToolContact(gpu::Context& context, const ParticleStore& particles, 
     if (t.contactDistance == 0.0f) t.contactDistance = spacing_;
     t.validate();
   }
-  static_assert(HEMO_TOOL_MAX_TOOLS * (2 + HEMO_TOOL_KEY_VEC4S * HEMO_TOOL_MAX_KEYS) <= HEMO_TOOL_DATA_VEC4S);
+  if (!(std::isfinite(timeStepFactor_) && timeStepFactor_ > 0.0f)) {
+    throw std::invalid_argument("tools: the wall's time-step factor must be positive");
+  }
+  static_assert(HEMO_TOOL_MAX_TOOLS * (HEMO_TOOL_RECORD_VEC4S + HEMO_TOOL_KEY_VEC4S * HEMO_TOOL_MAX_KEYS) <=
+                HEMO_TOOL_DATA_VEC4S);
   toolData_ = gpu::Buffer(context, HEMO_TOOL_DATA_VEC4S * 16, gpu::MemoryUse::Device, "tools and keyframes");
   log_ = gpu::Buffer(context, std::uint64_t(maxSteps_) * tools_.size() * sizeof(ToolSample), gpu::MemoryUse::Device,
                      "tool log");
   // (bound where the scene has no wall or no substeps: never read or written then)
   placeholder_ = gpu::Buffer(context, 16, gpu::MemoryUse::Device,
                              "tool placeholder (no wall)");
+  // every wall point starts free (a resumed run restores the records from its checkpoint)
+  grips_ = gpu::Buffer(context, std::max<std::uint64_t>(std::uint64_t(wallPoints_) * 16, 16), gpu::MemoryUse::Device,
+                       "tool grips");
+  grips_.upload(std::vector<glm::vec4>(std::max(wallPoints_, 1u), glm::vec4(0.0f)));
   upload();
 
   auto& cache = context.pipelines();
@@ -137,7 +150,8 @@ ToolContact::ToolContact(gpu::Context& context, const ParticleStore& particles, 
        {HEMO_TOOLC_BINDING_PARTIALS, &partials_},
        {HEMO_TOOLC_BINDING_PARTIAL_COUNT, &partialCount_},
        {HEMO_TOOLC_BINDING_DT_PARTIALS, &dtPartials_},
-       {HEMO_TOOLC_BINDING_DT_COUNTS, buffers.dtCounts}});
+       {HEMO_TOOLC_BINDING_DT_COUNTS, buffers.dtCounts},
+       {HEMO_TOOLC_BINDING_GRIPS, &grips_}});
   const bool blade = std::any_of(tools_.begin(), tools_.end(), [](const ToolSpec& t) { return t.kind == ToolKind::Blade; });
   if (blade && buffers.springs && buffers.springCount > 0) {
     springCount_ = buffers.springCount;
@@ -164,11 +178,13 @@ void ToolContact::upload() {
   for (std::size_t k = 0; k < tools_.size(); ++k) {
     const ToolSpec& t = tools_[k];
     const std::uint32_t first = static_cast<std::uint32_t>(k * HEMO_TOOL_MAX_KEYS);
-    data[2 * k] = glm::vec4(float(static_cast<std::uint32_t>(t.kind)), t.radius, t.length, t.contactDistance);
-    data[2 * k + 1] = glm::vec4(t.contactScale * psiPerScale_, float(first), float(t.keys.size()), 0.5f * t.jawWidth);
+    const std::size_t record = HEMO_TOOL_RECORD_VEC4S * k;
+    data[record] = glm::vec4(float(static_cast<std::uint32_t>(t.kind)), t.radius, t.length, t.contactDistance);
+    data[record + 1] = glm::vec4(t.contactScale * psiPerScale_, float(first), float(t.keys.size()), 0.5f * t.jawWidth);
+    data[record + 2] = glm::vec4(t.gripStiffness, timeStepFactor_, 0.0f, 0.0f);
     for (std::size_t j = 0; j < t.keys.size(); ++j) {
       const ToolKey& key = t.keys[j];
-      const std::size_t at = 2 * HEMO_TOOL_MAX_TOOLS + HEMO_TOOL_KEY_VEC4S * (first + j);
+      const std::size_t at = HEMO_TOOL_RECORD_VEC4S * HEMO_TOOL_MAX_TOOLS + HEMO_TOOL_KEY_VEC4S * (first + j);
       data[at] = glm::vec4(float(key.time), key.position);
       const glm::quat q = glm::normalize(key.orientation);
       data[at + 1] = glm::vec4(q.x, q.y, q.z, q.w);

@@ -50,11 +50,13 @@ gpu::Buffer clockAt(gpu::Context& context, const std::vector<ClockRecord>& recor
 }
 
 // 3,000 particles in a box periodic along x: fluid (mass), wall points (their own mass; some
-// anchored, some past the network's ids) and rigid boundary particles, around three tools: a
-// tilted capsule moving and turning between keyframes, a sphere across the periodic seam, and
-// a grasper whose flat jaws close while it moves and turns.
-// The pushes (added to random accelerations), the wall's held record, the time step's partials
-// and each tool's force, torque and pose match the twin.
+// anchored, some past the network's ids) and rigid boundary particles, around four tools: a
+// tilted capsule moving and turning between keyframes, a sphere across the periodic seam, a
+// grasper whose flat jaws close while it moves and turns, and a gripping one nearly closed,
+// moving and turning, with 400 of the particles between its jaws. The wall points' grip
+// records start random (free, held by it with a random anchor, or by another tool).
+// The pushes and grips (added to random accelerations), the wall's held record, the grip
+// records, the time step's partials and each tool's force, torque and pose match the twin.
 TEST_F(ToolTest, ContactMatchesReference) {
   auto rng = rngFor();
   std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -87,7 +89,17 @@ TEST_F(ToolTest, ContactMatchesReference) {
   grasper.keys = {{0.0, {0.025f, 0.03f, 0.01f}, axisAngle({0, 0, 1}, 0.4f), false, 0.012f},
                   {0.3, {0.025f, 0.032f, 0.012f}, axisAngle({0, 1, 0}, 0.5f), false, 0.002f}};
   tools.push_back(grasper);
-  const double t = 0.13;  // between the capsule's first two keys (and the grasper's)
+  sim::ToolSpec gripper = grasper;
+  gripper.name = "gripper";
+  gripper.radius = 0.001f;
+  gripper.length = 0.01f;
+  gripper.jawWidth = 0.004f;
+  gripper.gripStiffness = 3.0f;
+  gripper.keys = {{0.0, {0.01f, 0.01f, 0.03f}, axisAngle({1, 0, 1}, 0.2f), false, 0.0035f},
+                  {0.4, {0.012f, 0.008f, 0.026f}, axisAngle({1, 2, 0}, 0.6f), false, 0.002f}};
+  tools.push_back(gripper);
+  const double t = 0.13;  // between the capsule's first two keys (and the graspers')
+  const double timeStepFactor = 0.2;
 
   const std::uint32_t n = 3000, wallPoints = 900;
   std::vector<glm::vec4> pos(n), vel(n), acc(n), held(n);
@@ -95,8 +107,15 @@ TEST_F(ToolTest, ContactMatchesReference) {
   std::vector<glm::vec4> info(wallPoints);
   std::vector<glm::dvec3> x(n);
   std::vector<double> mass(n, 0.0);
+  const reference::RefToolPose gripPose = reference::toolPose(gripper, double(float(t)));
   for (std::uint32_t i = 0; i < n; ++i) {
     x[i] = glm::dvec3(glm::vec3(u(rng) * 0.04, u(rng) * 0.04, u(rng) * 0.04));
+    if (i < 400) {  // between the gripper's jaws (and a little beyond their edges)
+      const glm::dvec3 lateral = glm::cross(gripPose.axis, gripPose.side);
+      x[i] = glm::dvec3(glm::vec3(gripPose.position + (u(rng) * 1.1 - 0.05) * double(gripper.length) * gripPose.axis +
+                                  (u(rng) - 0.5) * 1.1 * double(gripper.jawWidth) * lateral +
+                                  (u(rng) - 0.5) * 0.6 * gripPose.opening * gripPose.side));
+    }
     const double r = u(rng);
     const std::uint32_t kind = r < 0.5 ? HEMO_KIND_FLUID : r < 0.9 ? HEMO_KIND_WALL : HEMO_KIND_BOUNDARY;
     const float sphMass = float(1e-5 * (0.5 + u(rng)));
@@ -115,6 +134,21 @@ TEST_F(ToolTest, ContactMatchesReference) {
   for (std::uint32_t i = 0; i < n; ++i) {
     if (uint32_t(vel[i].w) == HEMO_KIND_WALL && ids[i] < wallPoints) mass[i] = info[ids[i]].y != 0.0f ? 0.0 : info[ids[i]].x;
   }
+  // grip records by id: free, held by the gripper (its index + 1) at a random anchor, or by
+  // another tool
+  std::vector<glm::vec4> gripIn(wallPoints);
+  for (std::uint32_t id = 0; id < wallPoints; ++id) {
+    const double r = u(rng);
+    const float holder = r < 0.4 ? 0.0f : r < 0.75 ? 4.0f : r < 0.9 ? 3.0f : 1.0f;
+    gripIn[id] = holder == 0.0f ? glm::vec4(0.0f) : glm::vec4(float(u(rng) * 0.01), float((u(rng) - 0.5) * 0.004), 0.0f, holder);
+  }
+  reference::RefGrips refGrips;
+  refGrips.timeStepFactor = timeStepFactor;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    refGrips.grippable.push_back(uint32_t(vel[i].w) == HEMO_KIND_WALL && ids[i] < wallPoints && mass[i] > 0.0);
+    refGrips.velocity.push_back(glm::dvec3(glm::vec3(vel[i])));
+    refGrips.record.push_back(ids[i] < wallPoints ? glm::dvec4(gripIn[ids[i]]) : glm::dvec4(0.0));
+  }
 
   sim::ParticleStore store(ctx(), n);
   store.upload(pos, vel, ids);
@@ -130,15 +164,41 @@ TEST_F(ToolTest, ContactMatchesReference) {
   gpu::Buffer wallInfo(ctx(), wallPoints * 16, gpu::MemoryUse::Device, "wall info");
   wallInfo.upload(info);
   const double psiPerScale = double(s.soundSpeed) * s.soundSpeed / (2.0 * h);
-  sim::ToolContact contact(ctx(), store, {&accel, &paramsBuffer, &clock, &dtCounts, &wallInfo, wallPoints, &heldBuffer},
+  sim::ToolContact contact(ctx(), store,
+                           {&accel, &paramsBuffer, &clock, &dtCounts, &wallInfo, wallPoints, &heldBuffer, float(timeStepFactor)},
                            tools, float(psiPerScale), s.spacing, 4);
+  contact.grips().upload(gripIn);
   gpu::CommandRecorder rec(ctx());
   rec.begin();
   contact.record(rec, n, 1u, true);
   rec.end();
   rec.submitAndWait();
 
-  const reference::RefToolContact ref = reference::toolContact(tools, double(float(t)), x, mass, psiPerScale, h, period);
+  const reference::RefToolContact ref =
+      reference::toolContact(tools, double(float(t)), x, mass, psiPerScale, h, period, &refGrips);
+  // the grip records: the same holder, the anchor where it was or where the point is now
+  const auto gripOut = contact.grips().readback<glm::vec4>(wallPoints);
+  std::uint32_t gripped = 0, taken = 0, released = 0;
+  for (std::uint32_t i = 0; i < n; ++i) {
+    if (!refGrips.grippable[i]) continue;
+    const glm::dvec4& want = refGrips.record[i];
+    const glm::vec4& got = gripOut[ids[i]];
+    EXPECT_EQ(double(got.w), want.w) << "particle " << i;
+    EXPECT_NEAR(got.x, want.x, 1e-7) << "particle " << i;
+    EXPECT_NEAR(got.y, want.y, 1e-7) << "particle " << i;
+    gripped += want.w == 4.0;
+    taken += want.w == 4.0 && gripIn[ids[i]].w != 4.0f;
+    released += want.w == 0.0 && gripIn[ids[i]].w != 0.0f;
+  }
+  EXPECT_GT(gripped, 30u);
+  EXPECT_GT(taken, 5u);
+  EXPECT_GT(released, 100u);
+  // (ids past the network's and anchored points keep their records)
+  for (std::uint32_t id = 0; id < wallPoints; ++id) {
+    if (info[id].y != 0.0f) {
+      EXPECT_EQ(gripOut[id], gripIn[id]) << "anchored id " << id;
+    }
+  }
   const auto accOut = accel.readback<glm::vec4>(n);
   const auto heldOut = heldBuffer.readback<glm::vec4>(n);
   std::uint32_t touched = 0;
@@ -156,6 +216,7 @@ TEST_F(ToolTest, ContactMatchesReference) {
       const double after = glm::length(glm::dvec3(acc[i]) + ref.accel[i]);
       minLimit = std::min(minLimit, double(s.cflForce) * std::sqrt(h / after));
     }
+    if (refGrips.limit[i] > 0.0) minLimit = std::min(minLimit, refGrips.limit[i]);
   }
   EXPECT_GT(touched, 100u);
   EXPECT_LT(touched, n / 2);
@@ -406,6 +467,124 @@ TEST_F(ToolTest, ProbePressedIntoASpringSheetMeetsItsStiffness) {
   EXPECT_NEAR(f2 / w2, expected, 0.05 * expected);
 }
 
+// A grasper closed on the centre point of the pre-tensioned sheet above grips it (the point
+// lies within the contact distance of both capsule jaws, standing upright either side of it)
+// and lifts it: the grip's spring k_g in series with the sheet's stiffness K sets the lift,
+// u = w k_g / (k_g + K) for a jaw raised by w, and the force the tool feels, K u (both within
+// 5%). Opened, the jaws let go: the record clears and the sheet springs back.
+TEST_F(ToolTest, GrasperLiftsASpringSheetAgainstItsStiffnessAndLetsGo) {
+  const int n = 11;
+  const float dp = 0.01f, spacing = 4.0f * dp, z0 = 0.05f, k = 10.0f, mass = 1e-4f;
+  const double tension = double(k) * 0.1 * spacing;
+  sim::SphSettings s;
+  s.spacing = dp;
+  s.soundSpeed = 1.0f;
+  s.gravity = glm::vec3(0.0f);
+  s.maxTimeStep = 1.0f;
+  s.dampingRate = 60.0f;
+  s.dampingUntil = 1e6f;
+  std::vector<glm::vec4> pos, vel;
+  sim::SpringNetwork net;
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      pos.emplace_back(float(i) * spacing, float(j) * spacing, z0, s.particleMass());
+      vel.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL));
+      net.points.push_back({mass, i == 0 || j == 0 || i == n - 1 || j == n - 1});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const std::uint32_t id = std::uint32_t(j * n + i);
+      if (i + 1 < n) net.springs.push_back({id, id + 1, 0.9f * spacing, k, 0.0f, 3e38f});
+      if (j + 1 < n) net.springs.push_back({id, id + std::uint32_t(n), 0.9f * spacing, k, 0.0f, 3e38f});
+    }
+  }
+  const std::uint32_t centre = std::uint32_t((n / 2) * n + n / 2);
+  // Upright capsule jaws (the tool's default frame: shaft +z, jaws either side along x), the
+  // tip 10 mm below the sheet. Closed to 4 mm, the centre point lies 2 mm from each (within
+  // D = 3 mm of both), its neighbours 40 mm away out of reach. Raised by w1 = 0.5 mm, then
+  // by w2 = 1 mm, then opened.
+  const float mid = 5.0f * spacing, tip = z0 - 0.01f, w1 = 0.0005f, w2 = 0.001f;
+  const float kGrip = 2.0f;
+  sim::ToolSpec grasper;
+  grasper.name = "grasper";
+  grasper.kind = sim::ToolKind::Grasper;
+  grasper.radius = 0.004f;
+  grasper.length = 0.02f;
+  grasper.contactDistance = 0.003f;
+  grasper.contactScale = 0.26f;
+  grasper.gripStiffness = kGrip;
+  const glm::quat upright(1, 0, 0, 0);
+  grasper.keys = {{0.0, {mid, mid, tip}, upright, false, 0.03f},   {0.1, {mid, mid, tip}, upright, false, 0.004f},
+                  {0.15, {mid, mid, tip}, upright, false, 0.004f}, {0.25, {mid, mid, tip + w1}, upright, false, 0.004f},
+                  {0.5, {mid, mid, tip + w1}, upright, false, 0.004f}, {0.6, {mid, mid, tip + w2}, upright, false, 0.004f},
+                  {1.0, {mid, mid, tip + w2}, upright, false, 0.004f}, {1.05, {mid, mid, tip + w2}, upright, false, 0.03f}};
+
+  sim::ParticleStore store(ctx(), std::uint32_t(pos.size()));
+  store.upload(pos, vel);
+  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.45f), s, 256);
+  solver.attachWall(net);
+  solver.attachTools({grasper});
+  gpu::CommandRecorder rec(ctx());
+  rec.begin();
+  solver.recordReset(rec);
+  rec.end();
+  rec.submitAndWait();
+  std::uint32_t step = 0;
+  auto lift = [&]() {
+    const auto p = store.readPositions();
+    const auto ids = store.readIds();
+    for (std::size_t slot = 0; slot < ids.size(); ++slot) {
+      if (ids[slot] == centre) return double(p[slot].z) - z0;
+    }
+    return 0.0;
+  };
+  // Runs to `until` (s); over the last `window` s the mean tool force (z) and centre lift.
+  auto runTo = [&](double until, double window, double& force, double& up) {
+    double fSum = 0.0, wSum = 0.0;
+    int fCount = 0, wCount = 0;
+    while (solver.readClock().time < float(until)) {  // (the clock stops at float(until))
+      const double t0 = solver.readClock().time;
+      const std::uint32_t batch = t0 < until - window ? 256u : 16u;
+      rec.begin();
+      for (std::uint32_t b = 0; b < batch; ++b) solver.recordStep(rec, step++, b, float(until));
+      rec.end();
+      rec.submitAndWait();
+      if (t0 >= until - window) {
+        for (const sim::ToolSample& sample : solver.tools()->readLog(batch)) {
+          if (sample.force.w >= until - window && sample.force.w < until) fSum += sample.force.z, ++fCount;
+        }
+        wSum += lift(), ++wCount;
+      }
+    }
+    ASSERT_GT(fCount, 10);
+    force = fSum / fCount;
+    up = wSum / wCount;
+  };
+  const double sheet = sheetCentreStiffness(n, tension, spacing);
+  const double share = kGrip / (kGrip + sheet);
+  double f1 = 0, u1 = 0, f2 = 0, u2 = 0, f3 = 0, u3 = 0;
+  runTo(0.5, 0.05, f1, u1);
+  const auto grips = solver.tools()->grips().readback<glm::vec4>(net.points.size());
+  for (std::uint32_t id = 0; id < grips.size(); ++id) {
+    EXPECT_EQ(grips[id].w, id == centre ? 1.0f : 0.0f) << "id " << id << ": only the centre point is gripped";
+  }
+  runTo(1.0, 0.05, f2, u2);
+  runTo(1.4, 0.05, f3, u3);
+  std::printf("[tools] grip k %.3g N/m, sheet K %.5g N/m: lifted %.4g mm by %.3g (share %.4f, expected %.4f), F %.4g N "
+              "(K u %.4g); %.4g mm by %.3g (share %.4f), F %.4g N (K u %.4g); let go: %.3g mm, F %.3g N\n",
+              kGrip, sheet, u1 * 1e3, w1 * 1e3, u1 / w1, share, f1, sheet * u1, u2 * 1e3, w2 * 1e3, u2 / w2, f2,
+              sheet * u2, u3 * 1e3, f3);
+  EXPECT_NEAR(u1 / w1, share, 0.05 * share);
+  EXPECT_NEAR(u2 / w2, share, 0.05 * share);
+  // the sheet pulls the tool down (force z < 0)
+  EXPECT_NEAR(-f1, sheet * u1, 0.05 * sheet * u1);
+  EXPECT_NEAR(-f2, sheet * u2, 0.05 * sheet * u2);
+  for (const glm::vec4& g : solver.tools()->grips().readback<glm::vec4>(net.points.size())) EXPECT_EQ(g.w, 0.0f);
+  EXPECT_LT(std::abs(u3), 0.02 * u2);
+  EXPECT_LT(std::abs(f3), 1e-3 * std::abs(f2));
+}
+
 // A blade's cut against the twin: 4,000 random springs (some broken already) in a box periodic
 // along x; a blade whose edge moves and turns between two keys, cutting, and a probe that does
 // not cut. Every spring the edge swept through between the clock's last two times breaks
@@ -566,5 +745,93 @@ TEST_F(ToolTest, BladeDrawnAcrossATubeCutsItsPathAndTheBloodLeaves) {
   EXPECT_EQ(below, 0u) << "only through the cut";
 }
 
+// A clamp on a tube with flow: a periodic tube (32 mm, radius 1.5 mm) whose blood a body force
+// drives (a pressure gradient the clamp can hold, where the inflow's pump would set the flow
+// rate whatever the pressure). A grasper with flat jaws across it, open, lets the flow develop;
+// closed between 0.03 and 0.05 s, it squeezes the tube shut and grips its wall. The flux, the
+// blood's mean axial speed in the loop (the rate of its mean displacement, which on a closed
+// loop is every cross-section's flux averaged in time: a local rise or fall of the lumen's
+// volume near one section does not count), falls from its open value to under 5% of it.
+TEST_F(ToolTest, ClampClosedOnATubeStopsTheFlow) {
+  const nlohmann::json j = nlohmann::json::parse(R"({
+    "scene": "tube_clamp",
+    "particles": { "spacing_m": 5e-4, "neighbour_capacity": 256 },
+    "fluid": { "density_kg_m3": 1060.0, "viscosity_pa_s": 0.106, "expected_max_speed_m_s": 0.5,
+               "background_pressure_Pa": 300.0, "background_pressure_ramp_s": 0.002 },
+    "vessel": { "shape": "tube", "length_m": 0.032, "radius_m": 0.0015, "point_mass_kg": 2e-5,
+                "stiffness_N_m": 50.0, "damping_N_s_m": 0.005 },
+    "tools": [ { "name": "clamp", "kind": "grasper", "radius_m": 5e-4, "length_m": 0.008, "jaw_width_m": 0.001,
+                 "contact_scale": 0.1,
+                 "path": [ { "time_s": 0.0, "position_m": [0.016, 0.0, -0.004], "orientation_wxyz": [0.70710678, 0, 0, 0.70710678],
+                             "jaw_opening_m": 0.007 },
+                           { "time_s": 0.03, "position_m": [0.016, 0.0, -0.004], "orientation_wxyz": [0.70710678, 0, 0, 0.70710678],
+                             "jaw_opening_m": 0.007 },
+                           { "time_s": 0.05, "position_m": [0.016, 0.0, -0.004], "orientation_wxyz": [0.70710678, 0, 0, 0.70710678],
+                             "jaw_opening_m": 0.0005 } ] } ],
+    "forces": { "gravity_m_s2": [0, 0, 0], "body_force_m_s2": [20.0, 0, 0] },
+    "time": { "steps_per_batch": 64, "end_time_s": 0.12 },
+    "domain": { "min_m": [0.0, -0.008, -0.008], "max_m": [0.032, 0.008, 0.008], "periodic": ["x"] }
+  })");
+  const scene::Scene sc = scene::parseScene(j.dump(), "tube_clamp.json");
+  ASSERT_FLOAT_EQ(sc.tools[0].gripStiffness, 50.0f) << "a grasper grips with the vessel's spring stiffness by default";
+  sim::Simulation sim(ctx(), sc);
+  // the blood's mean axial displacement (each batch's steps, minimum image) and the net
+  // crossings of the lumen's section 8 mm past the jaws, against time
+  const float period = 0.032f, section = 0.024f;
+  std::vector<glm::vec4> last;
+  std::vector<double> times, shift, crossed;
+  std::uint32_t grippedMax = 0;
+  sim::RunOptions options;
+  options.onBatch = [&](const sim::Progress&) {
+    const sim::Snapshot snap = sim.snapshot();
+    if (!last.empty()) {
+      double sum = 0.0;
+      int count = 0, net = 0;
+      for (std::size_t i = 0; i < snap.positions.size(); ++i) {
+        if (std::uint32_t(snap.velocities[i].w) != HEMO_KIND_FLUID) continue;
+        const glm::vec4 a = last[i], b = snap.positions[i];
+        if (std::hypot(a.y, a.z) > 0.0035f || std::hypot(b.y, b.z) > 0.0035f) continue;  // (blood that left the tube)
+        const float dx = (b.x - a.x) - period * std::round((b.x - a.x) / period);
+        sum += dx;
+        ++count;
+        if (std::abs(b.x - a.x) < 0.5f * period && std::hypot(b.y, b.z) < 0.002f) {
+          net += (a.x < section && b.x >= section) ? 1 : (a.x >= section && b.x < section) ? -1 : 0;
+        }
+      }
+      times.push_back(sim.time());
+      shift.push_back((shift.empty() ? 0.0 : shift.back()) + sum / std::max(count, 1));
+      crossed.push_back((crossed.empty() ? 0.0 : crossed.back()) + net);
+    }
+    last = snap.positions;
+    if (sim.time() > 0.05) {
+      std::uint32_t gripped = 0;
+      for (const glm::vec4& g : sim.solver().tools()->grips().readback<glm::vec4>(sim.solver().wall()->pointCount())) {
+        gripped += g.w == 1.0f;
+      }
+      grippedMax = std::max(grippedMax, gripped);
+    }
+  };
+  sim.run(options);
+  // least-squares slopes over [from, to]
+  auto slope = [&](const std::vector<double>& y, double from, double to) {
+    double st = 0.0, sy = 0.0, stt = 0.0, sty = 0.0;
+    int n = 0;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+      if (times[i] < from || times[i] > to) continue;
+      st += times[i], sy += y[i], stt += times[i] * times[i], sty += times[i] * y[i], ++n;
+    }
+    return n > 2 ? (n * sty - st * sy) / (n * stt - st * st) : 0.0;
+  };
+  const double openSpeed = slope(shift, 0.015, 0.03), closedSpeed = slope(shift, 0.06, 0.12);
+  const double openCross = slope(crossed, 0.015, 0.03), closedCross = slope(crossed, 0.06, 0.12);
+  std::printf("[tools] clamp: the blood's mean speed open %.4g m/s, closed %.3g m/s (ratio %.4f); net crossings of the section "
+              "8 mm downstream open %.4g /s, closed %.3g /s (ratio %.3f); %u wall points gripped; %u escaped, %u broken "
+              "springs\n",
+              openSpeed, closedSpeed, closedSpeed / openSpeed, openCross, closedCross, closedCross / openCross, grippedMax,
+              sim.escapedParticles(), sim.brokenSprings());
+  EXPECT_GT(openSpeed, 0.04) << "the open tube carries the flow (Poiseuille: G R^2 / 8 nu = 0.056 m/s)";
+  EXPECT_LT(std::abs(closedSpeed), 0.05 * openSpeed);
+  EXPECT_GT(grippedMax, 20u) << "the jaws hold the wall they squeeze";
+}
 }  // namespace
 }  // namespace hemo::test

@@ -2,6 +2,7 @@
 #include "hemo/reference/analytic.hpp"
 #include "hemo/reference/neighbours.hpp"
 #include "hemo/reference/published.hpp"
+#include "hemo/reference/tools.hpp"
 
 #include <gtest/gtest.h>
 
@@ -85,3 +86,27 @@ TEST(ReferencePoiseuille, StartupSeriesHasTheRightLimits) {
 
 }  // namespace
 }  // namespace hemo::reference
+
+// The tool pose's velocity and spin against finite differences of the pose itself: the tip's
+// displacement, and the rotation q(t + d) q(t)^-1 over d, between two keys that move and turn.
+TEST(ReferenceTools, PoseVelocityAndSpinAreThePoseDerivatives) {
+  hemo::sim::ToolSpec tool;
+  tool.name = "t";
+  tool.radius = 0.001f;
+  tool.keys = {{0.1, {0.01f, 0.02f, 0.03f}, glm::angleAxis(0.3f, glm::normalize(glm::vec3(1, 1, 0)))},
+               {0.4, {0.02f, 0.015f, 0.01f}, glm::angleAxis(1.1f, glm::normalize(glm::vec3(0, 1, 2)))}};
+  for (const double t : {0.1, 0.17, 0.25, 0.39}) {
+    const double d = 1e-6;
+    const auto a = hemo::reference::toolPose(tool, t), b = hemo::reference::toolPose(tool, t + d);
+    const glm::dvec3 v = (b.position - a.position) / d;
+    EXPECT_LT(glm::length(a.velocity - v), 1e-6 * glm::length(v)) << t;
+    const glm::dquat r = b.orientation * glm::conjugate(a.orientation);
+    const double sign = r.w < 0.0 ? -1.0 : 1.0;
+    const glm::dvec3 spin = 2.0 * sign * glm::dvec3(r.x, r.y, r.z) / d;  // small rotation: vector part = angle/2 axis
+    EXPECT_GT(glm::length(spin), 1.0) << t;
+    EXPECT_LT(glm::length(a.spin - spin), 1e-5 * glm::length(spin)) << t;
+  }
+  // held before the first key and after the last
+  EXPECT_EQ(glm::length(hemo::reference::toolPose(tool, 0.05).spin), 0.0);
+  EXPECT_EQ(glm::length(hemo::reference::toolPose(tool, 0.5).velocity), 0.0);
+}

@@ -262,7 +262,8 @@ TEST(Scene, ShippedScenesLoad) {
 // default), and a blade with its cutting keys; keyframes out of order, an unknown kind, a tip
 // outside the domain, a non-positive radius, a zero or non-4 orientation, a turn of 90 degrees
 // between keys, a tip faster than sound, a probe's key that cuts, a blade without an edge, a
-// duplicate name and more than 8 tools each get an error naming the field.
+// grip on a tool that is not a grasper, a negative grip stiffness, a duplicate name and more
+// than 8 tools each get an error naming the field.
 TEST(Scene, ToolsAreParsedAndBadOnesNamed) {
   Json j = validScene();
   j["tools"] = Json::parse(R"([{ "name": "probe", "radius_m": 0.003, "length_m": 0.02,
@@ -308,7 +309,17 @@ TEST(Scene, ToolsAreParsedAndBadOnesNamed) {
     const Scene g = parseScene(k.dump(), "ok.json");
     EXPECT_EQ(g.tools[0].kind, sim::ToolKind::Grasper);
     EXPECT_FLOAT_EQ(g.tools[0].keys[0].jawOpening, 0.004f);
+    EXPECT_EQ(g.tools[0].gripStiffness, 0.0f) << "no vessel: nothing to grip, no default stiffness";
+    k["tools"][0]["grip_stiffness_N_m"] = 20.0;
+    EXPECT_FLOAT_EQ(parseScene(k.dump(), "ok.json").tools[0].gripStiffness, 20.0f);
+    k["tools"][0]["grip"] = false;
+    EXPECT_EQ(parseScene(k.dump(), "ok.json").tools[0].gripStiffness, 0.0f);
+    k["tools"][0]["grip_stiffness_N_m"] = -1.0;
+    expectError(k, {"tools[0].grip_stiffness_N_m"});
   }
+  expectError(added("/grip", true), {"tools[0].grip", "only a grasper grips"});
+  expectError(added("/grip_stiffness_N_m", 5.0), {"tools[0].grip_stiffness_N_m", "only a grasper grips"});
+  EXPECT_EQ(parseScene(added("/grip", false).dump(), "ok.json").tools[0].gripStiffness, 0.0f);
   {
     Json k = j;
     k["tools"][0]["kind"] = "blade";

@@ -29,8 +29,9 @@ namespace hemo::sim {
 
 // A probe pushes; a blade is a probe whose segment, its edge, also cuts: while its keys say
 // so, every spring the edge sweeps through breaks (interface/tool.h, tool/cut.comp).
-// A grasper has two capsule jaws side by side, the gap between them keyed (its jaw opening):
-// closing it squeezes what lies between, a vessel clamped shut for one.
+// A grasper has two jaws side by side, the gap between them keyed (its jaw opening): closing
+// it squeezes what lies between, a vessel clamped shut for one, and grips the wall points it
+// squeezes (they follow the jaws in the jaws' plane until the jaws open again).
 enum class ToolKind : std::uint32_t { Probe = 0, Blade = 1, Grasper = 2 };
 
 // A pose of the tool at a time. The tool's own frame: the tip at the origin, the shaft along +z.
@@ -50,6 +51,9 @@ struct ToolSpec {
   float contactDistance = 0.0f;  // m: D, the push's reach beyond the surface
   float contactScale = 0.01f;    // Psi = scale c0^2 / (2h), as the boundary repulsion's
   float jawWidth = 0.0f;         // m: a grasper's jaws are rounded plates this wide (0: capsules)
+  // N/m: the spring that holds a gripped wall point to where the jaws took it (a grasper;
+  // 0: its jaws squeeze but do not grip). interface/tool.h, "Grasping".
+  float gripStiffness = 0.0f;
   // At least one; times strictly increasing. Before the first key the tool holds the first
   // pose, after the last the last; in between the pose is interpolated (position linearly,
   // orientation by normalised linear interpolation, which needs a turn of under 90 degrees
@@ -58,6 +62,7 @@ struct ToolSpec {
   // Throws std::invalid_argument naming the tool and the problem (no keys, too many, times
   // out of order, a turn of 90 degrees or more between keys, a non-unit orientation,
   // non-positive radius or contact distance, negative length, a blade without an edge, a
+  // negative grip stiffness or one on a tool other than a grasper, a
   // key that cuts on a tool other than a blade, a negative jaw opening or one on a tool other
   // than a grasper, non-finite values).
   void validate() const;
@@ -81,6 +86,7 @@ struct ToolBuffers {
   const gpu::Buffer* wallInfo;      // vec4 per wall point id (mass, anchored); null without a wall
   std::uint32_t wallPoints;         // ids with a record in wallInfo
   const gpu::Buffer* held;          // the wall's held force (substeps); null without
+  float timeStepFactor = 0.1f;      // the wall's C: a gripped point's step is at most C sqrt(m / k_grip)
   // For blades: the wall's springs (GpuSpring records, broken flags written), its counters, the
   // slot of each particle id and the number of springs; null / 0 without a wall.
   const gpu::Buffer* springs = nullptr;
@@ -121,16 +127,21 @@ class ToolContact {
   std::vector<ToolSample> readLog(std::uint32_t steps) const;
   const std::vector<ToolSpec>& tools() const { return tools_; }
   std::uint32_t count() const { return static_cast<std::uint32_t>(tools_.size()); }
-  // Its buffers, for a checkpoint (the keyframes may have been changed since the scene's).
-  void checkpointBuffers(std::vector<gpu::Buffer*>& out) { out.insert(out.end(), {&toolData_}); }
+  // The grip records, one vec4 per wall point id (interface/tool.h, "Grasping"); a
+  // placeholder without a wall.
+  const gpu::Buffer& grips() const { return grips_; }
+  gpu::Buffer& grips() { return grips_; }
+  // Its buffers, for a checkpoint (the keyframes may have been changed since the scene's; the
+  // grips are state).
+  void checkpointBuffers(std::vector<gpu::Buffer*>& out) { out.insert(out.end(), {&toolData_, &grips_}); }
 
  private:
   void upload();
   const ParticleStore* particles_;
   std::vector<ToolSpec> tools_;
-  float psiPerScale_, spacing_;
+  float psiPerScale_, spacing_, timeStepFactor_;
   std::uint32_t maxSteps_, wallPoints_, stride_;
-  gpu::Buffer toolData_, partials_, partialCount_, dtPartials_, log_, placeholder_;
+  gpu::Buffer toolData_, partials_, partialCount_, dtPartials_, log_, placeholder_, grips_;
   const gpu::ComputePipeline* contact_;
   const gpu::ComputePipeline* cut_ = nullptr;  // with a blade and springs only
   std::uint32_t springCount_ = 0;

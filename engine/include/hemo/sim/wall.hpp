@@ -127,6 +127,7 @@ class MassSpring {
   void recordSubsteps(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n, std::uint32_t clockIn,
                       float endTime);
   std::uint32_t substeps() const { return substeps_; }
+  float timeStepFactor() const { return timeStepFactor_; }
   // The springs' own explicit limit on a (sub)step as built, time_step_factor sqrt(m / sum k),
   // the smallest over the free points with springs (s; 3e38 without any); the step's limit is
   // substeps() times this.
