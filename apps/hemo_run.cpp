@@ -431,6 +431,15 @@ int main(int argc, char** argv) {
       nlohmann::json names = nlohmann::json::array();
       for (const auto& t : scene.tools) names.push_back(t.name);
       summary["tools"] = names;
+      // the force signal: steps delivered per wall second, batches (host updates) per second,
+      // and the mean and longest time from a batch's submission to its rows in host memory
+      const hemo::sim::ToolFeedback& f = sim.toolFeedback();
+      if (f.batches > 0 && f.seconds > 0.0) {
+        summary["tool_feedback_rate_hz"] = double(f.samples) / f.seconds;
+        summary["tool_feedback_updates_hz"] = double(f.batches) / f.seconds;
+        summary["tool_feedback_latency_ms"] = 1e3 * f.seconds / double(f.batches);
+        summary["tool_feedback_latency_max_ms"] = 1e3 * f.maxLatency;
+      }
     }
     if (const auto* springs = sim.solver().wall()) {
       summary["wall_substeps"] = springs->substeps();

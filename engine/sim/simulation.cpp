@@ -2,6 +2,7 @@
 
 #include "hemo/io/checkpoint.hpp"
 #include "hemo/io/hash.hpp"
+#include "interface/sph.h"
 
 #include <algorithm>
 #include <chrono>
@@ -127,6 +128,16 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
     }
   }
   minStep_ = scene.minTimeStep > 0.0 ? scene.minTimeStep : 1.0e-4 * designTimeStep();
+  {  // the batch reports (recordReport), each part 16-byte aligned
+    const std::uint64_t rows = std::max(scene.stepsPerBatch, 1u);
+    const std::uint64_t tools = solver_->tools() ? solver_->tools()->count() : 0u;
+    report_.clock = 0;
+    report_.status = 32;
+    report_.stepLog = report_.status + (HEMO_STATUS_COUNT * 4 + 15) / 16 * 16;
+    report_.toolLog = report_.stepLog + (rows * 8 + 15) / 16 * 16;
+    report_.bytes = report_.toolLog + rows * tools * sizeof(ToolSample);
+    for (gpu::Buffer& b : reports_) b = gpu::Buffer(context, report_.bytes, gpu::MemoryUse::Readback, "batch report");
+  }
   recorder_ = std::make_unique<gpu::CommandRecorder>(context);
   recorder_->begin();
   solver_->recordReset(*recorder_);
@@ -174,6 +185,7 @@ RunResult Simulation::run(const RunOptions& options) {
       solver_->setRecordedIterations(options.recordedSolveIterations.value_or(solveDepth_));
     }
     std::uint32_t statsRows = 0;
+    const auto submitted = std::chrono::steady_clock::now();
     const SphSolver::SolveDepth depth = submitSteps([&] {
       statsRows = 0;
       for (std::uint64_t k = 0; k < batch; ++k) {
@@ -185,6 +197,7 @@ RunResult Simulation::run(const RunOptions& options) {
         if (stats_ && (steps_ + k) % statsEvery_ == 0) stats_->record(*recorder_, statsRows++);
       }
       if (solves) recordedSolveRegions_ += 2 * std::uint64_t(solver_->recordedIterations()) * batch;
+      recordReport(*recorder_, reportSlot_, static_cast<std::uint32_t>(batch));
     });
     // The next batch records half as much again as this one's solves took at most, and two
     // more: a batch's most changes slowly from one batch to the next.
@@ -192,20 +205,34 @@ RunResult Simulation::run(const RunOptions& options) {
       solveDepth_ = std::clamp(depth.maxIterations + depth.maxIterations / 2 + 2, std::min(cap, kMinSolveDepth), cap);
     }
     recordedSteps_ += batch;
-    clock = solver_->readClock();
-    checkStatus(steps_);
+    // the batch's outcome from its report (no readback submission)
+    const gpu::Buffer& report = reports_[reportSlot_];
+    reportSlot_ ^= 1u;
+    {
+      std::uint32_t words[HEMO_STATUS_COUNT];
+      report.readbackBytes(words, sizeof words, report_.status);
+      std::byte records[32];
+      report.readbackBytes(records, sizeof records, report_.clock);
+      clock = solver_->clockFrom(records);
+      checkStatus(steps_, SphSolver::statusFrom(words));
+    }
     if (clock.steps - before == batch) checkStep(clock, steps_, endTime);
     if (options.onToolLog && solver_->tools() && clock.steps > before) {
       // the steps that advanced the clock (later ones of the batch changed nothing)
       const auto steps = static_cast<std::uint32_t>(clock.steps - before);
-      const auto samples = solver_->tools()->readLog(steps);
-      const auto log = solver_->stepLog().readback<glm::vec2>(steps);
       const std::uint32_t tools = solver_->tools()->count();
+      const auto samples = report.readback<ToolSample>(std::size_t(steps) * tools, report_.toolLog);
+      const auto log = report.readback<glm::vec2>(steps, report_.stepLog);
       std::vector<ToolLogRow> rows;
       rows.reserve(samples.size());
       for (std::uint32_t k = 0; k < steps; ++k) {
         for (std::uint32_t t = 0; t < tools; ++t) rows.push_back({steps_ + k, log[k].y, t, samples[std::size_t(k) * tools + t]});
       }
+      const double latency = std::chrono::duration<double>(std::chrono::steady_clock::now() - submitted).count();
+      ++feedback_.batches;
+      feedback_.samples += steps;
+      feedback_.seconds += latency;
+      feedback_.maxLatency = std::max(feedback_.maxLatency, latency);
       options.onToolLog(rows);
     }
     if (statsRows > 0 && options.onStepStats) {
@@ -323,8 +350,21 @@ void Simulation::checkStep(const SphClock& clock, std::uint64_t batchFirstStep, 
   throw SimulationError(msg.str());
 }
 
-void Simulation::checkStatus(std::uint64_t batchFirstStep) {
-  const SphStatus status = solver_->readStatus();
+void Simulation::recordReport(gpu::CommandRecorder& rec, std::uint32_t slot, std::uint32_t steps) {
+  const gpu::Buffer& report = reports_[slot];
+  rec.computeToTransfer();
+  rec.copy(solver_->clockBuffer(), report, 32, 0, report_.clock);
+  rec.copy(solver_->statusBuffer(), report, HEMO_STATUS_COUNT * 4, 0, report_.status);
+  rec.copy(solver_->stepLog(), report, std::uint64_t(steps) * 8, 0, report_.stepLog);
+  if (const ToolContact* tools = solver_->tools()) {
+    rec.copy(tools->log(), report, std::uint64_t(steps) * tools->count() * sizeof(ToolSample), 0, report_.toolLog);
+  }
+  rec.computeToHost();
+}
+
+void Simulation::checkStatus(std::uint64_t batchFirstStep) { checkStatus(batchFirstStep, solver_->readStatus()); }
+
+void Simulation::checkStatus(std::uint64_t batchFirstStep, const SphStatus& status) {
   if (status.neighbourOverflow > 0) {
     std::ostringstream msg;
     msg << "a particle had " << status.maxNeighbours << " neighbours, more than particles.neighbour_capacity = "

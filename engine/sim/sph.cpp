@@ -1436,20 +1436,28 @@ std::uint32_t SphSolver::readRebuilds() const {
   return opened - (!armPending_ && opened > 0 && rebuildGate_.readIsOpen() ? 1u : 0u);
 }
 
-SphStatus SphSolver::readStatus() const {
-  const auto s = status_.readback<std::uint32_t>(HEMO_STATUS_COUNT);
+SphStatus SphSolver::statusFrom(const std::uint32_t* s) {
   return SphStatus{s[HEMO_STATUS_FIRST_BAD_STEP], s[HEMO_STATUS_NONFINITE], s[HEMO_STATUS_NEIGHBOUR_OVERFLOW],
                    s[HEMO_STATUS_MAX_NEIGHBOURS], s[HEMO_STATUS_BAD_INPUT_ID], s[HEMO_STATUS_BAD_FORCE_ID]};
 }
 
-SphClock SphSolver::readClock() const {
-  struct Raw {
-    float time, compensation, lastDt;
-    std::uint32_t steps;
-  };
-  const Raw r = clock_.readback<Raw>(2)[clockParity_];
+SphStatus SphSolver::readStatus() const { return statusFrom(status_.readback<std::uint32_t>(HEMO_STATUS_COUNT).data()); }
+
+namespace {
+struct RawClock {  // common/clock.glsl
+  float time, compensation, lastDt;
+  std::uint32_t steps;
+};
+static_assert(sizeof(RawClock) == 16);
+}  // namespace
+
+SphClock SphSolver::clockFrom(const void* records) const {
+  RawClock r;
+  std::memcpy(&r, static_cast<const char*>(records) + sizeof(RawClock) * clockParity_, sizeof r);
   return SphClock{double(r.time) - double(r.compensation), r.lastDt, r.steps};
 }
+
+SphClock SphSolver::readClock() const { return clockFrom(clock_.readback<RawClock>(2).data()); }
 
 void SphSolver::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
   particles_->checkpointBuffers(out);

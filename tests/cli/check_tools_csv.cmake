@@ -1,6 +1,7 @@
 # hemo-run with a scene's tools: DIR/tools.csv has its header and one row per step and tool
 # (the step count after the step, time, dt, the tool's name, force, torque, tip position), the
-# probe's force pushes it back up (+z) once it is in the fluid, and the summary names the file.
+# probe's force pushes it back up (+z) once it is in the fluid, and the summary names the file
+# and gives the force signal's rate, updates and latency.
 # A run stopped at a checkpoint and resumed keeps the rows up to it and ends with the same file.
 #   cmake -DRUN=hemo-run -DSCENE=scene.json -DDIR=out -P check_tools_csv.cmake
 file(REMOVE_RECURSE "${DIR}")
@@ -8,6 +9,9 @@ execute_process(COMMAND "${RUN}" "${SCENE}" --until 0.04 --out "${DIR}/full"
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc STREQUAL "0" OR NOT "${out}" MATCHES "\"tools\": \\[[ \n]*\"probe\"[ \n]*\\],[ \n]*\"tools_file\": \"tools.csv\"")
   message(FATAL_ERROR "exit code ${rc}\n${out}${err}")
+endif()
+if(NOT "${out}" MATCHES "\"tool_feedback_latency_max_ms\": [0-9.e+-]+,[ \n]*\"tool_feedback_latency_ms\": [0-9.e+-]+,[ \n]*\"tool_feedback_rate_hz\": [1-9][0-9.e+-]*,[ \n]*\"tool_feedback_updates_hz\": [1-9]")
+  message(FATAL_ERROR "the summary lacks the force signal's rate and latency\n${out}")
 endif()
 string(REGEX MATCH "\"steps\": ([0-9]+)," m "${out}")
 set(steps ${CMAKE_MATCH_1})

@@ -41,6 +41,15 @@ struct ToolLogRow {
   ToolSample sample{};
 };
 
+// How the tools' force signal reached the host (Simulation::toolFeedback): each batch's rows
+// arrive with its report, once the batch's fence signals.
+struct ToolFeedback {
+  std::uint64_t batches = 0;   // batches that delivered rows
+  std::uint64_t samples = 0;   // steps delivered (each with every tool's force and torque)
+  double seconds = 0.0;        // wall time of those batches, from submission to the rows in hand
+  double maxLatency = 0.0;     // s: the longest such batch (the age of its first step's force, at most)
+};
+
 struct RunOptions {
   std::optional<std::uint64_t> steps;  // run this many steps ...
   std::optional<double> until;         // ... or until this simulated time (s); default: scene end time
@@ -93,6 +102,8 @@ class Simulation {
   // iterations than the batch recorded (their first runs' dispatches count in the averages
   // above), and the solve's recorded regions per step on average.
   std::uint64_t redoneBatches() const { return redoneBatches_; }
+  // The tools' force signal so far (runs with onToolLog).
+  const ToolFeedback& toolFeedback() const { return feedback_; }
   double recordedSolveIterationsPerStep() const {
     return recordedSteps_ ? double(recordedSolveRegions_) / double(recordedSteps_) : 0.0;
   }
@@ -156,6 +167,16 @@ class Simulation {
 
  private:
   void checkStatus(std::uint64_t batchFirstStep);
+  void checkStatus(std::uint64_t batchFirstStep, const SphStatus& status);
+  // The batch report: at the end of each batch's command buffer, copies of the solver's clock
+  // records and status words, the batch's step log and (with tools) its tool log, into a
+  // host-visible slot of a ring of two. The host reads the batch's outcome from there once its
+  // fence signals, with no readback submission of its own: on a discrete GPU, whose device
+  // memory the host cannot map, every readback is otherwise a copy, a submission and a wait.
+  void recordReport(gpu::CommandRecorder& rec, std::uint32_t slot, std::uint32_t steps);
+  struct ReportLayout {
+    VkDeviceSize clock = 0, status = 0, stepLog = 0, toolLog = 0, bytes = 0;
+  };
   // Throws when the batch that started at `batchFirstStep` and did not reach the end time
   // left the step below minTimeStep(): a blow-up that stays finite (a particle at 1e9 m/s)
   // shrinks the step until the clock no longer advances, and the run would never end.
@@ -194,6 +215,10 @@ class Simulation {
   std::vector<gpu::Buffer> saved_;   // recordSaveState's copy
   bool saveRefused_ = false;         // the device's memory could not hold the copy
   std::vector<gpu::Buffer*> checkpointBuffers();
+  ReportLayout report_;
+  gpu::Buffer reports_[2];
+  std::uint32_t reportSlot_ = 0;
+  ToolFeedback feedback_;
 };
 
 }  // namespace hemo::sim

@@ -363,6 +363,11 @@ class SphSolver {
 
   SphStatus readStatus() const;
   SphClock readClock() const;
+  // The same from copies of the status words (HEMO_STATUS_COUNT uint) and of the clock's two
+  // records (32 bytes), as a batch's report holds them (Simulation).
+  const gpu::Buffer& statusBuffer() const { return status_; }
+  static SphStatus statusFrom(const std::uint32_t* words);
+  SphClock clockFrom(const void* records) const;
 
   // Checkpoints (hemo/io/checkpoint.hpp): every buffer of the solver, its grid, its rebuild
   // gate and its wall, in a fixed order (those of a path the scene does not take are
