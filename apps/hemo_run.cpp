@@ -323,10 +323,11 @@ int main(int argc, char** argv) {
       frameRec->begin();
       sim.recordSurface(*frameRec);
       sim.recordWallShade(*frameRec);
+      const hemo::render::ToolView tools{sim.solver().tools() ? &sim.solver().tools()->tools() : nullptr, sim.time()};
       renderer->record(*frameRec, camera, frame,
                        {&sim.store().live().positions, &sim.store().live().velocities, sim.store().count(),
                         sim.wallShade()},
-                       sim.surfaceExtractor());
+                       sim.surfaceExtractor(), nullptr, &tools);
       frameRec->end();
       frameRec->submitAndWait();
       char name[64];

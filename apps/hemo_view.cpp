@@ -204,10 +204,11 @@ int main(int argc, char** argv) {
       rec.begin();
       if (state.surface) sim.recordSurface(rec);
       sim.recordWallShade(rec);
+      const hemo::render::ToolView tools{sim.solver().tools() ? &sim.solver().tools()->tools() : nullptr, sim.time()};
       renderer.record(rec, camera, state.frame,
                       {&sim.store().live().positions, &sim.store().live().velocities, sim.store().count(),
                        sim.wallShade()},
-                      state.surface ? sim.surfaceExtractor() : nullptr, &springView);
+                      state.surface ? sim.surfaceExtractor() : nullptr, &springView, &tools);
       rec.end();
       rec.submitAndWait();
       if (!swapchain.present(renderer.colorImage(), renderer.extent())) swapchain.recreate({width, height});

@@ -401,7 +401,21 @@ VkDescriptorSet OffscreenRenderer::storageSet(const gpu::Buffer& b0, const gpu::
 
 void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, const FrameOptions& options,
                                const ParticleView& particles, const surface::MarchingCubes* surface,
-                               const SpringView* springs) {
+                               const SpringView* springs, const ToolView* tools) {
+  // The tools' triangles: written to host memory, copied to a vertex buffer before the
+  // barrier below (which orders transfers before drawing too).
+  std::uint32_t toolVertices = 0;
+  if (tools && tools->tools && !tools->tools->empty()) {
+    const std::vector<glm::vec4> mesh = toolTriangles(*tools->tools, tools->time);
+    const VkDeviceSize bytes = mesh.size() * sizeof(glm::vec4);
+    if (bytes > toolStaging_.size()) {
+      toolStaging_ = gpu::Buffer(*context_, bytes, gpu::MemoryUse::Upload, "tool triangles (host)");
+      toolVertices_ = gpu::Buffer(*context_, bytes, gpu::MemoryUse::Device, "tool triangles");
+    }
+    toolStaging_.upload(mesh);
+    rec.copy(toolStaging_, toolVertices_, bytes);
+    toolVertices = static_cast<std::uint32_t>(mesh.size() / 2);
+  }
   const bool drawParticles = particles.count > 0 && options.particleRadius > 0.0f &&
                              (options.fluid || options.wall || options.boundary);
   if (drawParticles && (!particles.positions || !particles.velocities)) {
@@ -481,6 +495,20 @@ void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, 
     vkCmdBindVertexBuffers(cmd, 0, 1, &vertices, &offset);
     vkCmdDrawIndirect(cmd, surface->args().handle(), surface::MarchingCubes::drawArgsOffset(), 1,
                       sizeof(VkDrawIndirectCommand));
+  }
+  if (toolVertices > 0) {  // lit like the surface, in the tools' colour
+    SurfacePush push{};
+    push.viewProj = viewProj;
+    push.eye = glm::vec4(camera.eye, 1.0f);
+    push.light = glm::vec4(glm::normalize(options.lightDirection), 0.0f);
+    push.color = glm::vec4(tools->color, 1.0f);
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, surfacePipeline_);
+    vkCmdPushConstants(cmd, surfacePipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                       sizeof(push), &push);
+    const VkBuffer vertices = toolVertices_.handle();
+    const VkDeviceSize offset = 0;
+    vkCmdBindVertexBuffers(cmd, 0, 1, &vertices, &offset);
+    vkCmdDraw(cmd, toolVertices, 1, 0, 0);
   }
   vkCmdEndRenderPass(cmd);
 

@@ -92,6 +92,79 @@ TEST_F(RenderTest, SphereSurfaceCoversItsSilhouette) {
   EXPECT_GT(top.r, bottom.r);
 }
 
+// The tools drawn at their poses: a probe's capsule covers its silhouette (a 2r x L rectangle
+// and a disc of radius r, seen side on), in the tools' grey; a grasper's two jaws stand either
+// side of its axis with the keyed gap between them, and move with the time given.
+TEST_F(RenderTest, ToolsAreDrawnAtTheirPoses) {
+  const std::uint32_t W = 320, H = 240;
+  render::OffscreenRenderer renderer(ctx(), W, H);
+  render::Camera camera;
+  camera.eye = glm::vec3(0.0f, -0.02f, 0.0005f);
+  camera.target = glm::vec3(0.0f, 0.0f, 0.0005f);
+  camera.nearPlane = 1e-3f;
+  camera.farPlane = 0.1f;
+  render::FrameOptions options;
+  auto draw = [&](const std::vector<sim::ToolSpec>& tools, double t) {
+    const render::ToolView view{&tools, t};
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    renderer.record(rec, camera, options, {}, nullptr, nullptr, &view);
+    rec.end();
+    rec.submitAndWait();
+    return renderer.readPixels();
+  };
+  const Rgb background{int(std::lround(options.background.r * 255.0f)), int(std::lround(options.background.g * 255.0f)),
+                       int(std::lround(options.background.b * 255.0f))};
+  auto covered = [&](const std::vector<std::uint8_t>& rgba, std::uint32_t x, std::uint32_t y) {
+    const Rgb p = pixel(rgba, W, x, y);
+    return p.r != background.r || p.g != background.g || p.b != background.b;
+  };
+
+  sim::ToolSpec probe;
+  probe.name = "probe";
+  probe.radius = 0.0004f;
+  probe.length = 0.001f;
+  probe.keys = {{0.0, {0.0f, 0.0f, 0.0f}, glm::quat(1, 0, 0, 0)}};
+  const auto rgba = draw({probe}, 0.0);
+  std::size_t count = 0;
+  for (std::uint32_t y = 0; y < H; ++y) {
+    for (std::uint32_t x = 0; x < W; ++x) {
+      if (!covered(rgba, x, y)) continue;
+      ++count;
+      const Rgb p = pixel(rgba, W, x, y);
+      ASSERT_LT(std::abs(p.r - p.b), 60) << "tool pixels are grey (" << x << ", " << y << ")";
+    }
+  }
+  // seen side on from 20 mm: the silhouette's area in pixels (the near side is r closer: the
+  // projection grows by about r / d = 2%)
+  const double scale = (H / 2.0) / (0.02 * std::tan(0.5 * camera.fovY));
+  const double expected = (2.0 * probe.radius * probe.length + 3.14159265358979 * probe.radius * probe.radius) * scale * scale;
+  std::printf("probe: %zu pixels covered, %.0f expected\n", count, expected);
+  EXPECT_NEAR(double(count) / expected, 1.02, 0.05);
+  const glm::vec2 mid = project(camera, glm::vec3(0.0f, 0.0f, 0.0005f), W, H);
+  EXPECT_TRUE(covered(rgba, std::uint32_t(mid.x), std::uint32_t(mid.y)));
+
+  // a grasper whose jaws (x = +-(opening / 2 + r)) open from 2 to 4 mm over a second
+  sim::ToolSpec grasper;
+  grasper.name = "grasper";
+  grasper.kind = sim::ToolKind::Grasper;
+  grasper.radius = 0.0002f;
+  grasper.length = 0.001f;
+  grasper.jawWidth = 0.0004f;
+  grasper.keys = {{0.0, {0.0f, 0.0f, 0.0f}, glm::quat(1, 0, 0, 0), false, 0.002f},
+                  {1.0, {0.0f, 0.0f, 0.0f}, glm::quat(1, 0, 0, 0), false, 0.004f}};
+  for (const double t : {0.0, 1.0}) {
+    const auto img = draw({grasper}, t);
+    const float c = float(0.5 * (0.002 + 0.002 * t)) + grasper.radius;
+    for (const float side : {c, -c}) {
+      const glm::vec2 jaw = project(camera, glm::vec3(side, 0.0f, 0.0005f), W, H);
+      EXPECT_TRUE(covered(img, std::uint32_t(jaw.x), std::uint32_t(jaw.y))) << "jaw at x = " << side << " m, t = " << t;
+    }
+    const glm::vec2 gap = project(camera, glm::vec3(0.5f * c, 0.0f, 0.0005f), W, H);
+    EXPECT_FALSE(covered(img, std::uint32_t(gap.x), std::uint32_t(gap.y))) << "the gap, t = " << t;
+  }
+}
+
 TEST_F(RenderTest, ParticlesAreDrawnInTheirKindsColours) {
   // A slow and a fast fluid particle, a wall particle, and a boundary particle (hidden by
   // default), side by side along x.

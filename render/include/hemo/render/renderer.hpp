@@ -1,12 +1,13 @@
 #pragma once
 // Drawing from the engine's GPU buffers on the same device: particles as shaded discs (fluid
 // coloured by speed, wall particles by strain, optionally the rigid boundary), the wall's
-// springs as lines coloured by strain (broken ones purple), and the marching-cubes surface,
-// lit, with depth. The renderer only reads engine buffers (positions, velocities,
+// springs as lines coloured by strain (broken ones purple), the marching-cubes surface and
+// the surgical tools, lit, with depth. The renderer only reads engine buffers (positions, velocities,
 // the extractor's vertices and indirect draw arguments) and owns the one compute-to-graphics
 // barrier. OffscreenRenderer draws into an image and copies it to host memory for PNG files
 // and tests; nothing here needs a window.
 #include "hemo/gpu/commands.hpp"
+#include "hemo/sim/tools.hpp"
 #include "hemo/surface/marching_cubes.hpp"
 
 #include <glm/mat4x4.hpp>
@@ -77,6 +78,19 @@ struct SpringView {
   glm::vec3 period{0.0f};                  // m on periodic axes, 0 elsewhere
 };
 
+// The tools to draw, at their poses at `time` (the keyframes as the solver holds them).
+struct ToolView {
+  const std::vector<sim::ToolSpec>* tools = nullptr;
+  double time = 0.0;  // s
+  glm::vec3 color{0.62f, 0.66f, 0.72f};
+};
+
+// The tools' surfaces at time t as triangles, three vertices each, every vertex two vec4:
+// the position (m) and the outward normal. A probe or blade: its capsule. A grasper: its two
+// jaws, each the box that bounds the rounded plate (capsules when it has no width).
+// `segments` around a capsule's axis.
+std::vector<glm::vec4> toolTriangles(const std::vector<sim::ToolSpec>& tools, double t, int segments = 24);
+
 class OffscreenRenderer {
  public:
   OffscreenRenderer(gpu::Context& context, std::uint32_t width, std::uint32_t height);
@@ -85,11 +99,13 @@ class OffscreenRenderer {
   OffscreenRenderer& operator=(const OffscreenRenderer&) = delete;
 
   // Records one frame after the compute work that produced the buffers (same recorder): the
-  // compute-to-graphics barrier, clear, particles, the surface (drawn with the extractor's
-  // indirect arguments; nullptr: no surface), and the copy of the image to host memory.
+  // tools' triangles copied from host memory, the compute-to-graphics barrier, clear,
+  // particles, the surface (drawn with the extractor's indirect arguments; nullptr: no
+  // surface), the tools, and the copy of the image to host memory. The previous frame must
+  // have completed (the tools' buffers are reused).
   void record(gpu::CommandRecorder& rec, const Camera& camera, const FrameOptions& options,
               const ParticleView& particles, const surface::MarchingCubes* surface,
-              const SpringView* springs = nullptr);
+              const SpringView* springs = nullptr, const ToolView* tools = nullptr);
   // RGBA8 pixels of the last recorded frame (after its submission completed), top row first.
   std::vector<std::uint8_t> readPixels() const;
   // The rendered image (TRANSFER_SRC_OPTIMAL after a frame), for presenting (Swapchain).
@@ -124,6 +140,7 @@ class OffscreenRenderer {
   std::map<std::tuple<VkBuffer, VkBuffer, VkBuffer>, VkDescriptorSet> storageSets_;
   gpu::Buffer pixels_;
   gpu::Buffer noShade_;  // bound when a view has no wall shade (never read then)
+  gpu::Buffer toolStaging_, toolVertices_;  // the tools' triangles (host-written, and for drawing)
 };
 
 // Writes RGBA8 pixels (top row first) as an 8-bit RGBA PNG. Throws std::runtime_error naming
