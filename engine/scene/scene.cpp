@@ -219,6 +219,12 @@ class Checker {
     const double x = v.get<double>();
     if (!std::isfinite(x)) fail(path, "must be finite, got " + v.dump());
     if (f.kind == Kind::Integer && (!v.is_number_integer() || x != std::floor(x))) fail(path, "expected a whole number, got " + v.dump());
+    // the engine computes in single precision: a value that would become 0 or lose its
+    // precision there (below the smallest normal float) is refused, not silently zeroed
+    if (x != 0.0 && std::abs(x) < double(std::numeric_limits<float>::min())) {
+      fail(path, "is too small for single precision (non-zero values need |x| >= " +
+                     fmt(double(std::numeric_limits<float>::min())) + "), got " + v.dump());
+    }
     const bool belowMin = f.minExclusive ? x <= f.min : x < f.min;
     if (belowMin || x > f.max) {
       fail(path, "must be in " + std::string(f.minExclusive ? "(" : "[") + fmt(f.min) + ", " + fmt(f.max) + "]" +

@@ -117,6 +117,8 @@ TEST(Scene, WrongTypesAreNamed) {
   EXPECT_EQ(parseScene(j.dump(), "ok.json").sph.densityMethod, sim::DensityMethod::Continuity);
 }
 
+// Values out of their range, and non-zero ones too small for single precision (a wall point's
+// mass of 5e-324 kg passed the range check and reached the builder as 0), are named.
 TEST(Scene, OutOfRangeValuesAreNamed) {
   Json j = validScene();
   j["particles"]["spacing_m"] = -0.01;
@@ -127,6 +129,12 @@ TEST(Scene, OutOfRangeValuesAreNamed) {
   j = validScene();
   j["fluid"]["density_kg_m3"] = 1e9;
   expectError(j, {"fluid.density_kg_m3"});
+  // in range as a double, but 0 (or denormal) in the engine's single precision
+  j = validScene();
+  j["fluid"]["viscosity_pa_s"] = 5e-324;
+  expectError(j, {"fluid.viscosity_pa_s", "too small for single precision"});
+  j["fluid"]["viscosity_pa_s"] = 1e-39;
+  expectError(j, {"fluid.viscosity_pa_s", "too small for single precision"});
 }
 
 // The DFSPH solver's settings, and what it does not run, are named.
