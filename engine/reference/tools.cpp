@@ -149,16 +149,20 @@ RefToolContact toolContact(const std::vector<sim::ToolSpec>& tools, double t, co
     const bool grippable = grips && grips->grippable[i];
     const std::size_t holder = grippable ? std::size_t(grips->record[i].w) : 0;  // tool + 1
     std::size_t gripper = 0;
+    glm::dvec3 arm(0.0);  // from the gripper's tip
     for (std::size_t k = 0; k < tools.size(); ++k) {
-      glm::dvec3 arm;
+      glm::dvec3 toTool;
       bool squeezed = false;
       const glm::dvec3 a = toolAcceleration(tools[k], r.poses[k], double(tools[k].contactScale) * psiPerScale, h, x[i],
-                                            period, &arm, &squeezed);
+                                            period, &toTool, &squeezed);
       r.accel[i] += a;
       r.force[k] -= mass[i] * a;
-      r.torque[k] += glm::cross(arm, -mass[i] * a);
+      r.torque[k] += glm::cross(toTool, -mass[i] * a);
       // the holder keeps it while it squeezes it, else the first grasper that squeezes it
-      if (grippable && squeezed && tools[k].gripStiffness > 0.0f && (gripper == 0 || k + 1 == holder)) gripper = k + 1;
+      if (grippable && squeezed && tools[k].gripStiffness > 0.0f && (gripper == 0 || k + 1 == holder)) {
+        gripper = k + 1;
+        arm = toTool;
+      }
     }
     if (!grippable) continue;
     if (gripper == 0) {
@@ -167,10 +171,6 @@ RefToolContact toolContact(const std::vector<sim::ToolSpec>& tools, double t, co
     }
     const std::size_t k = gripper - 1;
     const RefToolPose& pose = r.poses[k];
-    glm::dvec3 arm = x[i] - pose.position;
-    for (int a = 0; a < 3; ++a) {
-      if (period[a] > 0.0) arm[a] -= period[a] * std::round(arm[a] / period[a]);
-    }
     const glm::dvec3 lateral = glm::cross(pose.axis, pose.side);
     if (gripper != holder) grips->record[i] = glm::dvec4(glm::dot(arm, pose.axis), glm::dot(arm, lateral), 0.0, double(gripper));
     const glm::dvec4& anchor = grips->record[i];

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <numbers>
 #include <vector>
 
@@ -369,97 +370,114 @@ double sheetCentreStiffness(int n, double tension, double spacing) {
   return 1.0 / x[c];
 }
 
+// That sheet (dp 10 mm, spacing 40 mm at z0 = 50 mm, springs of 10 N/m with mass 1e-4 kg
+// points, pre-tensioned to a tenth of k times the spacing) on a solver with one tool; the wall
+// points' transverse modes settle under velocity damping (the springs damp along themselves
+// only).
+struct SpringSheet {
+  static constexpr int n = 11;
+  static constexpr float dp = 0.01f, spacing = 4.0f * dp, z0 = 0.05f, k = 10.0f, mass = 1e-4f;
+  static constexpr float mid = 5.0f * spacing;  // the centre point's x and y
+  static constexpr double tension = double(k) * 0.1 * spacing;
+  static constexpr std::uint32_t centre = std::uint32_t((n / 2) * n + n / 2);
+
+  SpringSheet(gpu::Context& context, const sim::ToolSpec& tool) : store(context, n * n), rec(context) {
+    sim::SphSettings s;
+    s.spacing = dp;
+    s.soundSpeed = 1.0f;
+    s.gravity = glm::vec3(0.0f);
+    s.maxTimeStep = 1.0f;
+    s.dampingRate = 60.0f;
+    s.dampingUntil = 1e6f;
+    std::vector<glm::vec4> pos, vel;
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        pos.emplace_back(float(i) * spacing, float(j) * spacing, z0, s.particleMass());
+        vel.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL));
+        net.points.push_back({mass, i == 0 || j == 0 || i == n - 1 || j == n - 1});
+      }
+    }
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const std::uint32_t id = std::uint32_t(j * n + i);
+        if (i + 1 < n) net.springs.push_back({id, id + 1, 0.9f * spacing, k, 0.0f, 3e38f});
+        if (j + 1 < n) net.springs.push_back({id, id + std::uint32_t(n), 0.9f * spacing, k, 0.0f, 3e38f});
+      }
+    }
+    store.upload(pos, vel);
+    solver = std::make_unique<sim::SphSolver>(context, store, glm::vec3(-0.05f), glm::vec3(0.45f), s, 256);
+    solver->attachWall(net);
+    solver->attachTools({tool});
+    rec.begin();
+    solver->recordReset(rec);
+    rec.end();
+    rec.submitAndWait();
+  }
+
+  // Runs to `until` (s); over its last `window` s, the mean z force on the tool (N) and the
+  // centre point's mean height above z0 (m).
+  void runTo(double until, double window, double& force, double& height) {
+    double fSum = 0.0, zSum = 0.0;
+    int fCount = 0, zCount = 0;
+    while (solver->readClock().time < float(until)) {  // (the clock stops at float(until))
+      const double t0 = solver->readClock().time;
+      const std::uint32_t batch = t0 < until - window ? 256u : 16u;
+      rec.begin();
+      for (std::uint32_t b = 0; b < batch; ++b) solver->recordStep(rec, step++, b, float(until));
+      rec.end();
+      rec.submitAndWait();
+      if (t0 >= until - window) {
+        for (const sim::ToolSample& sample : solver->tools()->readLog(batch)) {
+          if (sample.force.w >= until - window && sample.force.w < until) fSum += sample.force.z, ++fCount;
+        }
+        const auto p = store.readPositions();
+        const auto ids = store.readIds();
+        for (std::size_t slot = 0; slot < ids.size(); ++slot) {
+          if (ids[slot] == centre) zSum += double(p[slot].z) - z0, ++zCount;
+        }
+      }
+    }
+    ASSERT_GT(fCount, 10);
+    force = fSum / fCount;
+    height = zSum / zCount;
+  }
+
+  sim::SpringNetwork net;
+  sim::ParticleStore store;
+  std::unique_ptr<sim::SphSolver> solver;
+  gpu::CommandRecorder rec;
+  std::uint32_t step = 0;
+};
+
 // A sphere pressed onto the centre of that sheet, held at two depths (the wall points' own
 // dynamics, damped, with the contact's push): the force the tool log reports over the centre
 // point's displacement is the sheet's stiffness from the linearised statics within 5% at both
 // depths (Hooke: the same K at twice the displacement). Only the centre point is within the
 // contact distance, so the force is the sheet's reaction at that point alone.
 TEST_F(ToolTest, ProbePressedIntoASpringSheetMeetsItsStiffness) {
-  const int n = 11;
+  using S = SpringSheet;
   // The sheet's spacing is 4 dp: the contact's reach (2 dp) then takes in the centre point
   // alone, and the push's whole range (from its weakest at the reach to its strongest) holds
   // the sheet at both depths.
-  const float dp = 0.01f, spacing = 4.0f * dp, z0 = 0.05f, k = 10.0f, mass = 1e-4f;
-  const double tension = double(k) * 0.1 * spacing;
-  sim::SphSettings s;
-  s.spacing = dp;
-  s.soundSpeed = 1.0f;
-  s.gravity = glm::vec3(0.0f);
-  s.maxTimeStep = 1.0f;
-  s.dampingRate = 60.0f;  // the sheet's transverse modes settle (the springs damp along themselves only)
-  s.dampingUntil = 1e6f;
-  std::vector<glm::vec4> pos, vel;
-  sim::SpringNetwork net;
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      pos.emplace_back(float(i) * spacing, float(j) * spacing, z0, s.particleMass());
-      vel.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL));
-      net.points.push_back({mass, i == 0 || j == 0 || i == n - 1 || j == n - 1});
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const std::uint32_t id = std::uint32_t(j * n + i);
-      if (i + 1 < n) net.springs.push_back({id, id + 1, 0.9f * spacing, k, 0.0f, 3e38f});
-      if (j + 1 < n) net.springs.push_back({id, id + std::uint32_t(n), 0.9f * spacing, k, 0.0f, 3e38f});
-    }
-  }
-  const std::uint32_t centre = std::uint32_t((n / 2) * n + n / 2);
   // The sphere's bottom held where the centre point settles about 0.2 and 0.45 mm down (the
   // point sits 11-17 mm below the sphere, where the push balances the sheet's reaction)
-  const float radius = 0.004f, mid = 5.0f * spacing;
+  const float radius = 0.004f, mid = S::mid, z0 = S::z0;
   const float hold1 = z0 + 0.0170f + radius, hold2 = z0 + 0.0112f + radius;
   sim::ToolSpec probe;
   probe.name = "probe";
   probe.radius = radius;
-  probe.contactDistance = 2.0f * dp;
+  probe.contactDistance = 2.0f * S::dp;
   probe.contactScale = 0.26f;  // Psi = 10 m/s^2
   probe.keys = {{0.0, {mid, mid, z0 + 0.03f + radius}, glm::quat(1, 0, 0, 0)},
                 {0.15, {mid, mid, hold1}, glm::quat(1, 0, 0, 0)},
                 {0.5, {mid, mid, hold1}, glm::quat(1, 0, 0, 0)},
                 {0.65, {mid, mid, hold2}, glm::quat(1, 0, 0, 0)}};
-
-  sim::ParticleStore store(ctx(), std::uint32_t(pos.size()));
-  store.upload(pos, vel);
-  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.45f), s, 256);
-  solver.attachWall(net);
-  solver.attachTools({probe});
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  solver.recordReset(rec);
-  rec.end();
-  rec.submitAndWait();
-  std::uint32_t step = 0;
-  // Runs to `until` (s); over the last `window` s the mean tool force and centre displacement.
-  auto runTo = [&](double until, double window, double& force, double& displacement) {
-    double fSum = 0.0, wSum = 0.0;
-    int fCount = 0, wCount = 0;
-    while (solver.readClock().time < until) {
-      const double t0 = solver.readClock().time;
-      const std::uint32_t batch = t0 < until - window ? 256u : 16u;
-      rec.begin();
-      for (std::uint32_t b = 0; b < batch; ++b) solver.recordStep(rec, step++, b, float(until));
-      rec.end();
-      rec.submitAndWait();
-      if (t0 >= until - window) {
-        for (const sim::ToolSample& sample : solver.tools()->readLog(batch)) {
-          if (sample.force.w >= until - window && sample.force.w < until) fSum += sample.force.z, ++fCount;
-        }
-        const auto p = store.readPositions();
-        const auto ids = store.readIds();
-        for (std::size_t slot = 0; slot < ids.size(); ++slot) {
-          if (ids[slot] == centre) wSum += double(z0) - p[slot].z, ++wCount;
-        }
-      }
-    }
-    ASSERT_GT(fCount, 10);
-    force = fSum / fCount;
-    displacement = wSum / wCount;
-  };
-  const double expected = sheetCentreStiffness(n, tension, spacing);
-  double f1 = 0, w1 = 0, f2 = 0, w2 = 0;
-  runTo(0.5, 0.05, f1, w1);
-  runTo(1.0, 0.05, f2, w2);
+  SpringSheet sheet(ctx(), probe);
+  const double expected = sheetCentreStiffness(S::n, S::tension, S::spacing);
+  double f1 = 0, h1 = 0, f2 = 0, h2 = 0;
+  sheet.runTo(0.5, 0.05, f1, h1);
+  sheet.runTo(1.0, 0.05, f2, h2);
+  const double w1 = -h1, w2 = -h2;  // pressed down
   std::printf("[tools] sheet K from the statics %.5g N/m; pressed %.3g mm: %.4g N, K %.5g; %.3g mm: %.4g N, K %.5g\n",
               expected, w1 * 1e3, f1, f1 / w1, w2 * 1e3, f2, f2 / w2);
   EXPECT_GT(w2, 1.5 * w1);
@@ -473,38 +491,12 @@ TEST_F(ToolTest, ProbePressedIntoASpringSheetMeetsItsStiffness) {
 // u = w k_g / (k_g + K) for a jaw raised by w, and the force the tool feels, K u (both within
 // 5%). Opened, the jaws let go: the record clears and the sheet springs back.
 TEST_F(ToolTest, GrasperLiftsASpringSheetAgainstItsStiffnessAndLetsGo) {
-  const int n = 11;
-  const float dp = 0.01f, spacing = 4.0f * dp, z0 = 0.05f, k = 10.0f, mass = 1e-4f;
-  const double tension = double(k) * 0.1 * spacing;
-  sim::SphSettings s;
-  s.spacing = dp;
-  s.soundSpeed = 1.0f;
-  s.gravity = glm::vec3(0.0f);
-  s.maxTimeStep = 1.0f;
-  s.dampingRate = 60.0f;
-  s.dampingUntil = 1e6f;
-  std::vector<glm::vec4> pos, vel;
-  sim::SpringNetwork net;
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      pos.emplace_back(float(i) * spacing, float(j) * spacing, z0, s.particleMass());
-      vel.emplace_back(0.0f, 0.0f, 0.0f, float(HEMO_KIND_WALL));
-      net.points.push_back({mass, i == 0 || j == 0 || i == n - 1 || j == n - 1});
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const std::uint32_t id = std::uint32_t(j * n + i);
-      if (i + 1 < n) net.springs.push_back({id, id + 1, 0.9f * spacing, k, 0.0f, 3e38f});
-      if (j + 1 < n) net.springs.push_back({id, id + std::uint32_t(n), 0.9f * spacing, k, 0.0f, 3e38f});
-    }
-  }
-  const std::uint32_t centre = std::uint32_t((n / 2) * n + n / 2);
+  using S = SpringSheet;
   // Upright capsule jaws (the tool's default frame: shaft +z, jaws either side along x), the
   // tip 10 mm below the sheet. Closed to 4 mm, the centre point lies 2 mm from each (within
   // D = 3 mm of both), its neighbours 40 mm away out of reach. Raised by w1 = 0.5 mm, then
   // by w2 = 1 mm, then opened.
-  const float mid = 5.0f * spacing, tip = z0 - 0.01f, w1 = 0.0005f, w2 = 0.001f;
+  const float mid = S::mid, tip = S::z0 - 0.01f, w1 = 0.0005f, w2 = 0.001f;
   const float kGrip = 2.0f;
   sim::ToolSpec grasper;
   grasper.name = "grasper";
@@ -519,68 +511,28 @@ TEST_F(ToolTest, GrasperLiftsASpringSheetAgainstItsStiffnessAndLetsGo) {
                   {0.15, {mid, mid, tip}, upright, false, 0.004f}, {0.25, {mid, mid, tip + w1}, upright, false, 0.004f},
                   {0.5, {mid, mid, tip + w1}, upright, false, 0.004f}, {0.6, {mid, mid, tip + w2}, upright, false, 0.004f},
                   {1.0, {mid, mid, tip + w2}, upright, false, 0.004f}, {1.05, {mid, mid, tip + w2}, upright, false, 0.03f}};
-
-  sim::ParticleStore store(ctx(), std::uint32_t(pos.size()));
-  store.upload(pos, vel);
-  sim::SphSolver solver(ctx(), store, glm::vec3(-0.05f), glm::vec3(0.45f), s, 256);
-  solver.attachWall(net);
-  solver.attachTools({grasper});
-  gpu::CommandRecorder rec(ctx());
-  rec.begin();
-  solver.recordReset(rec);
-  rec.end();
-  rec.submitAndWait();
-  std::uint32_t step = 0;
-  auto lift = [&]() {
-    const auto p = store.readPositions();
-    const auto ids = store.readIds();
-    for (std::size_t slot = 0; slot < ids.size(); ++slot) {
-      if (ids[slot] == centre) return double(p[slot].z) - z0;
-    }
-    return 0.0;
-  };
-  // Runs to `until` (s); over the last `window` s the mean tool force (z) and centre lift.
-  auto runTo = [&](double until, double window, double& force, double& up) {
-    double fSum = 0.0, wSum = 0.0;
-    int fCount = 0, wCount = 0;
-    while (solver.readClock().time < float(until)) {  // (the clock stops at float(until))
-      const double t0 = solver.readClock().time;
-      const std::uint32_t batch = t0 < until - window ? 256u : 16u;
-      rec.begin();
-      for (std::uint32_t b = 0; b < batch; ++b) solver.recordStep(rec, step++, b, float(until));
-      rec.end();
-      rec.submitAndWait();
-      if (t0 >= until - window) {
-        for (const sim::ToolSample& sample : solver.tools()->readLog(batch)) {
-          if (sample.force.w >= until - window && sample.force.w < until) fSum += sample.force.z, ++fCount;
-        }
-        wSum += lift(), ++wCount;
-      }
-    }
-    ASSERT_GT(fCount, 10);
-    force = fSum / fCount;
-    up = wSum / wCount;
-  };
-  const double sheet = sheetCentreStiffness(n, tension, spacing);
-  const double share = kGrip / (kGrip + sheet);
+  SpringSheet sheet(ctx(), grasper);
+  const double K = sheetCentreStiffness(S::n, S::tension, S::spacing);
+  const double share = kGrip / (kGrip + K);
+  const std::size_t points = sheet.net.points.size();
   double f1 = 0, u1 = 0, f2 = 0, u2 = 0, f3 = 0, u3 = 0;
-  runTo(0.5, 0.05, f1, u1);
-  const auto grips = solver.tools()->grips().readback<glm::vec4>(net.points.size());
+  sheet.runTo(0.5, 0.05, f1, u1);
+  const auto grips = sheet.solver->tools()->grips().readback<glm::vec4>(points);
   for (std::uint32_t id = 0; id < grips.size(); ++id) {
-    EXPECT_EQ(grips[id].w, id == centre ? 1.0f : 0.0f) << "id " << id << ": only the centre point is gripped";
+    EXPECT_EQ(grips[id].w, id == S::centre ? 1.0f : 0.0f) << "id " << id << ": only the centre point is gripped";
   }
-  runTo(1.0, 0.05, f2, u2);
-  runTo(1.4, 0.05, f3, u3);
+  sheet.runTo(1.0, 0.05, f2, u2);
+  sheet.runTo(1.4, 0.05, f3, u3);
   std::printf("[tools] grip k %.3g N/m, sheet K %.5g N/m: lifted %.4g mm by %.3g (share %.4f, expected %.4f), F %.4g N "
               "(K u %.4g); %.4g mm by %.3g (share %.4f), F %.4g N (K u %.4g); let go: %.3g mm, F %.3g N\n",
-              kGrip, sheet, u1 * 1e3, w1 * 1e3, u1 / w1, share, f1, sheet * u1, u2 * 1e3, w2 * 1e3, u2 / w2, f2,
-              sheet * u2, u3 * 1e3, f3);
+              kGrip, K, u1 * 1e3, w1 * 1e3, u1 / w1, share, f1, K * u1, u2 * 1e3, w2 * 1e3, u2 / w2, f2, K * u2,
+              u3 * 1e3, f3);
   EXPECT_NEAR(u1 / w1, share, 0.05 * share);
   EXPECT_NEAR(u2 / w2, share, 0.05 * share);
   // the sheet pulls the tool down (force z < 0)
-  EXPECT_NEAR(-f1, sheet * u1, 0.05 * sheet * u1);
-  EXPECT_NEAR(-f2, sheet * u2, 0.05 * sheet * u2);
-  for (const glm::vec4& g : solver.tools()->grips().readback<glm::vec4>(net.points.size())) EXPECT_EQ(g.w, 0.0f);
+  EXPECT_NEAR(-f1, K * u1, 0.05 * K * u1);
+  EXPECT_NEAR(-f2, K * u2, 0.05 * K * u2);
+  for (const glm::vec4& g : sheet.solver->tools()->grips().readback<glm::vec4>(points)) EXPECT_EQ(g.w, 0.0f);
   EXPECT_LT(std::abs(u3), 0.02 * u2);
   EXPECT_LT(std::abs(f3), 1e-3 * std::abs(f2));
 }
