@@ -12,6 +12,7 @@ packages=(
   libglm-dev nlohmann-json3-dev libglfw3-dev libgtest-dev
   libpng-dev               # PNG frames (render/)
   xvfb xauth               # a virtual X server: the windowed viewer runs in CI
+  libimgui-dev             # Dear ImGui with its GLFW and Vulkan backends: the viewer's panel
 )
 
 missing=()

@@ -510,6 +510,7 @@ void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, 
     vkCmdBindVertexBuffers(cmd, 0, 1, &vertices, &offset);
     vkCmdDraw(cmd, toolVertices, 1, 0, 0);
   }
+  if (overlay_) overlay_(cmd);
   vkCmdEndRenderPass(cmd);
 
   VkBufferImageCopy copy{};

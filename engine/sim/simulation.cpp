@@ -119,7 +119,10 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
   solver_ = std::make_unique<SphSolver>(context, *store_, scene.domain.min, scene.domain.max, scene.sph,
                                         scene.stepsPerBatch);
   if (build.network) solver_->attachWall(*build.network);  // a scene without walls runs no wall stage
-  if (scene.vessel && scene.vessel->inflow) solver_->setInflow(*scene.vessel->inflow);
+  if (scene.vessel && scene.vessel->inflow) {
+    inflow_ = *scene.vessel->inflow;
+    solver_->setInflow(*inflow_);
+  }
   if (!scene.tools.empty()) {  // (after the wall: the tools push its free points)
     try {
       solver_->attachTools(scene.tools);
@@ -143,6 +146,20 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
   solver_->recordReset(*recorder_);
   recorder_->end();
   recorder_->submitAndWait();
+}
+
+void Simulation::setInflowSpeed(float metresPerSecond) {
+  if (!inflow_) throw std::logic_error("the scene has no inflow zone (vessel.inflow)");
+  if (!std::isfinite(metresPerSecond)) throw std::invalid_argument("inflow speed must be finite (m/s)");
+  Inflow changed = *inflow_;
+  changed.meanSpeed = metresPerSecond;
+  solver_->setInflow(changed);
+  inflow_ = changed;
+}
+
+void Simulation::setWallStiffnessScale(float scale) {
+  if (!solver_->wall()) throw std::logic_error("the scene has no vessel wall");
+  solver_->wall()->setStiffnessScale(scale);
 }
 
 double Simulation::time() const { return solver_->readClock().time; }

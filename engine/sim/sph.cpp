@@ -998,6 +998,13 @@ void SphSolver::setInflow(const Inflow& inflow) {
   }
 }
 
+void SphSolver::setBackgroundPressure(float pascals) {
+  if (!std::isfinite(pascals)) throw std::invalid_argument("background pressure must be finite (Pa)");
+  settings_.backgroundPressure = pascals;
+  params_.backgroundPressure = pascals;
+  paramsBuffer_.upload(std::vector<SphParams>{params_});
+}
+
 void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   if (wall_) wall_->recordReset(rec);
   rec.fill(clock_, 0);

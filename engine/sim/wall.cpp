@@ -136,6 +136,9 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   std::vector<glm::vec4> info(std::max<std::size_t>(idCount_, 1), glm::vec4(0.0f));
   for (std::uint32_t i = 0; i < idCount_; ++i) info[i] = glm::vec4(network.points[i].mass, network.points[i].anchored ? 1.0f : 0.0f, 0.0f, 0.0f);
   if (!gpuSprings.empty()) springs_.upload(gpuSprings);
+  builtStiffness_.reserve(gpuSprings.size());
+  builtDamping_.reserve(gpuSprings.size());
+  for (const GpuSpring& g : gpuSprings) builtStiffness_.push_back(g.stiffness), builtDamping_.push_back(g.damping);
   first_.upload(first);
   springsOf_.upload(springsOf);
   wallInfo_.upload(info);
@@ -321,6 +324,21 @@ std::uint32_t MassSpring::readBrokenCount() const {
 
 std::uint32_t MassSpring::readDetachedCount() const {
   return counters_.readback<std::uint32_t>(4)[HEMO_WALL_COUNTER_DETACHED];
+}
+
+void MassSpring::setStiffnessScale(float scale) {
+  if (!(std::isfinite(scale) && scale > 0.0f)) {
+    throw std::invalid_argument("wall stiffness scale must be positive and finite, got " + std::to_string(scale));
+  }
+  stiffnessScale_ = scale;
+  if (springCount_ == 0) return;
+  std::vector<GpuSpring> springs = readSprings();
+  const float dampingScale = std::sqrt(scale);
+  for (std::size_t k = 0; k < springs.size(); ++k) {
+    springs[k].stiffness = builtStiffness_[k] * scale;
+    springs[k].damping = builtDamping_[k] * dampingScale;
+  }
+  springs_.upload(springs);
 }
 
 std::vector<GpuSpring> MassSpring::readSprings() const {

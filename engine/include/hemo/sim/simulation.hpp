@@ -159,6 +159,23 @@ class Simulation {
   ParticleStore& store() { return *store_; }
   SphSolver& solver() { return *solver_; }
 
+  // Live controls, between runs (hemo-view's panel): each is an upload that takes effect from
+  // the next step. They are not checkpoint state: a checkpoint written after a change resumes
+  // with the scene's values.
+  // The lumen's background pressure p_bg (Pa; fluid.background_pressure_Pa). Throws
+  // std::invalid_argument if it is not finite.
+  void setLumenPressure(float pascals) { solver_->setBackgroundPressure(pascals); }
+  float lumenPressure() const { return solver_->settings().backgroundPressure; }
+  // The inflow zone's mean speed U (m/s; a waveform scales it, a ramp still applies). Throws
+  // std::logic_error without an inflow zone, std::invalid_argument for a non-finite speed.
+  bool hasInflow() const { return inflow_.has_value(); }
+  void setInflowSpeed(float metresPerSecond);
+  float inflowSpeed() const { return inflow_ ? inflow_->meanSpeed : 0.0f; }
+  // The wall's springs' stiffness times `scale` (MassSpring::setStiffnessScale). Throws
+  // std::logic_error without a wall.
+  void setWallStiffnessScale(float scale);
+  float wallStiffnessScale() const { return solver_->wall() ? solver_->wall()->stiffnessScale() : 1.0f; }
+
   // The step below which a run stops (time.min_dt_s, or 1e-4 of the scene's own step), and
   // that own step: the smallest of the fluid's acoustic (DFSPH: flow) limit at the expected
   // speed, max_dt_s, the viscous limit and the wall's spring limit times its substeps.
@@ -219,6 +236,7 @@ class Simulation {
   gpu::Buffer reports_[2];
   std::uint32_t reportSlot_ = 0;
   ToolFeedback feedback_;
+  std::optional<Inflow> inflow_;  // the inflow zone as driven now (setInflowSpeed)
 };
 
 }  // namespace hemo::sim

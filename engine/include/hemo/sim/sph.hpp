@@ -275,6 +275,10 @@ class SphSolver {
   // Drives the fluid in a vessel's inflow zone (hemo/sim/inflow.hpp). Set-up only (an upload);
   // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
   void setInflow(const Inflow& inflow);
+  // The background (lumen) pressure p_bg (Pa) from the next step on: an upload, between
+  // batches. A ramp still rising goes on towards the new value. Throws std::invalid_argument
+  // if it is not finite.
+  void setBackgroundPressure(float pascals);
 
   // Resets clock, status and counters (set-up; records transfer commands).
   void recordReset(gpu::CommandRecorder& rec);

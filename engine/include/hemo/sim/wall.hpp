@@ -149,6 +149,13 @@ class MassSpring {
   // them (a readback).
   std::uint32_t readDetachedCount() const;
   std::vector<GpuSpring> readSprings() const;        // with their broken flags (a readback)
+  // Every spring's stiffness as built times `scale` (> 0, finite) and its damping times
+  // sqrt(scale), which keeps each spring's damping ratio; rest lengths, maximum forces and
+  // broken flags stay (a softer wall stretches further before it tears). Between batches: a
+  // readback and an upload. The step's spring limit follows on the GPU (it reads the live
+  // stiffness); the substeps stay as built. Throws std::invalid_argument for a bad scale.
+  void setStiffnessScale(float scale);
+  float stiffnessScale() const { return stiffnessScale_; }
   const gpu::Buffer& counters() const { return counters_; }  // uint[4] (interface/wall.h)
   // Per slot of the first n: vec2(largest strain of the particle's unbroken springs, fraction
   // of its springs broken) for wall particles, 0 for others (wall/point_shade.comp), into
@@ -169,6 +176,8 @@ class MassSpring {
   float timeStepFactor_, acousticLength_, soundSpeed_;
   std::uint32_t substeps_ = 1;
   double springLimit_ = 3.0e38;
+  float stiffnessScale_ = 1.0f;
+  std::vector<float> builtStiffness_, builtDamping_;  // as built (setStiffnessScale)
   gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_, shade_;
   gpu::Buffer held_;  // vec4 per slot: what the fluid and gravity give a wall particle for the step
   const gpu::ComputePipeline* forces_;

@@ -16,6 +16,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <map>
 #include <tuple>
 #include <utility>
@@ -106,6 +107,11 @@ class OffscreenRenderer {
   void record(gpu::CommandRecorder& rec, const Camera& camera, const FrameOptions& options,
               const ParticleView& particles, const surface::MarchingCubes* surface,
               const SpringView* springs = nullptr, const ToolView* tools = nullptr);
+  // Drawn over each frame, last inside its render pass (hemo-view's panel): called with the
+  // command buffer being recorded. Its pipelines must be made for renderPass() (subpass 0: one
+  // RGBA8 colour attachment and a depth attachment, one sample). Empty: nothing.
+  void setOverlay(std::function<void(VkCommandBuffer)> overlay) { overlay_ = std::move(overlay); }
+  VkRenderPass renderPass() const { return renderPass_; }
   // RGBA8 pixels of the last recorded frame (after its submission completed), top row first.
   std::vector<std::uint8_t> readPixels() const;
   // The rendered image (TRANSFER_SRC_OPTIMAL after a frame), for presenting (Swapchain).
@@ -140,6 +146,7 @@ class OffscreenRenderer {
   std::map<std::tuple<VkBuffer, VkBuffer, VkBuffer>, VkDescriptorSet> storageSets_;
   gpu::Buffer pixels_;
   gpu::Buffer noShade_;  // bound when a view has no wall shade (never read then)
+  std::function<void(VkCommandBuffer)> overlay_;
   gpu::Buffer toolStaging_, toolVertices_;  // the tools' triangles (host-written, and for drawing)
 };
 
