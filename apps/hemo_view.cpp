@@ -52,7 +52,8 @@ const char* kUsage =
     "mouse: left drag orbits, wheel zooms, right drag moves the active tool on the plane facing\n"
     "the camera (a blade cuts while dragged), Shift+wheel or Up/Down moves it in depth;\n"
     "keys: Tab next tool, G close/open a grasper, Space pause, N step, R reset, S surface,\n"
-    "P particles, W wall, L springs, B boundary, C cutaway, H panel, Esc/Q quit\n"
+    "T wall surface, P particles, W wall particles, L springs, B boundary, C cutaway, H panel,\n"
+    "Esc/Q quit\n"
     "hemo-view --help prints this text\n";
 
 // The hand's hold on one tool.
@@ -71,6 +72,8 @@ struct ViewState {
   bool stepOnce = false;
   bool surface = true;
   bool panel = true;
+  bool wallSurface = false;  // the wall as a shaded surface (T) ...
+  bool wallParticles = true; // ... else as particles (W)
   bool quit = false;
   bool reset = false;
   hemo::render::FrameOptions frame;
@@ -124,11 +127,12 @@ void handleKey(ViewState& s, int key) {
     case GLFW_KEY_R: s.reset = true; break;
     case GLFW_KEY_S: s.surface = !s.surface; break;
     case GLFW_KEY_P: s.frame.fluid = !s.frame.fluid; break;
-    case GLFW_KEY_W: s.frame.wall = !s.frame.wall; break;
+    case GLFW_KEY_W: s.wallParticles = !s.wallParticles; break;
     case GLFW_KEY_B: s.frame.boundary = !s.frame.boundary; break;
     case GLFW_KEY_C: s.frame.cutaway = !s.frame.cutaway; break;
     case GLFW_KEY_L: s.frame.springs = !s.frame.springs; break;
     case GLFW_KEY_H: s.panel = !s.panel; break;
+    case GLFW_KEY_T: s.wallSurface = !s.wallSurface; break;
     case GLFW_KEY_TAB:
       if (!s.tools.empty()) s.active = (s.active + 1) % std::uint32_t(s.tools.size());
       break;
@@ -216,7 +220,8 @@ const std::map<std::string, int>& scriptKeys() {
       {"space", GLFW_KEY_SPACE}, {"n", GLFW_KEY_N},     {"r", GLFW_KEY_R},       {"s", GLFW_KEY_S},
       {"p", GLFW_KEY_P},         {"w", GLFW_KEY_W},     {"b", GLFW_KEY_B},       {"c", GLFW_KEY_C},
       {"l", GLFW_KEY_L},         {"h", GLFW_KEY_H},     {"tab", GLFW_KEY_TAB},   {"g", GLFW_KEY_G},
-      {"up", GLFW_KEY_UP},       {"down", GLFW_KEY_DOWN}, {"q", GLFW_KEY_Q},    {"escape", GLFW_KEY_ESCAPE}};
+      {"up", GLFW_KEY_UP},       {"down", GLFW_KEY_DOWN}, {"q", GLFW_KEY_Q},    {"escape", GLFW_KEY_ESCAPE},
+      {"t", GLFW_KEY_T}};
   return keys;
 }
 
@@ -494,7 +499,11 @@ int main(int argc, char** argv) {
     state.pitch = std::asin(toEye.z / state.distance);
     state.frame.fluid = false;
     state.frame.boundary = true;
-    state.frame.cutaway = true;
+    // With a wall: drawn as a translucent tissue surface, the blood showing through (T: as
+    // particles, cut away on the camera's side).
+    state.wallSurface = sim->wallParticles() > 0 && sim->springs() > 0;
+    state.frame.cutaway = !state.wallSurface;
+    state.frame.wallOpacity = 0.5f;
     state.frame.particleRadius = 0.5f * scene.sph.spacing;
     state.frame.speedScale = std::max(scene.expectedMaxSpeed, 1e-3f);
     state.domainMin = scene.domain.min;
@@ -594,6 +603,12 @@ int main(int argc, char** argv) {
           float inflow = sim->inflowSpeed();
           if (ImGui::SliderFloat("inflow m/s", &inflow, -inflowMax, inflowMax, "%.3f")) setControl("inflow_speed", inflow);
         }
+        if (sim->springs() > 0) {
+          ImGui::Checkbox("wall surface (T)", &state.wallSurface);
+          ImGui::SameLine();
+          ImGui::SetNextItemWidth(110.0f);
+          ImGui::SliderFloat("opacity", &state.frame.wallOpacity, 0.05f, 1.0f, "%.2f");
+        }
         if (sim->wallParticles() > 0) {
           float stiffness = sim->wallStiffnessScale();
           if (ImGui::SliderFloat("stiffness x", &stiffness, 0.1f, 4.0f, "%.2f", ImGuiSliderFlags_Logarithmic)) {
@@ -672,11 +687,19 @@ int main(int argc, char** argv) {
       if (state.surface) sim->recordSurface(rec);
       sim->recordWallShade(rec);
       const hemo::render::ToolView tools{state.tools.empty() ? nullptr : &state.tools, state.now};
+      hemo::render::WallSurfaceView wallView;
+      if (state.wallSurface) {
+        wallView = {&sim->store().live().positions, &sim->solver().grid().slotOfId(), &sim->solver().wall()->springs(),
+                    &sim->enableWallSurface(), &sim->store().live().normals, sim->wallShade(), sim->wallTriangleCount(),
+                    sim->solver().grid().spec().period, sim->solver().grid().spec().origin};
+      }
+      state.frame.wall = !state.wallSurface && state.wallParticles;
       renderer->setOverlay(state.panel ? Panel::draw : std::function<void(VkCommandBuffer)>{});
       renderer->record(rec, state.camera, state.frame,
                        {&sim->store().live().positions, &sim->store().live().velocities, sim->store().count(),
                         sim->wallShade()},
-                       state.surface ? sim->surfaceExtractor() : nullptr, &springView, &tools);
+                       state.surface ? sim->surfaceExtractor() : nullptr, &springView, &tools,
+                       state.wallSurface ? &wallView : nullptr);
       rec.end();
       rec.submitAndWait();
       if (!swapchain.present(renderer->colorImage(), renderer->extent())) swapchain.recreate({width, height});

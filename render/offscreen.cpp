@@ -4,6 +4,7 @@
 #include "interface/render.h"
 
 #include <glm/geometric.hpp>
+#include <glm/vector_relational.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <algorithm>
@@ -37,6 +38,15 @@ struct SurfacePush {
   glm::vec4 eye, light, color;
 };
 static_assert(sizeof(SurfacePush) == 112);
+
+struct WallPush {
+  glm::mat4 viewProj;
+  glm::vec4 period;  // w: strain scale
+  glm::vec4 origin;  // w: opacity
+  glm::vec4 eye;     // w: cutaway on
+  glm::vec4 cut;
+};
+static_assert(sizeof(WallPush) == 128);
 
 constexpr std::uint32_t kMaxParticleSets = 16;
 
@@ -130,6 +140,9 @@ OffscreenRenderer::~OffscreenRenderer() {
   if (particlePipelineLayout_) vkDestroyPipelineLayout(d, particlePipelineLayout_, nullptr);
   if (springPipeline_) vkDestroyPipeline(d, springPipeline_, nullptr);
   if (springPipelineLayout_) vkDestroyPipelineLayout(d, springPipelineLayout_, nullptr);
+  if (wallOpaquePipeline_) vkDestroyPipeline(d, wallOpaquePipeline_, nullptr);
+  if (wallBlendPipeline_) vkDestroyPipeline(d, wallBlendPipeline_, nullptr);
+  if (wallPipelineLayout_) vkDestroyPipelineLayout(d, wallPipelineLayout_, nullptr);
   if (surfacePipelineLayout_) vkDestroyPipelineLayout(d, surfacePipelineLayout_, nullptr);
   if (pool_) vkDestroyDescriptorPool(d, pool_, nullptr);
   if (particleLayout_) vkDestroyDescriptorSetLayout(d, particleLayout_, nullptr);
@@ -290,6 +303,14 @@ void OffscreenRenderer::createPipelines() {
   VkPipelineLayoutCreateInfo spl = pl;
   spl.pPushConstantRanges = &springRange;
   gpu::check(vkCreatePipelineLayout(d, &spl, nullptr, &springPipelineLayout_), "vkCreatePipelineLayout");
+  // The wall's surface: two sets of the same layout (interface/render.h).
+  VkPushConstantRange wallRange{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(WallPush)};
+  const VkDescriptorSetLayout wallSets[2] = {particleLayout_, particleLayout_};
+  VkPipelineLayoutCreateInfo wl = pl;
+  wl.setLayoutCount = 2;
+  wl.pSetLayouts = wallSets;
+  wl.pPushConstantRanges = &wallRange;
+  gpu::check(vkCreatePipelineLayout(d, &wl, nullptr, &wallPipelineLayout_), "vkCreatePipelineLayout");
   VkPushConstantRange surfaceRange{VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0, sizeof(SurfacePush)};
   VkPipelineLayoutCreateInfo sl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
   sl.pushConstantRangeCount = 1;
@@ -358,6 +379,22 @@ void OffscreenRenderer::createPipelines() {
   build(module("render/springs.vert"), module("render/springs.frag"), noInput, springPipelineLayout_, springPipeline_,
         VK_PRIMITIVE_TOPOLOGY_LINE_LIST);
 
+  const VkShaderModule wallVert = module("render/wall_surface.vert"), wallFrag = module("render/wall_surface.frag");
+  build(wallVert, wallFrag, noInput, wallPipelineLayout_, wallOpaquePipeline_);
+  // Translucent: blended over what is behind (straight alpha), tested against the depth of
+  // the opaque things but not writing it, so both sides of a vessel show.
+  blendAttachment.blendEnable = VK_TRUE;
+  blendAttachment.srcColorBlendFactor = VK_BLEND_FACTOR_SRC_ALPHA;
+  blendAttachment.dstColorBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+  blendAttachment.colorBlendOp = VK_BLEND_OP_ADD;
+  blendAttachment.srcAlphaBlendFactor = VK_BLEND_FACTOR_ONE;
+  blendAttachment.dstAlphaBlendFactor = VK_BLEND_FACTOR_ONE_MINUS_SRC_ALPHA;
+  blendAttachment.alphaBlendOp = VK_BLEND_OP_ADD;
+  depth.depthWriteEnable = VK_FALSE;
+  build(wallVert, wallFrag, noInput, wallPipelineLayout_, wallBlendPipeline_);
+  blendAttachment.blendEnable = VK_FALSE;
+  depth.depthWriteEnable = VK_TRUE;
+
   VkVertexInputBindingDescription binding{0, HEMO_RENDER_SURFACE_STRIDE, VK_VERTEX_INPUT_RATE_VERTEX};
   VkVertexInputAttributeDescription attributes[2] = {{0, 0, VK_FORMAT_R32G32B32A32_SFLOAT, 0},
                                                      {1, 0, VK_FORMAT_R32G32B32A32_SFLOAT, 16}};
@@ -401,7 +438,7 @@ VkDescriptorSet OffscreenRenderer::storageSet(const gpu::Buffer& b0, const gpu::
 
 void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, const FrameOptions& options,
                                const ParticleView& particles, const surface::MarchingCubes* surface,
-                               const SpringView* springs, const ToolView* tools) {
+                               const SpringView* springs, const ToolView* tools, const WallSurfaceView* wall) {
   // The tools' triangles: written to host memory, copied to a vertex buffer before the
   // barrier below (which orders transfers before drawing too).
   std::uint32_t toolVertices = 0;
@@ -434,6 +471,14 @@ void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, 
   }
   const VkDescriptorSet springSet =
       drawSprings ? storageSet(*springs->positions, *springs->slotOfId, *springs->springs) : VK_NULL_HANDLE;
+  const bool drawWall = wall && wall->count > 0 && options.wallOpacity > 0.0f;
+  if (drawWall && (!wall->positions || !wall->slotOfId || !wall->springs || !wall->triangles || !wall->normals ||
+                   !wall->shade)) {
+    throw std::invalid_argument("wall surface view without buffers");
+  }
+  const VkDescriptorSet wallSets[2] = {
+      drawWall ? storageSet(*wall->positions, *wall->slotOfId, *wall->springs) : VK_NULL_HANDLE,
+      drawWall ? storageSet(*wall->triangles, *wall->normals, *wall->shade) : VK_NULL_HANDLE};
   rec.computeToGraphics();
   VkCommandBuffer cmd = rec.handle();
   VkClearValue clears[2]{};
@@ -509,6 +554,24 @@ void OffscreenRenderer::record(gpu::CommandRecorder& rec, const Camera& camera, 
     const VkDeviceSize offset = 0;
     vkCmdBindVertexBuffers(cmd, 0, 1, &vertices, &offset);
     vkCmdDraw(cmd, toolVertices, 1, 0, 0);
+  }
+  if (drawWall) {
+    WallPush push{};
+    push.viewProj = viewProj;
+    push.period = glm::vec4(wall->period, std::max(options.strainScale, 1e-9f));
+    push.origin = glm::vec4(wall->origin, std::min(options.wallOpacity, 1.0f));
+    push.eye = glm::vec4(camera.eye, options.cutaway ? 1.0f : 0.0f);
+    if (options.cutaway) {
+      const glm::vec3 n = glm::normalize(camera.eye - camera.target);
+      push.cut = glm::vec4(n, glm::dot(n, camera.target));
+    }
+    vkCmdBindPipeline(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS,
+                      options.wallOpacity >= 1.0f ? wallOpaquePipeline_ : wallBlendPipeline_);
+    vkCmdBindDescriptorSets(cmd, VK_PIPELINE_BIND_POINT_GRAPHICS, wallPipelineLayout_, 0, 2, wallSets, 0, nullptr);
+    vkCmdPushConstants(cmd, wallPipelineLayout_, VK_SHADER_STAGE_VERTEX_BIT | VK_SHADER_STAGE_FRAGMENT_BIT, 0,
+                       sizeof(push), &push);
+    // Instance 1: the copies of triangles across a periodic seam (render/shaders/wall_surface.vert).
+    vkCmdDraw(cmd, 3 * wall->count, glm::any(glm::greaterThan(wall->period, glm::vec3(0.0f))) ? 2 : 1, 0, 0);
   }
   if (overlay_) overlay_(cmd);
   vkCmdEndRenderPass(cmd);

@@ -23,6 +23,14 @@
 #define HEMO_RENDER_SPRINGS_BINDING_SLOT_OF_ID 1
 #define HEMO_RENDER_SPRINGS_BINDING_SPRINGS 2  // Spring records (interface/wall.h)
 #define HEMO_RENDER_SPRINGS_BINDING_COUNT 3
+
+// The wall's surface (render/shaders/wall_surface.vert): two sets of the same three-buffer
+// layout. Set 0 is the springs' (positions, slot of id, springs); set 1:
+#define HEMO_RENDER_WALL_BINDING_TRIANGLES 0  // uint[6] per triangle: ids a, b, c, then the
+                                              // springs along (a, b), (b, c), (c, a)
+                                              // (hemo/sim/wall_surface.hpp)
+#define HEMO_RENDER_WALL_BINDING_NORMALS 1    // vec4 per slot: the wall's normal (xyz)
+#define HEMO_RENDER_WALL_BINDING_SHADE 2      // vec2 per slot: (strain, broken fraction)
 // push (96 bytes): mat4 viewProj; vec4 period (xyz m, w strain scale); uvec4 flags (x: draw
 //                  broken springs)
 

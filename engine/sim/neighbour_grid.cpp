@@ -286,4 +286,13 @@ void NeighbourList::record(gpu::CommandRecorder& rec, std::uint32_t n) const {
   rec.computeToCompute();
 }
 
+void NeighbourGrid::setUploadedSlots(const std::vector<std::uint32_t>& ids) {
+  const std::size_t capacity = slotOfId_.size() / 4;
+  std::vector<std::uint32_t> slots(capacity, 0u);
+  for (std::size_t slot = 0; slot < ids.size(); ++slot) {
+    if (ids[slot] < capacity) slots[ids[slot]] = static_cast<std::uint32_t>(slot);
+  }
+  slotOfId_.upload(slots);
+}
+
 }  // namespace hemo::sim

@@ -2,6 +2,7 @@
 
 #include "hemo/io/checkpoint.hpp"
 #include "hemo/io/hash.hpp"
+#include "hemo/sim/wall_surface.hpp"
 #include "interface/sph.h"
 
 #include <algorithm>
@@ -118,7 +119,14 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
   store_->upload(set.positions, set.velocities, set.ids, set.normals);
   solver_ = std::make_unique<SphSolver>(context, *store_, scene.domain.min, scene.domain.max, scene.sph,
                                         scene.stepsPerBatch);
+  solver_->grid().setUploadedSlots(set.ids);
   if (build.network) solver_->attachWall(*build.network);  // a scene without walls runs no wall stage
+  if (build.network) {  // the builders' normals of the wall points, for enableWallSurface
+    wallNormals_.resize(build.network->points.size());
+    for (std::size_t id = 0; id < wallNormals_.size() && id < set.normals.size(); ++id) {
+      wallNormals_[id] = glm::vec3(set.normals[id]);
+    }
+  }
   if (scene.vessel && scene.vessel->inflow) {
     inflow_ = *scene.vessel->inflow;
     solver_->setInflow(*inflow_);
@@ -160,6 +168,21 @@ void Simulation::setInflowSpeed(float metresPerSecond) {
 void Simulation::setWallStiffnessScale(float scale) {
   if (!solver_->wall()) throw std::logic_error("the scene has no vessel wall");
   solver_->wall()->setStiffnessScale(scale);
+}
+
+const gpu::Buffer& Simulation::enableWallSurface() {
+  if (wallTriangles_) return *wallTriangles_;
+  const MassSpring* wall = solver_->wall();
+  if (!wall || wall->springCount() == 0) throw std::logic_error("the scene has no vessel wall with springs");
+  const Snapshot state = snapshot();
+  const std::vector<std::uint32_t> triangles =
+      wallSurfaceTriangles(wall->readSprings(), wall->readFrames(), state.positions, solver_->grid().spec().period,
+                           wallNormals_);
+  wallTriangleCount_ = static_cast<std::uint32_t>(triangles.size() / kWallTriangleWords);
+  wallTriangles_.emplace(*context_, std::max<std::size_t>(triangles.size(), 1) * 4, gpu::MemoryUse::Device,
+                         "wall surface triangles");
+  if (!triangles.empty()) wallTriangles_->upload(triangles);
+  return *wallTriangles_;
 }
 
 double Simulation::time() const { return solver_->readClock().time; }

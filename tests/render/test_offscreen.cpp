@@ -3,6 +3,8 @@
 #include "gpu_test.hpp"
 #include "hemo/render/renderer.hpp"
 #include "hemo/sim/particles.hpp"
+#include "hemo/scene/scene.hpp"
+#include "hemo/sim/simulation.hpp"
 #include "hemo/sim/wall.hpp"
 
 #include <glm/geometric.hpp>
@@ -302,6 +304,97 @@ TEST_F(RenderTest, SpringsAreDrawnByStrainAndBrokenOnesMarked) {
   EXPECT_EQ(hidden.r, background.r) << "broken springs left out on request";
   EXPECT_EQ(hidden.b, background.b);
   EXPECT_NE(lineAt(0).r, background.r) << "the others still drawn";
+}
+
+// The wall's surface (sim::Simulation::enableWallSurface, render/shaders/wall_surface.*): a
+// periodic tube seen side on covers its silhouette to its ends (the seam's triangles are drawn
+// a period apart and kept inside the domain), nothing beyond it; with every spring in its
+// middle third broken, the background shows through there (near and far sides torn) and the
+// outer thirds stay covered.
+TEST_F(RenderTest, WallSurfaceCoversTheTubeAndTearsWhereSpringsBroke) {
+  const scene::Scene scene = scene::parseScene(R"({
+    "scene": "wall_surface",
+    "particles": { "spacing_m": 5e-4 },
+    "fluid": { "density_kg_m3": 1060.0, "viscosity_pa_s": 0.0035, "expected_max_speed_m_s": 0.5 },
+    "vessel": { "shape": "tube", "length_m": 0.012, "radius_m": 0.002, "point_mass_kg": 2e-5,
+                "stiffness_N_m": 200.0, "damping_N_s_m": 0.01 },
+    "forces": { "gravity_m_s2": [0, 0, 0] },
+    "domain": { "min_m": [0.0, -0.004, -0.004], "max_m": [0.012, 0.004, 0.004], "periodic": ["x"] }
+  })", "wall_surface");
+  sim::Simulation sim(ctx(), scene);  // drawn before its first step: the slots of the upload
+  const gpu::Buffer& triangles = sim.enableWallSurface();
+  ASSERT_GT(sim.wallTriangleCount(), 0u);
+  const std::uint32_t W = 400, H = 240;
+  render::OffscreenRenderer renderer(ctx(), W, H);
+  render::Camera camera;
+  camera.eye = glm::vec3(0.006f, -0.06f, 0.0f);
+  camera.target = glm::vec3(0.006f, 0.0f, 0.0f);
+  camera.fovY = 0.2f;
+  camera.nearPlane = 1e-3f;
+  camera.farPlane = 1.0f;
+  render::FrameOptions options;
+  options.particleRadius = 0.0f;
+  options.wallOpacity = 1.0f;
+  const render::WallSurfaceView view{&sim.store().live().positions, &sim.solver().grid().slotOfId(),
+                                     &sim.solver().wall()->springs(), &triangles, &sim.store().live().normals,
+                                     sim.wallShade(), sim.wallTriangleCount(), sim.solver().grid().spec().period,
+                                     sim.solver().grid().spec().origin};
+  auto draw = [&]() {
+    gpu::CommandRecorder rec(ctx());
+    rec.begin();
+    sim.recordWallShade(rec);
+    renderer.record(rec, camera, options, {}, nullptr, nullptr, nullptr, &view);
+    rec.end();
+    rec.submitAndWait();
+    return renderer.readPixels();
+  };
+  const Rgb background{int(std::lround(options.background.r * 255.0f)), int(std::lround(options.background.g * 255.0f)),
+                       int(std::lround(options.background.b * 255.0f))};
+  // The outer layer's radius and the spacing of its rings along x.
+  const sim::Snapshot state = sim.snapshot();
+  double rOuter = 0.0;
+  for (std::size_t i = 0; i < state.positions.size(); ++i) {
+    if (state.velocities[i].w != 0.0f) rOuter = std::max(rOuter, std::hypot(double(state.positions[i].y), double(state.positions[i].z)));
+  }
+  const float L = 0.012f, dx = 5e-4f;
+  // The share of sample points (x, 0, z), x in [x0, x1], |z| in [z0, z1], whose pixel shows
+  // the wall (not the background).
+  auto covered = [&](const std::vector<std::uint8_t>& rgba, float x0, float x1, float z0, float z1) {
+    int hit = 0, all = 0;
+    for (float x = x0; x <= x1; x += 1e-4f)
+      for (float z = z0; z <= z1; z += 1e-4f)
+        for (float sign : {-1.0f, 1.0f}) {
+          const glm::vec2 p = project(camera, glm::vec3(x, 0.0f, sign * z), W, H);
+          const Rgb c = pixel(rgba, W, std::uint32_t(p.x), std::uint32_t(p.y));
+          hit += c.r != background.r || c.g != background.g || c.b != background.b;
+          ++all;
+        }
+    return double(hit) / all;
+  };
+  const float inside = float(0.85 * rOuter), outside = float(1.15 * rOuter);
+  std::vector<std::uint8_t> rgba = draw();
+  EXPECT_EQ(covered(rgba, 0.05f * dx, L - 0.05f * dx, 0.0f, inside), 1.0) << "the tube's silhouette, seams included";
+  EXPECT_EQ(covered(rgba, 0.05f * dx, L - 0.05f * dx, outside, 1.6f * outside), 0.0) << "beyond the tube";
+  const glm::vec2 mid = project(camera, glm::vec3(0.3f * L, 0.0f, 0.0f), W, H);
+  const Rgb tissue = pixel(rgba, W, std::uint32_t(mid.x), std::uint32_t(mid.y));
+  EXPECT_GT(tissue.r, tissue.g + 20) << "tissue coloured";
+
+  // Break every spring with both ends in the middle third.
+  std::vector<sim::GpuSpring> springs = sim.solver().wall()->readSprings();
+  std::size_t broken = 0;
+  for (sim::GpuSpring& s : springs) {
+    const float xa = state.positions[s.a].x, xb = state.positions[s.b].x;
+    if (xa > L / 3 && xa < 2 * L / 3 && xb > L / 3 && xb < 2 * L / 3) s.broken = 1u, ++broken;
+  }
+  ASSERT_GT(broken, 100u);
+  std::vector<gpu::Buffer*> buffers;
+  sim.solver().wall()->checkpointBuffers(buffers);
+  buffers.front()->upload(springs);  // the springs' records come first
+  rgba = draw();
+  EXPECT_EQ(covered(rgba, L / 3 + dx, 2 * L / 3 - dx, 0.0f, inside), 0.0) << "torn: the background shows through";
+  EXPECT_EQ(covered(rgba, 0.05f * dx, L / 3 - 2 * dx, 0.0f, inside), 1.0) << "the first third stays";
+  EXPECT_EQ(covered(rgba, 2 * L / 3 + 2 * dx, L - 0.05f * dx, 0.0f, inside), 1.0) << "the last third stays";
+  std::printf("wall surface: %u triangles, %zu springs broken in the middle third\n", sim.wallTriangleCount(), broken);
 }
 
 }  // namespace

@@ -80,6 +80,11 @@ class NeighbourGrid {
   const GridSpec& spec() const { return spec_; }
   const gpu::Buffer& cellStart() const { return cellStart_; }  // keyCount + 1 entries
   const gpu::Buffer& slotOfId() const { return slotOfId_; }    // id -> slot (ids < capacity)
+  // Before the first build: the slot of each id where the particles were uploaded (ids[slot],
+  // below the capacity), so that what reads the map between set-up and the first step (the
+  // renderer's springs and wall surface) finds the particles. An upload; ids not listed map to
+  // slot 0.
+  void setUploadedSlots(const std::vector<std::uint32_t>& ids);
   const gpu::Buffer& counters() const { return counters_; }
   const gpu::Buffer& positionsAtBuild() const { return posAtBuild_; }  // vec4 per slot: (x, kind)
   GridCounters readCounters() const;

@@ -141,6 +141,13 @@ class Simulation {
   // nullptr without a wall).
   void recordWallShade(gpu::CommandRecorder& rec);
   const gpu::Buffer* wallShade() const { return solver_->wall() ? &solver_->wall()->shade() : nullptr; }
+  // The wall's outermost layer as a surface for drawing (hemo/sim/wall_surface.hpp): triangles
+  // of particle ids with their edges' springs, kWallTriangleWords uints each. Built on first use from the
+  // wall's springs and frames (readbacks) and the particles' positions now: a run nobody looks
+  // at never has them. Throws std::logic_error without a wall.
+  const gpu::Buffer& enableWallSurface();
+  const gpu::Buffer* wallTriangles() const { return wallTriangles_ ? &*wallTriangles_ : nullptr; }
+  std::uint32_t wallTriangleCount() const { return wallTriangleCount_; }
   const scene::Scene& scene() const { return scene_; }
   std::uint32_t fluidParticles() const { return fluid_; }
   std::uint32_t boundaryParticles() const { return boundary_; }
@@ -237,6 +244,9 @@ class Simulation {
   std::uint32_t reportSlot_ = 0;
   ToolFeedback feedback_;
   std::optional<Inflow> inflow_;  // the inflow zone as driven now (setInflowSpeed)
+  std::optional<gpu::Buffer> wallTriangles_;  // enableWallSurface
+  std::vector<glm::vec3> wallNormals_;         // by wall point id, as built (inward)
+  std::uint32_t wallTriangleCount_ = 0;
 };
 
 }  // namespace hemo::sim

@@ -289,6 +289,7 @@ class SphSolver {
   const SphSettings& settings() const { return settings_; }
   const SphParams& params() const { return params_; }
   const NeighbourGrid& grid() const { return grid_; }
+  NeighbourGrid& grid() { return grid_; }
   const gpu::Buffer& state() const { return state_; }     // vec4 (rho, p, d rho/dt with continuity density and RK2, else 0, 0) per slot
   const gpu::Buffer& accel() const { return accel_; }     // vec4 (a, 0) per slot
   const gpu::Buffer& dtLimits() const { return dtLimit_; }

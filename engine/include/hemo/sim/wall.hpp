@@ -149,6 +149,8 @@ class MassSpring {
   // them (a readback).
   std::uint32_t readDetachedCount() const;
   std::vector<GpuSpring> readSprings() const;        // with their broken flags (a readback)
+  // The normal frames, two ids per point id (frame A, frame B; WallPoint::kNoFrame without).
+  std::vector<std::uint32_t> readFrames() const { return frames_.readback<std::uint32_t>(std::size_t(idCount_) * 2); }
   // Every spring's stiffness as built times `scale` (> 0, finite) and its damping times
   // sqrt(scale), which keeps each spring's damping ratio; rest lengths, maximum forces and
   // broken flags stay (a softer wall stretches further before it tears). Between batches: a

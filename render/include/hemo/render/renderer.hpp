@@ -56,6 +56,8 @@ struct FrameOptions {
   float strainScale = 0.1f;     // spring strain at the red end of the wall's colour scale
   bool springs = false;         // the wall's springs as lines (with a SpringView)
   bool brokenSprings = true;    // broken springs drawn purple (else left out)
+  float wallOpacity = 1.0f;     // the wall surface's (with a WallSurfaceView): 1 opaque, less
+                                // lets the blood show through
   glm::vec4 background{0.95f, 0.95f, 0.96f, 1.0f};
   glm::vec3 surfaceColor{0.62f, 0.05f, 0.06f};
   glm::vec3 lightDirection{0.3f, -0.5f, 0.8f};  // towards the light
@@ -77,6 +79,22 @@ struct SpringView {
   const gpu::Buffer* springs = nullptr;    // sim::GpuSpring records
   std::uint32_t count = 0;
   glm::vec3 period{0.0f};                  // m on periodic axes, 0 elsewhere
+};
+
+// The wall as a shaded surface (sim::Simulation::enableWallSurface): its triangles, torn where
+// springs broke, coloured by strain, drawn after everything else, as opaque as
+// FrameOptions::wallOpacity.
+struct WallSurfaceView {
+  const gpu::Buffer* positions = nullptr;  // vec4 per slot
+  const gpu::Buffer* slotOfId = nullptr;   // uint per particle id
+  const gpu::Buffer* springs = nullptr;    // sim::GpuSpring records (their broken flags)
+  const gpu::Buffer* triangles = nullptr;  // sim::kWallTriangleWords uints per triangle
+  const gpu::Buffer* normals = nullptr;    // vec4 per slot (the wall's normals)
+  const gpu::Buffer* shade = nullptr;      // vec2 per slot (sim::MassSpring::recordShade)
+  std::uint32_t count = 0;                 // triangles
+  glm::vec3 period{0.0f};                  // m on periodic axes, 0 elsewhere
+  glm::vec3 origin{0.0f};                  // m: the domain's low corner (on periodic axes, the
+                                           // surface is drawn inside [origin, origin + period))
 };
 
 // The tools to draw, at their poses at `time` (the keyframes as the solver holds them).
@@ -102,11 +120,13 @@ class OffscreenRenderer {
   // Records one frame after the compute work that produced the buffers (same recorder): the
   // tools' triangles copied from host memory, the compute-to-graphics barrier, clear,
   // particles, the surface (drawn with the extractor's indirect arguments; nullptr: no
-  // surface), the tools, and the copy of the image to host memory. The previous frame must
+  // surface), the tools, the wall's surface, the overlay, and the copy of the image to host
+  // memory. The previous frame must
   // have completed (the tools' buffers are reused).
   void record(gpu::CommandRecorder& rec, const Camera& camera, const FrameOptions& options,
               const ParticleView& particles, const surface::MarchingCubes* surface,
-              const SpringView* springs = nullptr, const ToolView* tools = nullptr);
+              const SpringView* springs = nullptr, const ToolView* tools = nullptr,
+              const WallSurfaceView* wall = nullptr);
   // Drawn over each frame, last inside its render pass (hemo-view's panel): called with the
   // command buffer being recorded. Its pipelines must be made for renderPass() (subpass 0: one
   // RGBA8 colour attachment and a depth attachment, one sample). Empty: nothing.
@@ -142,6 +162,8 @@ class OffscreenRenderer {
   VkPipeline particlePipeline_ = VK_NULL_HANDLE, surfacePipeline_ = VK_NULL_HANDLE;
   VkPipelineLayout springPipelineLayout_ = VK_NULL_HANDLE;
   VkPipeline springPipeline_ = VK_NULL_HANDLE;
+  VkPipelineLayout wallPipelineLayout_ = VK_NULL_HANDLE;
+  VkPipeline wallOpaquePipeline_ = VK_NULL_HANDLE, wallBlendPipeline_ = VK_NULL_HANDLE;
   std::vector<VkShaderModule> modules_;
   std::map<std::tuple<VkBuffer, VkBuffer, VkBuffer>, VkDescriptorSet> storageSets_;
   gpu::Buffer pixels_;
