@@ -585,7 +585,7 @@ int main(int argc, char** argv) {
       panel.begin();
       if (state.panel) {
         ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-        ImGui::SetNextWindowSize(ImVec2(310, 0), ImGuiCond_FirstUseEver);
+        ImGui::SetNextWindowSize(ImVec2(350, 0), ImGuiCond_FirstUseEver);
         ImGui::Begin("hemo");
         ImGui::Text("%.1f frames/s   %.0f steps/s", readout.fps, readout.stepsPerSecond);
         ImGui::Text("t = %.5f s   step %llu", state.now, static_cast<unsigned long long>(sim->steps()));

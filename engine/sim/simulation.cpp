@@ -188,6 +188,8 @@ const gpu::Buffer& Simulation::enableWallSurface() {
 double Simulation::time() const { return solver_->readClock().time; }
 
 RunResult Simulation::run(const RunOptions& options) {
+  lastDelivery_ = std::chrono::steady_clock::now();
+  if (options.pipelined && !solver_->solvesPressure() && !stats_ && options.outputEvery == 0) return runPipelined(options);
   const auto start = std::chrono::steady_clock::now();
   const double endTime = options.steps ? 3.0e38 : options.until.value_or(scene_.endTime);
   const std::uint64_t targetSteps = options.steps.value_or(~0ull);
@@ -245,36 +247,8 @@ RunResult Simulation::run(const RunOptions& options) {
       solveDepth_ = std::clamp(depth.maxIterations + depth.maxIterations / 2 + 2, std::min(cap, kMinSolveDepth), cap);
     }
     recordedSteps_ += batch;
-    // the batch's outcome from its report (no readback submission)
-    const gpu::Buffer& report = reports_[reportSlot_];
+    const std::uint64_t done = takeReport(options, reportSlot_, solver_->clockParity(), batch, clock, endTime, submitted);
     reportSlot_ ^= 1u;
-    {
-      std::uint32_t words[HEMO_STATUS_COUNT];
-      report.readbackBytes(words, sizeof words, report_.status);
-      std::byte records[32];
-      report.readbackBytes(records, sizeof records, report_.clock);
-      clock = solver_->clockFrom(records);
-      checkStatus(steps_, SphSolver::statusFrom(words));
-    }
-    if (clock.steps - before == batch) checkStep(clock, steps_, endTime);
-    if (options.onToolLog && solver_->tools() && clock.steps > before) {
-      // the steps that advanced the clock (later ones of the batch changed nothing)
-      const auto steps = static_cast<std::uint32_t>(clock.steps - before);
-      const std::uint32_t tools = solver_->tools()->count();
-      const auto samples = report.readback<ToolSample>(std::size_t(steps) * tools, report_.toolLog);
-      const auto log = report.readback<glm::vec2>(steps, report_.stepLog);
-      std::vector<ToolLogRow> rows;
-      rows.reserve(samples.size());
-      for (std::uint32_t k = 0; k < steps; ++k) {
-        for (std::uint32_t t = 0; t < tools; ++t) rows.push_back({steps_ + k, log[k].y, t, samples[std::size_t(k) * tools + t]});
-      }
-      const double latency = std::chrono::duration<double>(std::chrono::steady_clock::now() - submitted).count();
-      ++feedback_.batches;
-      feedback_.samples += steps;
-      feedback_.seconds += latency;
-      feedback_.maxLatency = std::max(feedback_.maxLatency, latency);
-      options.onToolLog(rows);
-    }
     if (statsRows > 0 && options.onStepStats) {
       std::vector<StepStatsRow> rows;
       std::uint32_t last = static_cast<std::uint32_t>(before);
@@ -284,11 +258,139 @@ RunResult Simulation::run(const RunOptions& options) {
       options.onStepStats(rows);
     }
     // Steps after the end time change nothing and are not counted by the GPU clock.
-    const std::uint64_t done = clock.steps - before;
     steps_ += done;
     if (options.onBatch) options.onBatch(progress());
     if (options.outputEvery && steps_ % options.outputEvery == 0 && options.onOutput) options.onOutput(progress());
     if (done < batch) break;  // the end time was reached inside this batch
+  }
+  RunResult r;
+  r.steps = steps_ - firstStep;
+  r.simTime = clock.time;
+  r.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+std::uint64_t Simulation::takeReport(const RunOptions& options, std::uint32_t slot, std::uint32_t parity,
+                                     std::uint64_t batch, SphClock& clock, double endTime,
+                                     std::chrono::steady_clock::time_point submitted) {
+  // the batch's outcome from its report (no readback submission)
+  const gpu::Buffer& report = reports_[slot];
+  const std::uint64_t before = clock.steps;
+  {
+    std::uint32_t words[HEMO_STATUS_COUNT];
+    report.readbackBytes(words, sizeof words, report_.status);
+    std::byte records[32];
+    report.readbackBytes(records, sizeof records, report_.clock);
+    clock = SphSolver::clockFrom(records, parity);
+    checkStatus(steps_, SphSolver::statusFrom(words));
+  }
+  if (clock.steps - before == batch) checkStep(clock, steps_, endTime);
+  if (options.onToolLog && solver_->tools() && clock.steps > before) {
+    // the steps that advanced the clock (later ones of the batch changed nothing)
+    const auto steps = static_cast<std::uint32_t>(clock.steps - before);
+    const std::uint32_t tools = solver_->tools()->count();
+    const auto samples = report.readback<ToolSample>(std::size_t(steps) * tools, report_.toolLog);
+    const auto log = report.readback<glm::vec2>(steps, report_.stepLog);
+    std::vector<ToolLogRow> rows;
+    rows.reserve(samples.size());
+    for (std::uint32_t k = 0; k < steps; ++k) {
+      for (std::uint32_t t = 0; t < tools; ++t) rows.push_back({steps_ + k, log[k].y, t, samples[std::size_t(k) * tools + t]});
+    }
+    const auto now = std::chrono::steady_clock::now();
+    const double latency = std::chrono::duration<double>(now - submitted).count();
+    ++feedback_.batches;
+    feedback_.samples += steps;
+    feedback_.seconds += std::chrono::duration<double>(now - lastDelivery_).count();
+    lastDelivery_ = now;
+    feedback_.latencySeconds += latency;
+    feedback_.maxLatency = std::max(feedback_.maxLatency, latency);
+    options.onToolLog(rows);
+  }
+  return clock.steps - before;
+}
+
+RunResult Simulation::runPipelined(const RunOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  const double endTime = options.steps ? 3.0e38 : options.until.value_or(scene_.endTime);
+  const std::uint64_t firstStep = steps_;
+  const std::uint64_t lastStep = options.steps ? firstStep + *options.steps : ~0ull;
+  SphClock clock = solver_->readClock();
+  if (!recorder2_) recorder2_ = std::make_unique<gpu::CommandRecorder>(*context_);
+  struct InFlight {
+    gpu::CommandRecorder* recorder;
+    std::uint32_t slot;
+    std::uint32_t parity;  // the clock's, after the batch's steps
+    std::uint64_t batch;
+    std::chrono::steady_clock::time_point submitted;
+  };
+  std::vector<InFlight> inFlight;  // oldest first, at most two
+  std::uint64_t recordedUpTo = steps_;  // the step index the next recorded batch starts at
+  bool ended = false;
+  gpu::CommandRecorder* nextRecorder = recorder_.get();
+  // The next batch's size: full, or the steps left to the target, or near the end time about
+  // the steps left at the last known dt beyond those already in flight (0: none to submit).
+  auto nextBatch = [&]() -> std::uint64_t {
+    if (ended || recordedUpTo >= lastStep) return 0;
+    std::uint64_t batch = std::min<std::uint64_t>(scene_.stepsPerBatch, lastStep - recordedUpTo);
+    if (!options.steps) {
+      if (!(clock.time < endTime)) return 0;
+      if (clock.lastDt > 0.0f && std::isfinite(clock.lastDt)) {
+        const double left = std::ceil((endTime - clock.time) / double(clock.lastDt)) - double(recordedUpTo - steps_);
+        if (left <= 0.0) return 0;
+        if (left < double(batch)) batch = std::min<std::uint64_t>(batch, std::uint64_t(left * 1.1) + 2);
+      }
+    }
+    return batch;
+  };
+  auto submit = [&](std::uint64_t batch) {
+    gpu::CommandRecorder& rec = *nextRecorder;
+    nextRecorder = nextRecorder == recorder_.get() ? recorder2_.get() : recorder_.get();
+    rec.begin();  // (its previous batch, two back, has been read)
+    for (std::uint64_t k = 0; k < batch; ++k) {
+      const std::uint64_t dispatches = rec.dispatchCount(), barriers = rec.barrierCount();
+      solver_->recordStep(rec, static_cast<std::uint32_t>(recordedUpTo + k), static_cast<std::uint32_t>(k),
+                          static_cast<float>(endTime));
+      recordedDispatches_ += rec.dispatchCount() - dispatches;
+      recordedBarriers_ += rec.barrierCount() - barriers;
+    }
+    recordReport(rec, reportSlot_, static_cast<std::uint32_t>(batch));
+    rec.end();
+    rec.submit();
+    inFlight.push_back({&rec, reportSlot_, solver_->clockParity(), batch, std::chrono::steady_clock::now()});
+    reportSlot_ ^= 1u;
+    recordedSteps_ += batch;
+    recordedUpTo += batch;
+  };
+  auto progress = [&]() {
+    Progress p;
+    p.steps = steps_;
+    p.firstStep = firstStep;
+    p.time = clock.time;
+    p.endTime = options.steps ? 0.0 : endTime;
+    p.targetSteps = options.steps ? lastStep : 0;
+    p.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return p;
+  };
+  try {
+    for (;;) {
+      while (inFlight.size() < 2) {
+        const std::uint64_t batch = nextBatch();
+        if (batch == 0) break;
+        submit(batch);
+      }
+      if (inFlight.empty()) break;
+      const InFlight oldest = inFlight.front();
+      inFlight.erase(inFlight.begin());
+      oldest.recorder->wait();
+      const std::uint64_t done =
+          takeReport(options, oldest.slot, oldest.parity, oldest.batch, clock, endTime, oldest.submitted);
+      steps_ += done;
+      if (options.onBatch) options.onBatch(progress());
+      if (done < oldest.batch) ended = true;  // the end time was reached inside it
+    }
+  } catch (...) {
+    for (const InFlight& f : inFlight) f.recorder->wait();  // nothing may run past the throw
+    throw;
   }
   RunResult r;
   r.steps = steps_ - firstStep;

@@ -1458,9 +1458,9 @@ struct RawClock {  // common/clock.glsl
 static_assert(sizeof(RawClock) == 16);
 }  // namespace
 
-SphClock SphSolver::clockFrom(const void* records) const {
+SphClock SphSolver::clockFrom(const void* records, std::uint32_t parity) {
   RawClock r;
-  std::memcpy(&r, static_cast<const char*>(records) + sizeof(RawClock) * clockParity_, sizeof r);
+  std::memcpy(&r, static_cast<const char*>(records) + sizeof(RawClock) * (parity & 1u), sizeof r);
   return SphClock{double(r.time) - double(r.compensation), r.lastDt, r.steps};
 }
 

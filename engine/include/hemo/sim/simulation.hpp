@@ -9,6 +9,7 @@
 
 #include <glm/vec2.hpp>
 
+#include <chrono>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -46,7 +47,10 @@ struct ToolLogRow {
 struct ToolFeedback {
   std::uint64_t batches = 0;   // batches that delivered rows
   std::uint64_t samples = 0;   // steps delivered (each with every tool's force and torque)
-  double seconds = 0.0;        // wall time of those batches, from submission to the rows in hand
+  double seconds = 0.0;        // wall time over which they arrived: each run's, from its start
+                               // to its last batch's rows in hand (the rate's denominator)
+  double latencySeconds = 0.0; // the batches' times from submission to the rows in hand, summed
+                               // (a pipelined run's batches overlap: this exceeds `seconds`)
   double maxLatency = 0.0;     // s: the longest such batch (the age of its first step's force, at most)
 };
 
@@ -66,6 +70,14 @@ struct RunOptions {
   // solves took. Any depth gives the same results bit for bit; a shallow one costs batches run
   // again (Simulation::redoneBatches), a deep one empty dispatches.
   std::optional<std::uint32_t> recordedSolveIterations;
+  // Keep a second batch in flight: the next batch is recorded and submitted before the last
+  // one's report is read, so the GPU does not wait while the host reads a report, records and
+  // submits (two command buffers; the reports' ring of two). Results are the same bit for
+  // bit. Taken only where nothing reads or changes the state between batches: not with
+  // outputEvery, step statistics or DFSPH (whose batches may have to run again), which run
+  // one batch at a time. A failure is reported after the batch in flight has finished too,
+  // so the state left behind is that batch's.
+  bool pipelined = false;
 };
 
 struct RunResult {
@@ -190,6 +202,14 @@ class Simulation {
   double designTimeStep() const;
 
  private:
+  // RunOptions::pipelined.
+  RunResult runPipelined(const RunOptions& options);
+  // Reads a batch's report from its slot (after its fence): the clock (into `clock`; its
+  // record by `parity`, the clock's after the batch) and the status words (throws on a
+  // failure), and with onToolLog the batch's tool log. Returns the steps the batch advanced
+  // the clock by.
+  std::uint64_t takeReport(const RunOptions& options, std::uint32_t slot, std::uint32_t parity, std::uint64_t batch,
+                           SphClock& clock, double endTime, std::chrono::steady_clock::time_point submitted);
   void checkStatus(std::uint64_t batchFirstStep);
   void checkStatus(std::uint64_t batchFirstStep, const SphStatus& status);
   // The batch report: at the end of each batch's command buffer, copies of the solver's clock
@@ -226,6 +246,7 @@ class Simulation {
   std::unique_ptr<ParticleStore> store_;
   std::unique_ptr<SphSolver> solver_;
   std::unique_ptr<gpu::CommandRecorder> recorder_;
+  std::unique_ptr<gpu::CommandRecorder> recorder2_;  // the second batch in flight (pipelined runs)
   std::unique_ptr<StepStats> stats_;
   std::unique_ptr<surface::MarchingCubes> surface_;
   std::unique_ptr<surface::ParticleField> field_;
@@ -243,6 +264,7 @@ class Simulation {
   gpu::Buffer reports_[2];
   std::uint32_t reportSlot_ = 0;
   ToolFeedback feedback_;
+  std::chrono::steady_clock::time_point lastDelivery_;  // the run's start, then its last tool rows
   std::optional<Inflow> inflow_;  // the inflow zone as driven now (setInflowSpeed)
   std::optional<gpu::Buffer> wallTriangles_;  // enableWallSurface
   std::vector<glm::vec3> wallNormals_;         // by wall point id, as built (inward)

@@ -372,7 +372,10 @@ class SphSolver {
   // records (32 bytes), as a batch's report holds them (Simulation).
   const gpu::Buffer& statusBuffer() const { return status_; }
   static SphStatus statusFrom(const std::uint32_t* words);
-  SphClock clockFrom(const void* records) const;
+  SphClock clockFrom(const void* records) const { return clockFrom(records, clockParity_); }
+  // The clock's current record alternates each step: `parity` is clockParity() as it was
+  // after recording the steps the copy followed (a pipelined run has recorded more since).
+  static SphClock clockFrom(const void* records, std::uint32_t parity);
 
   // Checkpoints (hemo/io/checkpoint.hpp): every buffer of the solver, its grid, its rebuild
   // gate and its wall, in a fixed order (those of a path the scene does not take are
