@@ -187,6 +187,18 @@ const gpu::Buffer& Simulation::enableWallSurface() {
 
 double Simulation::time() const { return solver_->readClock().time; }
 
+Progress Simulation::progressOf(const RunOptions& options, std::uint64_t firstStep, double time, double endTime,
+                                std::chrono::steady_clock::time_point start) const {
+  Progress p;
+  p.steps = steps_;
+  p.firstStep = firstStep;
+  p.time = time;
+  p.endTime = options.steps ? 0.0 : endTime;
+  p.targetSteps = options.steps ? firstStep + *options.steps : 0;
+  p.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return p;
+}
+
 RunResult Simulation::run(const RunOptions& options) {
   lastDelivery_ = std::chrono::steady_clock::now();
   if (options.pipelined && !solver_->solvesPressure() && !stats_ && options.outputEvery == 0) return runPipelined(options);
@@ -195,16 +207,7 @@ RunResult Simulation::run(const RunOptions& options) {
   const std::uint64_t targetSteps = options.steps.value_or(~0ull);
   const std::uint64_t firstStep = steps_;
   SphClock clock = solver_->readClock();
-  auto progress = [&]() {
-    Progress p;
-    p.steps = steps_;
-    p.firstStep = firstStep;
-    p.time = clock.time;
-    p.endTime = options.steps ? 0.0 : endTime;
-    p.targetSteps = options.steps ? firstStep + *options.steps : 0;
-    p.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return p;
-  };
+  auto progress = [&]() { return progressOf(options, firstStep, clock.time, endTime, start); };
   while (steps_ - firstStep < targetSteps && (options.steps || clock.time < endTime)) {
     std::uint64_t batch = scene_.stepsPerBatch;
     if (options.steps) batch = std::min<std::uint64_t>(batch, firstStep + *options.steps - steps_);
@@ -361,16 +364,7 @@ RunResult Simulation::runPipelined(const RunOptions& options) {
     recordedSteps_ += batch;
     recordedUpTo += batch;
   };
-  auto progress = [&]() {
-    Progress p;
-    p.steps = steps_;
-    p.firstStep = firstStep;
-    p.time = clock.time;
-    p.endTime = options.steps ? 0.0 : endTime;
-    p.targetSteps = options.steps ? lastStep : 0;
-    p.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return p;
-  };
+  auto progress = [&]() { return progressOf(options, firstStep, clock.time, endTime, start); };
   try {
     for (;;) {
       while (inFlight.size() < 2) {

@@ -204,6 +204,9 @@ class Simulation {
  private:
   // RunOptions::pipelined.
   RunResult runPipelined(const RunOptions& options);
+  // A run's progress now, for its callbacks.
+  Progress progressOf(const RunOptions& options, std::uint64_t firstStep, double time, double endTime,
+                      std::chrono::steady_clock::time_point start) const;
   // Reads a batch's report from its slot (after its fence): the clock (into `clock`; its
   // record by `parity`, the clock's after the batch) and the status words (throws on a
   // failure), and with onToolLog the batch's tool log. Returns the steps the batch advanced
