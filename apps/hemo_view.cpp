@@ -535,10 +535,12 @@ int main(int argc, char** argv) {
     auto tFps = t0;
     std::uint64_t frames = 0, fpsFrames = 0, fpsSteps = 0, runSteps = 0;
     std::size_t nextAction = 0;
+    // The simulated time, read once here and after a reset; each run's result carries it on
+    // (the clock's readback would be a copy, a submission and a wait per frame on a discrete GPU).
+    state.now = sim->time();
     while (!glfwWindowShouldClose(window) && !state.quit && (maxFrames == 0 || frames < maxFrames)) {
       glfwPollEvents();
       state.camera = camera();
-      state.now = sim->time();
       for (; nextAction < script.size() && script[nextAction].frame <= frames; ++nextAction) {
         const ScriptAction& a = script[nextAction];
         if (a.action == "press" || a.action == "release") {
@@ -661,7 +663,7 @@ int main(int argc, char** argv) {
           const hemo::sim::RunResult result = sim->run(run);
           runSteps += result.steps;
           fpsSteps += result.steps;
-          const double after = sim->time();
+          const double after = result.simTime;
           if (after > before) lead = after - before;
           state.now = after;
         } catch (const hemo::sim::SimulationError& e) {
