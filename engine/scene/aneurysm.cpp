@@ -1,4 +1,5 @@
 #include "hemo/scene/aneurysm.hpp"
+#include "hemo/scene/mesh_vessel.hpp"
 
 #include "hemo/scene/bifurcation.hpp"
 
@@ -218,6 +219,7 @@ bool outsideVessel(const AneurysmSpec& a, glm::vec3 point, float margin) {
   const TubeSpec& t = a.tube;
   const glm::dvec3 p(point);
   const double wall = double(t.layers) * t.spacing + margin;
+  if (a.mesh) return !a.mesh->inside(p) && !(a.mesh->distance(p, wall) < wall);
   if (a.branchLength > 0.0f) return bifurcationDistance(bifurcationGeometry(a), p, double(t.radius) + wall) > 0.0;
   if (!t.periodic && (p.x < t.x0 || p.x > double(t.x0) + t.length)) return true;
   if (axisDistance(t, p) <= innerRadiusAt(a, p.x) + wall) return false;

@@ -2,6 +2,7 @@
 
 #include "hemo/scene/bifurcation.hpp"
 #include "hemo/scene/fusiform.hpp"
+#include "hemo/scene/mesh_vessel.hpp"
 #include "hemo/scene/statics.hpp"
 
 #include <cmath>
@@ -30,6 +31,7 @@ AneurysmSpec vesselSpec(const Vessel& v, const sim::SphSettings& fluid) {
   t.periodic = v.periodic;
   t.anchorEnds = v.anchorEnds;
   t.fluidMass = fluid.particleMass();
+  a.mesh = v.mesh;
   if (v.shape == Vessel::Shape::SaccularAneurysm) {
     a.sacRadius = v.sacRadius;
     a.neckWidth = v.neckWidth;
@@ -55,7 +57,12 @@ SceneBuild buildScene(const Scene& s) {
   if (s.vessel) {
     const AneurysmSpec spec = vesselSpec(s);
     try {
-      if (s.vessel->shape == Vessel::Shape::SaccularAneurysm) {
+      if (s.vessel->shape == Vessel::Shape::Mesh) {
+        MeshVesselBuild b = buildMeshVessel(spec);
+        set = std::move(b.particles);
+        out.network = std::move(b.network);
+        out.wall = b.wall;
+      } else if (s.vessel->shape == Vessel::Shape::SaccularAneurysm) {
         AneurysmBuild b = buildSaccularAneurysm(spec);
         set = std::move(b.particles);
         out.network = std::move(b.network);
@@ -139,7 +146,7 @@ std::uint32_t countLost(const std::vector<glm::vec4>& positions, const std::vect
 
 namespace {
 std::optional<RuptureEstimate> ruptureEstimateOf(const Scene& s) {
-  if (!s.vessel || s.vessel->shape == Vessel::Shape::Bifurcation) return std::nullopt;
+  if (!s.vessel || s.vessel->shape == Vessel::Shape::Bifurcation || s.vessel->shape == Vessel::Shape::Mesh) return std::nullopt;
   constexpr std::uint32_t kMaxPoints = 60000;
   const AneurysmSpec spec = vesselSpec(s);
   auto staticOf = [&](const ParticleSet& set, const sim::SpringNetwork& net, std::uint32_t wall, const AneurysmSpec& a) {

@@ -3,6 +3,8 @@
 #include "hemo/scene/aneurysm.hpp"
 #include "hemo/scene/bifurcation.hpp"
 #include "hemo/scene/build.hpp"
+#include "hemo/scene/mesh_vessel.hpp"
+#include "hemo/io/mesh.hpp"
 #include "hemo/scene/tube.hpp"
 #include "interface/tool.h"
 
@@ -94,7 +96,17 @@ const std::vector<Field>& schema() {
        }},
       {"vessel", Kind::Section, "", 0, 0, false, Json::object(), "A vessel wall of wall particles joined by springs, filled with fluid; its axis runs along +x. Omit it for scenes without walls (no spring stage runs).", {},
        {
-           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, tube bulging all round halfway along, a bifurcation (two branches that split off and merge again halfway along a periodic tube), or none.", {"none", "tube", "saccular_aneurysm", "fusiform_aneurysm", "bifurcation"}},
+           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, tube bulging all round halfway along, a bifurcation (two branches that split off and merge again halfway along a periodic tube), a surface mesh of the lumen (vessel.mesh), or none.", {"none", "tube", "saccular_aneurysm", "fusiform_aneurysm", "bifurcation", "mesh"}},
+           {"mesh", Kind::Section, "", 0, 0, false, Json::object(), "shape \"mesh\": the lumen's surface, as segmented from CT or MR angiography (docs/meshes.md). Its wall layers lie at (l + 1/2) dp outside the surface; start_m, length_m and radius_m come from the mesh and its inlet.", {},
+            {
+                {"file", Kind::String, "", 0, 0, false, "", "STL (binary or ASCII) or OBJ file of the lumen's surface, relative to the scene file: one connected surface of triangles wound counter-clockwise seen from outside, open only at its ends."},
+                {"unit_m", Kind::Number, "m", 0, 1e3, true, 1.0, "Metres per unit of the file's coordinates: 0.001 for millimetres (what segmentation tools export)."},
+                {"ends", Kind::Objects, "", 0, kInf, false, Json::array(), "Every open boundary loop of the surface, named; a loop no entry names is an error (a hole). Open ends must lie on the two planes of a periodic x axis, matching across the seam (the blood leaving the outlet comes back through the inlet).", {},
+                 {
+                     {"role", Kind::Choice, "", 0, 0, false, nullptr, "What the end is: the inlet (on the domain's min x plane when vessel.inflow drives the flow: the zone starts there) or an outlet.", {"inlet", "outlet"}},
+                     {"at_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "A point at the end's centre (within its radius): which loop the entry names."},
+                 }},
+            }},
            {"start_m", Kind::Vec3, "m", -1e6, 1e6, false, Json::array({0.0, 0.0, 0.0}), "Start of the axis. With a periodic x axis the tube spans the domain: start x = domain min x."},
            {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length along +x (with a periodic x axis: the domain's period)."},
            {"radius_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Inner radius; the wall's layers lie at radius + (l + 1/2) dp."},
@@ -203,6 +215,12 @@ std::string kindName(Kind k) {
 std::string fmt(double v) {
   std::ostringstream s;
   s << v;
+  return s.str();
+}
+
+std::string fmtPoint(glm::dvec3 p) {
+  std::ostringstream s;
+  s << "(" << p.x << ", " << p.y << ", " << p.z << ") m";
   return s.str();
 }
 
@@ -384,17 +402,114 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
   w.inflow = f;
 }
 
-void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
+// shape "mesh": reads and checks the surface, names its ends, and sets the vessel's start,
+// length and radius from them (before the inflow, which reads them).
+void parseMesh(const Checker& c, const Json& v, const Json& raw, const Scene& s, const std::filesystem::path& baseDir, Vessel& w) {
+  for (const char* key : {"start_m", "length_m", "radius_m", "anchor_ends", "sac_radius_m", "neck_width_m", "sac_stiffness_scale", "sac_strength_scale",
+                          "bulge_radius_m", "bulge_length_m", "branch_angle_deg", "branch_length_m"}) {
+    if (raw.contains(key)) c.fail(std::string("vessel.") + key, "does not apply to a mesh vessel (the mesh gives the geometry)");
+  }
+  const Json& m = v["mesh"];
+  const std::string file = m["file"].get<std::string>();
+  if (file.empty()) c.fail("vessel.mesh.file", "is required for vessel.shape \"mesh\"");
+  std::filesystem::path path(file);
+  if (path.is_relative() && !baseDir.empty()) path = baseDir / path;
+  io::TriangleMesh mesh;
+  try {
+    mesh = io::readMesh(path);
+  } catch (const io::MeshError& e) {
+    c.fail("vessel.mesh.file", e.what());
+  }
+  const double unit = m["unit_m"].get<double>();
+  for (glm::dvec3& p : mesh.vertices) p *= unit;
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (const glm::dvec3& p : mesh.vertices) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const double across = glm::length(hi - lo);
+  // The largest vessels (the aorta) are centimetres across; a mesh metres across was read in
+  // the wrong unit.
+  if (!(across <= 0.5)) {
+    c.fail("vessel.mesh.unit_m", "makes the mesh " + fmt(across) + " m across (with unit_m = " + fmt(unit) +
+                                     "): no blood vessel is that large; if the file is in millimetres, set unit_m to 0.001");
+  }
+  std::shared_ptr<const VesselMesh> vm;
+  try {
+    vm = std::make_shared<const VesselMesh>(std::move(mesh));
+  } catch (const std::invalid_argument& e) {
+    c.fail("vessel.mesh.file", path.string() + ": " + e.what());
+  }
+  const auto& loops = vm->ends();
+  const Json& ends = m["ends"];
+  std::vector<int> claimed(loops.size(), -1);
+  for (std::size_t k = 0; k < ends.size(); ++k) {
+    const std::string p = "vessel.mesh.ends[" + std::to_string(k) + "]";
+    const glm::dvec3 at(vec3(ends[k]["at_m"]));
+    int best = -1;
+    double bestDistance = std::numeric_limits<double>::infinity();
+    for (std::size_t e = 0; e < loops.size(); ++e) {
+      const double d = glm::length(at - loops[e].centroid);
+      if (d <= std::max(loops[e].radius, 2.0 * double(s.sph.spacing)) && d < bestDistance) best = int(e), bestDistance = d;
+    }
+    if (best < 0) {
+      std::string where;
+      for (const MeshEnd& e : loops) where += (where.empty() ? "" : ", ") + fmtPoint(e.centroid);
+      c.fail(p + ".at_m", "no open end of the mesh has its centre within its radius of " + fmtPoint(at) +
+                              (loops.empty() ? std::string(" (the mesh is closed)") : " (its open ends are at " + where + ")"));
+    }
+    if (claimed[std::size_t(best)] >= 0) {
+      c.fail(p + ".at_m", "names the same end as vessel.mesh.ends[" + std::to_string(claimed[std::size_t(best)]) + "]");
+    }
+    claimed[std::size_t(best)] = int(k);
+  }
+  w.endRoles.assign(loops.size(), "");
+  for (std::size_t e = 0; e < loops.size(); ++e) {
+    if (claimed[e] < 0) {
+      c.fail("vessel.mesh.ends", "the mesh has an open boundary loop (a hole) at " + fmtPoint(loops[e].centroid) + ", about " +
+                                     fmt(2.0 * loops[e].radius) + " m across, that no entry names: close it in the mesh, or name it an inlet or outlet");
+    }
+    w.endRoles[e] = ends[std::size_t(claimed[e])]["role"].get<std::string>();
+  }
+  if (!loops.empty() && !s.sph.periodic[0]) {
+    c.fail("domain.periodic", "a mesh vessel with open ends needs a periodic x axis with its ends on the two planes (open inlets and outlets elsewhere are not supported yet)");
+  }
+  const MeshEnd* inlet = nullptr;
+  for (std::size_t e = 0; e < loops.size(); ++e) {
+    if (w.endRoles[e] == "inlet" && (!inlet || loops[e].centroid.x < inlet->centroid.x)) inlet = &loops[e];
+  }
+  const glm::dvec3 centre = inlet ? inlet->centroid : 0.5 * (lo + hi);
+  w.start = glm::vec3(s.sph.periodic[0] ? double(s.domain.min.x) : lo.x, centre.y, centre.z);
+  w.length = s.sph.periodic[0] ? s.domain.max.x - s.domain.min.x : float(hi.x - lo.x);
+  w.radius = float(inlet ? inlet->radius : 2.0 * vm->volume() / vm->area());
+  if (raw.contains("inflow") && raw["inflow"].value("profile", "none") != "none") {
+    if (!inlet) c.fail("vessel.mesh.ends", "vessel.inflow needs an end with role \"inlet\"");
+    if (std::abs(inlet->centroid.x - double(s.domain.min.x)) > 1e-3 * s.sph.spacing) {
+      c.fail("vessel.mesh.ends", "the inlet must be the end on the plane x = domain min x (" + fmt(s.domain.min.x) +
+                                     " m), where the inflow zone starts (for flow along -x give a negative vessel.inflow.mean_speed_m_s)");
+    }
+  }
+  // The wall's outer layer reaches layers dp out; one more spacing of room around it.
+  const double room = double(w.layers + 1) * s.sph.spacing;
+  const Box need{glm::vec3(s.sph.periodic[0] ? glm::dvec3(s.domain.min.x, lo.y - room, lo.z - room) : lo - room),
+                 glm::vec3(s.sph.periodic[0] ? glm::dvec3(s.domain.max.x, hi.y + room, hi.z + room) : hi + room)};
+  const float slack = 1e-4f * s.sph.spacing;
+  if (!inside(need, s.domain, slack)) {
+    c.fail("vessel.mesh", "the mesh with its wall (x " + fmt(need.min.x) + ".." + fmt(need.max.x) + ", y " + fmt(need.min.y) + ".." +
+                              fmt(need.max.y) + ", z " + fmt(need.min.z) + ".." + fmt(need.max.z) + " m) reaches outside the domain");
+  }
+  w.mesh = std::move(vm);
+}
+
+void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s, const std::filesystem::path& baseDir) {
   const std::string shape = v["shape"].get<std::string>();
   auto given = [&](const char* key) { return raw.contains(key); };
   if (shape == "none") {
     for (auto it = raw.begin(); it != raw.end(); ++it) {
-      if (it.key() != "shape") c.fail("vessel." + it.key(), "is set but vessel.shape is not (\"tube\", \"saccular_aneurysm\", \"fusiform_aneurysm\" or \"bifurcation\")");
+      if (it.key() != "shape") c.fail("vessel." + it.key(), "is set but vessel.shape is not (\"tube\", \"saccular_aneurysm\", \"fusiform_aneurysm\", \"bifurcation\" or \"mesh\")");
     }
     return;
   }
   Vessel w;
-  w.shape = shape == "tube"                ? Vessel::Shape::Tube
+  w.shape = shape == "mesh"                ? Vessel::Shape::Mesh
+            : shape == "tube"              ? Vessel::Shape::Tube
             : shape == "saccular_aneurysm" ? Vessel::Shape::SaccularAneurysm
             : shape == "fusiform_aneurysm" ? Vessel::Shape::FusiformAneurysm
                                            : Vessel::Shape::Bifurcation;
@@ -417,7 +532,14 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   w.branchLength = v["branch_length_m"].get<float>();
   w.timeStepFactor = v["time_step_factor"].get<float>();
   w.substeps = v["substeps"].get<std::uint32_t>();
+  const bool meshed = w.shape == Vessel::Shape::Mesh;
+  if (meshed) {
+    parseMesh(c, v, raw, s, baseDir, w);
+  } else if (given("mesh")) {
+    c.fail("vessel.mesh", "only applies to vessel.shape \"mesh\"");
+  }
   for (const char* key : {"length_m", "radius_m", "point_mass_kg"}) {
+    if (meshed && std::string(key) != "point_mass_kg") continue;
     if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
   }
   w.youngsModulus = v["youngs_modulus_Pa"].get<float>();
@@ -444,7 +566,9 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
       if (given(key)) c.fail(std::string("vessel.") + key, "only applies to a bifurcation (vessel.shape \"bifurcation\")");
     }
   }
-  if (w.shape == Vessel::Shape::Tube || w.shape == Vessel::Shape::Bifurcation) {
+  if (meshed) {
+    // (parseMesh rejected the analytic shapes' keys)
+  } else if (w.shape == Vessel::Shape::Tube || w.shape == Vessel::Shape::Bifurcation) {
     for (const char* key : {"sac_radius_m", "neck_width_m", "sac_stiffness_scale", "sac_strength_scale", "bulge_radius_m", "bulge_length_m"}) {
       if (given(key)) c.fail(std::string("vessel.") + key, "only applies to an aneurysm (vessel.shape \"saccular_aneurysm\" or \"fusiform_aneurysm\")");
     }
@@ -498,14 +622,21 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s) {
   }
   const Box need{glm::vec3(w.start.x, w.start.y - halfWidth, w.start.z - w.radius - room),
                  glm::vec3(w.start.x + w.length, w.start.y + halfWidth, w.start.z + top)};
-  if (!inside(need, s.domain, slack)) {
+  if (!meshed && !inside(need, s.domain, slack)) {  // (parseMesh checked the mesh's box)
     c.fail("vessel", "the vessel with its wall (x " + fmt(need.min.x) + ".." + fmt(need.max.x) + ", y " + fmt(need.min.y) + ".." +
                          fmt(need.max.y) + ", z " + fmt(need.min.z) + ".." + fmt(need.max.z) + " m) reaches outside the domain");
   }
   if (tissue) {  // springs fitted to the built layout
     try {
-      const TissueSprings fit = springsFromTissue(vesselSpec(w, s.sph).tube, given("youngs_modulus_Pa") ? w.youngsModulus : 1.0,
-                                                  w.poissonRatio, w.wallThickness, given("failure_stress_Pa") ? w.failureStress : 1.0);
+      const double E = given("youngs_modulus_Pa") ? w.youngsModulus : 1.0, sigma = given("failure_stress_Pa") ? w.failureStress : 1.0;
+      TissueSprings fit;
+      if (meshed) {
+        AneurysmSpec unit = vesselSpec(w, s.sph);
+        unit.tube.stiffness = unit.tube.maxForce = 1.0f;
+        fit = springsFromMeshTissue(*w.mesh, buildMeshVessel(unit), E, w.poissonRatio, w.wallThickness, sigma);
+      } else {
+        fit = springsFromTissue(vesselSpec(w, s.sph).tube, E, w.poissonRatio, w.wallThickness, sigma);
+      }
       if (given("youngs_modulus_Pa")) w.stiffness = fit.stiffness;
       if (given("failure_stress_Pa")) w.maxForce = fit.maxForce;
     } catch (const std::invalid_argument& e) {
@@ -657,7 +788,7 @@ void checkPeriodicAxes(const Scene& s, const std::string& source, int onlyAxis) 
   }
 }
 
-Scene parseScene(const std::string& text, const std::string& source) {
+Scene parseScene(const std::string& text, const std::string& source, const std::filesystem::path& baseDir) {
   Json raw;
   try {
     raw = Json::parse(text);
@@ -756,7 +887,7 @@ Scene parseScene(const std::string& text, const std::string& source) {
     for (auto& t : s.tanks) t.periodic[a] = true;
   }
   checkPeriodicAxes(s, source);
-  parseVessel(c, j["vessel"], raw.contains("vessel") ? raw["vessel"] : Json::object(), s);
+  parseVessel(c, j["vessel"], raw.contains("vessel") ? raw["vessel"] : Json::object(), s, baseDir);
   if (s.blocks.empty() && !s.vessel) c.fail("fluid.blocks", "needs at least 1 entry (or a vessel to fill)");
   for (std::size_t k = 0; k < s.blocks.size(); ++k) {
     if (!inside(s.blocks[k].box, s.domain, slack)) {
@@ -799,7 +930,7 @@ Scene loadScene(const std::filesystem::path& path) {
   if (!in) throw SceneError(path.string() + ": cannot open the scene file");
   std::ostringstream text;
   text << in.rdbuf();
-  return parseScene(text.str(), path.string());
+  return parseScene(text.str(), path.string(), path.parent_path());
 }
 
 namespace {

@@ -9,9 +9,12 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace hemo::scene {
+
+class VesselMesh;
 
 struct AneurysmSpec {
   TubeSpec tube;                   // the parent vessel (its springs' parameters too)
@@ -28,6 +31,9 @@ struct AneurysmSpec {
   // +-branchAngle to the axis that bend back and merge again halfway along a periodic tube.
   float branchAngle = 0.0f;        // rad
   float branchLength = 0.0f;       // m, each leg
+  // A vessel from a surface mesh instead (hemo/scene/mesh_vessel.hpp): the tube's spacing,
+  // layers and spring parameters apply; x0 and length give the periodic span.
+  std::shared_ptr<const VesselMesh> mesh;
 };
 
 // The inner radius (m) of the vessel at axial position x: the tube's, or on a fusiform

@@ -8,12 +8,15 @@
 #include <glm/vector_relational.hpp>
 
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 namespace hemo::scene {
+
+class VesselMesh;
 
 // Bad scene input (hemo-run exit code 1). The message names the file, the field and the problem.
 class SceneError : public std::runtime_error {
@@ -52,8 +55,11 @@ struct Tank {
 // +z side, halfway along), with a fusiform aneurysm (a bulge all round, halfway along), or a
 // bifurcation (two branches that split off at +-angle in the x-y plane and merge again, halfway
 // along a periodic tube). Periodic along x when the domain is (the tube then spans it).
+// A vessel can also come from a triangle surface of its lumen (Shape::Mesh, an STL or OBJ
+// file; hemo/scene/mesh_vessel.hpp): start, length and radius then describe its ends (start:
+// the domain's min x and the inlet's centre; radius: the inlet's equivalent radius).
 struct Vessel {
-  enum class Shape { Tube, SaccularAneurysm, FusiformAneurysm, Bifurcation };
+  enum class Shape { Tube, SaccularAneurysm, FusiformAneurysm, Bifurcation, Mesh };
   Shape shape = Shape::Tube;
   glm::vec3 start{0.0f};       // m, where the axis starts
   float length = 0.0f;         // m
@@ -84,6 +90,10 @@ struct Vessel {
   // Driven inflow at the start of a periodic tube (the outflow comes back through the seam);
   // none when the scene's vessel.inflow.profile is "none".
   std::optional<sim::Inflow> inflow;
+  // Shape::Mesh: the checked surface in metres, and the role the scene gave each of its ends
+  // (VesselMesh::ends order): "inlet" or "outlet".
+  std::shared_ptr<const VesselMesh> mesh;
+  std::vector<std::string> endRoles;
 };
 
 // The blood surface's grid (hemo/surface/marching_cubes.hpp).
@@ -111,7 +121,9 @@ struct Scene {
   std::vector<sim::ToolSpec> tools;
 };
 
-Scene parseScene(const std::string& jsonText, const std::string& sourceName);
+// `baseDir`: where files the scene names by relative path (a vessel's mesh) are looked up;
+// loadScene passes the scene file's directory.
+Scene parseScene(const std::string& jsonText, const std::string& sourceName, const std::filesystem::path& baseDir = {});
 Scene loadScene(const std::filesystem::path& path);
 // The rules for periodic axes (a whole number of spacings, at least 2.5 neighbour-list
 // radii, tanks spanning the period); throws SceneError naming `source` and the field. Run by

@@ -1,0 +1,56 @@
+// hemo-mesh: writes the project's own vessel surfaces as binary STL (hemo/scene/mesh_vessel.hpp,
+// vesselSurface), for mesh scenes and tests: a tube along x, bent up and back over its length
+// if asked, with a saccular aneurysm on the outer side of the bend's crest.
+#include "cli.hpp"
+#include "hemo/io/atomic_file.hpp"
+#include "hemo/io/mesh.hpp"
+#include "hemo/scene/mesh_vessel.hpp"
+
+#include <cstdio>
+
+int main(int argc, char** argv) {
+  const char* usage =
+      "usage: hemo-mesh --out FILE.stl --length-m L --radius-m R [--bend-height-m H] [--sac-radius-m RS --sac-offset-m C]\n"
+      "                 [--around N] [--along M] [--unit-m U] [--help]\n"
+      "  a tube of radius R from x = 0 to L whose axis rises to z = H at x = L/2 and falls back (z = H (1 - cos(2 pi x/L))/2),\n"
+      "  with a spherical sac of radius RS centred C above the axis at x = L/2 (a saccular aneurysm on the bend's outer side);\n"
+      "  N x M quads (M = 0: about square).\n"
+      "  Coordinates are written in units of U m (default 0.001: millimetres, as segmentation tools write them).\n"
+      "  Prints the two open ends' centres in m (for the scene's vessel.mesh.ends).\n";
+  if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
+  try {
+    const auto args = hemo::cli::parse(argc, argv, {"--out", "--length-m", "--radius-m", "--bend-height-m", "--sac-radius-m", "--sac-offset-m",
+                                                    "--around", "--along", "--unit-m"});
+    if (!args.positional.empty()) throw hemo::cli::UsageError("unexpected argument '" + args.positional[0] + "'");
+    if (!args.has("--out")) throw hemo::cli::UsageError("--out FILE.stl is required");
+    if (!args.has("--length-m") || !args.has("--radius-m")) throw hemo::cli::UsageError("--length-m and --radius-m are required");
+    hemo::scene::VesselSurfaceSpec spec;
+    spec.length = args.number("--length-m", 0.0, 1e-6, 1.0);
+    spec.radius = args.number("--radius-m", 0.0, 1e-7, 0.5);
+    spec.bendHeight = args.number("--bend-height-m", 0.0, 0.0, 1.0);
+    spec.sacRadius = args.number("--sac-radius-m", 0.0, 0.0, 1.0);
+    spec.sacOffset = args.number("--sac-offset-m", 0.0, 0.0, 1.0);
+    if (args.has("--sac-radius-m") != args.has("--sac-offset-m")) throw hemo::cli::UsageError("--sac-radius-m and --sac-offset-m go together");
+    spec.around = static_cast<std::uint32_t>(args.count("--around", 64, 8, 4096));
+    spec.along = static_cast<std::uint32_t>(args.count("--along", 0, 0, 100000));
+    const double unit = args.number("--unit-m", 0.001, 1e-9, 1e3);
+    hemo::io::TriangleMesh mesh;
+    try {
+      mesh = hemo::scene::vesselSurface(spec);
+    } catch (const std::invalid_argument& e) {
+      throw hemo::cli::UsageError(e.what());
+    }
+    for (glm::dvec3& p : mesh.vertices) p /= unit;
+    const std::string out = args.text("--out");
+    hemo::io::writeStl(out, mesh, "hemo-mesh vessel surface, unit " + std::to_string(unit) + " m");
+    std::printf("wrote %s: %zu triangles, %zu vertices, unit %g m\n", out.c_str(), mesh.triangles.size(), mesh.vertices.size(), unit);
+    std::printf("ends at (0, 0, 0) m and (%g, 0, 0) m\n", spec.length);
+    return 0;
+  } catch (const hemo::cli::UsageError& e) {
+    std::fprintf(stderr, "hemo-mesh: %s\n%s", e.what(), usage);
+    return 1;
+  } catch (const hemo::io::WriteError& e) {
+    std::fprintf(stderr, "hemo-mesh: %s\n", e.what());
+    return 4;
+  }
+}
