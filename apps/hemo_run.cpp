@@ -252,7 +252,13 @@ int main(int argc, char** argv) {
         return;
       }
       std::snprintf(name, sizeof name, "particles_%08llu.vtu", step);
-      hemo::io::writeParticlesVtu(out / name, snap, p.time, wall ? &springs : nullptr, period);
+      hemo::sim::Simulation::WallShearMaps maps;
+      hemo::io::WallShearFields shear;
+      if (sim.wallShearEnabled()) {
+        maps = sim.readWallShear();
+        shear = {&maps.wss, &maps.tawss, &maps.osi};
+      }
+      hemo::io::writeParticlesVtu(out / name, snap, p.time, wall ? &springs : nullptr, period, sim.wallShearEnabled() ? &shear : nullptr);
       if (!particleSeries) particleSeries.emplace(out / "particles.pvd", keepFrame);
       particleSeries->add(p.time, name);
       if (wall) {
@@ -262,6 +268,10 @@ int main(int argc, char** argv) {
         springSeries->add(p.time, name);
       }
     };
+    // The wall maps (wall shear stress, its time average and the oscillatory shear index) go
+    // into the XML particle files of a vessel under WCSPH: averaged from the run's start (or
+    // its resumption).
+    if (vtkEvery && !vtkLegacy && sim.solver().wall() && !sim.solver().solvesPressure()) sim.enableWallShear();
     // (written under a temporary name during the run, renamed when it ends: hemo/io/atomic_file.hpp)
     std::unique_ptr<hemo::io::AtomicFile> csvFile;
     if (statsEvery) {

@@ -58,7 +58,11 @@
 // DFSPH, the solve's reaction, wall/dfsph_reaction.comp) and gravity give the particle for the
 // whole step; the wall's substeps (wall/substep.comp) add the springs to it.
 #define HEMO_SPRINGF_BINDING_HELD 23
-#define HEMO_SPRINGF_BINDING_COUNT 24
+// vec4 per slot, written for wall slots when the pass computes wall shear (push wallShear):
+// (the wall shear stress the fluid exerts, Pa: the tangential viscous force on the particle
+// over the lumen area it carries, wall info z; 1 where fluid wets the particle else 0).
+#define HEMO_SPRINGF_BINDING_WSS 24
+#define HEMO_SPRINGF_BINDING_COUNT 25
 
 // wall/dfsph_reaction.comp (DFSPH scenes only): after the density solve, each wall particle
 // adds the reaction of the pressure the solve gave its fluid neighbours through the mirrored
@@ -120,6 +124,16 @@
 #define HEMO_SHADE_BINDING_PARAMS 7
 #define HEMO_SHADE_BINDING_SHADE 8
 #define HEMO_SHADE_BINDING_COUNT 9
+
+// The wall shear maps' accumulation (wall/shear_accumulate.comp), after each step, per point
+// id: the step's wall shear stress (HEMO_SPRINGF_BINDING_WSS at the point's slot) times the
+// step's dt added to (sum tau dt (Pa s), sum |tau| dt (Pa s)), and, by invocation 0, dt to the
+// record after the last id's (x: the time summed, s).
+#define HEMO_SHEARACC_BINDING_IDS_SLOT 0   // texel uint per id: its slot (slot of id)
+#define HEMO_SHEARACC_BINDING_WSS 1        // texel vec4 per slot
+#define HEMO_SHEARACC_BINDING_CLOCK 2      // uniform ClockRecord[2]
+#define HEMO_SHEARACC_BINDING_SUMS 3       // storage vec4 per id, and one more
+#define HEMO_SHEARACC_BINDING_COUNT 4
 
 // A wall particle's normal follows the deformed wall: n = normalize((x_A - x) x (x_B - x)) for
 // its frame points A and B (ids; HEMO_NO_FRAME keeps the normal it has).

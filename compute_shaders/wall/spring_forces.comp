@@ -50,6 +50,8 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_DT_COUNTS) writeonly buffer DtCoun
 // What the fluid and gravity give each wall slot for the step, (F_fluid / m + g, 0): read by
 // wall/substep.comp (and added to by wall/dfsph_reaction.comp).
 layout(std430, binding = HEMO_SPRINGF_BINDING_HELD) writeonly buffer Held { vec4 held[]; };
+// The wall shear stress at wall slots, when push.wallShear is set (see hemo_fluid_reaction).
+layout(std430, binding = HEMO_SPRINGF_BINDING_WSS) writeonly buffer Wss { vec4 wss[]; };
 
 #define positions(k) texelFetch(positionsT, int(k))
 #define velocities(k) texelFetch(velocitiesT, int(k))
@@ -65,6 +67,21 @@ layout(constant_id = 1) const uint kListWidth = 1u;
 #define HEMO_WALK_CELL_START neighbourListT
 #include "common/cell_walk.glsl"
 #endif
+
+layout(push_constant) uniform Push {
+  vec4 gravity;
+  uint n;
+  uint idCount;
+  float timeStepFactor;
+  float acousticLength;  // C_a h (m): the fluid's acoustic limit C_a h / (c0 + |v|) applies too
+  float c0;
+  uint first;  // the slots [first, n): the fluid's, first after a sort, are left out
+  uint dtPartialBase;  // this pass's first partial of the time step's reduction (past the force pass's)
+  uint groupBase;      // the workgroups of the pass's earlier dispatches (the pages of the fluid's list)
+  uint last;           // 1: the pass's last dispatch (it writes the partials' count)
+  uint substeps;       // the wall's substeps per step (wall/substep.comp; 1: none)
+  uint wallShear;      // 1: also the wall shear stress (HEMO_SPRINGF_BINDING_WSS)
+} pc;
 
 #include "wall/spring_gather.glsl"
 
@@ -82,6 +99,10 @@ vec3 gXw, gVw, gNrm;
 bool gRepels;
 vec3 gSum;        // sum of V_f [ ... ] above, times V_w at the end
 vec3 gRepulsion;  // sum of m_f a_repulsion
+// Wall shear (with push.wallShear): the viscous part of gSum alone, and the fluid neighbours.
+bool gShear;
+vec3 gVisc;
+uint gWet;
 
 // One fluid neighbour f of the wall particle; `valid` is false for the padding of the list's
 // last texel, which nobody wrote: the caller then passes the wall particle's own slot, so
@@ -95,7 +116,12 @@ void reactionPair(uint f, bool valid) {
   }
   const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm);  // as sph/forces.comp
   const vec4 vf = viscousVel(f);  // (v_f, V_f)
-  gSum += -(pf.w + vf.w * gPW) * gradW + (vf.w * gTwoMu * dot(d, gradW) / (r2 + gEtaSq)) * (vf.xyz - gVw);
+  const vec3 viscous = (vf.w * gTwoMu * dot(d, gradW) / (r2 + gEtaSq)) * (vf.xyz - gVw);
+  gSum += -(pf.w + vf.w * gPW) * gradW + viscous;
+  if (gShear) {
+    gVisc += viscous;
+    gWet += 1u;
+  }
   if (gRepels) {
     const float x = dot(d, gNrm);
     float weight;
@@ -123,6 +149,9 @@ vec3 hemo_fluid_reaction(uint w) {
   gRepels = xw.w > 0.0;  // detached particles (no SPH mass) do not repel
   gSum = vec3(0.0);
   gRepulsion = vec3(0.0);
+  gShear = pc.wallShear != 0u;
+  gVisc = vec3(0.0);
+  gWet = 0u;
 #if HEMO_CELL_WALK
   const uint ranges = hemo_walk_ranges(w);  // the fluid's part only (common/cell_walk.glsl)
   for (uint r = 0u; r < ranges; ++r) {
@@ -140,6 +169,20 @@ vec3 hemo_fluid_reaction(uint w) {
     reactionPair(k + 1u < count ? fs.y : w, k + 1u < count);
     reactionPair(k + 2u < count ? fs.z : w, k + 2u < count);
     reactionPair(k + 3u < count ? fs.w : w, k + 3u < count);
+  }
+  if (gShear) {
+    // The wall shear stress: the viscous force the fluid exerts on the particle (the viscous
+    // part of its reaction, exactly what the fluid's viscous term took from it), less its
+    // part along the normal, over the lumen area the particle carries (wallInfo.z: dp^2 over
+    // the layers, each layer holding one point per dp^2 of the lumen). The layers share the
+    // traction (the first takes most of it), so an average over a patch of wall points of all
+    // layers is the wall shear stress there; it needs no fit to a velocity profile, which the
+    // slip an SPH wall leaves at its surface would bias (by a quarter, in a Poiseuille tube of
+    // radius 4 dp), and by momentum conservation its sum is the force the blood puts on the wall.
+    const vec3 force = -volumeW * gVisc;
+    const float area = texelFetch(wallInfoT, int(texelFetch(idsT, int(w)).x)).z;
+    const vec3 tangential = force - dot(force, gNrm) * gNrm;
+    wss[w] = vec4(area > 0.0 ? tangential / area : vec3(0.0), gWet > 0u ? 1.0 : 0.0);
   }
   const vec3 sum = gSum, repulsion = gRepulsion;
   return -(volumeW * sum + repulsion);
@@ -163,19 +206,6 @@ void updateNormal(uint slot, uint id) {
   }
 }
 
-layout(push_constant) uniform Push {
-  vec4 gravity;
-  uint n;
-  uint idCount;
-  float timeStepFactor;
-  float acousticLength;  // C_a h (m): the fluid's acoustic limit C_a h / (c0 + |v|) applies too
-  float c0;
-  uint first;  // the slots [first, n): the fluid's, first after a sort, are left out
-  uint dtPartialBase;  // this pass's first partial of the time step's reduction (past the force pass's)
-  uint groupBase;      // the workgroups of the pass's earlier dispatches (the pages of the fluid's list)
-  uint last;           // 1: the pass's last dispatch (it writes the partials' count)
-  uint substeps;       // the wall's substeps per step (wall/substep.comp; 1: none)
-} pc;
 
 #include "common/dt_fold.glsl"
 
@@ -187,8 +217,8 @@ float hemo_wall(uint slot, uint id) {
   const vec4 info = texelFetch(wallInfoT, int(id));
   const bool anchored = info.y != 0.0;
   vec3 reaction = vec3(0.0);
-  if (!anchored) {
-    reaction = hemo_fluid_reaction(slot);
+  if (!anchored || pc.wallShear != 0u) {
+    reaction = hemo_fluid_reaction(slot);  // (an anchored particle's is not used: it does not move)
   }
   float stiffness;
   uint intact, total;

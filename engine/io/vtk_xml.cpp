@@ -66,7 +66,7 @@ std::vector<float> xyz(const std::vector<glm::vec4>& v) {
 }  // namespace
 
 void writeParticlesVtu(const std::filesystem::path& path, const sim::Snapshot& s, double time,
-                       const std::vector<sim::GpuSpring>* springs, glm::vec3 period) {
+                       const std::vector<sim::GpuSpring>* springs, glm::vec3 period, const WallShearFields* shear) {
   const std::size_t n = s.positions.size();
   if (s.velocities.size() != n || s.densityPressure.size() != n || s.ids.size() != n) {
     throw std::runtime_error("the snapshot's arrays differ in length");
@@ -92,6 +92,19 @@ void writeParticlesVtu(const std::filesystem::path& path, const sim::Snapshot& s
     const WallPointStats w = wallPointStats(s, *springs, period);
     pointData.push_back(arrays.add("Float32", "max_strain", 1, w.maxStrain));
     pointData.push_back(arrays.add("Float32", "broken_fraction", 1, w.brokenFraction));
+  }
+  if (shear && shear->wss && shear->tawss && shear->osi) {
+    std::vector<float> wss(3 * n, 0.0f), tawss(n, 0.0f), osi(n, 0.0f);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t id = s.ids[i];
+      if (id >= shear->wss->size() || std::uint32_t(s.velocities[i].w) != 2u) continue;  // wall points only
+      for (int c = 0; c < 3; ++c) wss[3 * i + std::size_t(c)] = (*shear->wss)[id][c];
+      tawss[i] = (*shear->tawss)[id];
+      osi[i] = (*shear->osi)[id];
+    }
+    pointData.push_back(arrays.add("Float32", "wss_Pa", 3, wss));
+    pointData.push_back(arrays.add("Float32", "tawss_Pa", 1, tawss));
+    pointData.push_back(arrays.add("Float32", "osi", 1, osi));
   }
   const std::string points = arrays.add("Float32", "position_m", 3, xyz(s.positions));
   // one vertex cell (VTK_VERTEX = 1) per particle

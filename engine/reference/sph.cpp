@@ -150,6 +150,26 @@ std::vector<glm::dvec3> viscousVelocities(const std::vector<SphParticle>& partic
   return out;
 }
 
+glm::dvec3 wallShearStress(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp, const SphModel& m,
+                           std::size_t wall, double area) {
+  const SphParticle& b = particles[wall];
+  const auto vv = viscousVelocities(particles, m);
+  const double etaSq = 0.01 * m.h * m.h;
+  glm::dvec3 force(0.0);
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    const SphParticle& pi = particles[i];
+    if (pi.kind != 0) continue;
+    const glm::dvec3 d = separation(m, pi.x, b.x);
+    const double r = glm::length(d);
+    if (r >= 2.0 * m.h || r == 0.0) continue;
+    const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
+    // minus m_i times the viscous pair term of accelerations(): V_i V_b 2 mu (x_ib . gradW) / (r^2 + eta^2) (v_i - v_b)
+    force -= (pi.mass / rp[i].x) * (b.mass / rp[wall].x) * 2.0 * m.mu * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[wall]);
+  }
+  const glm::dvec3 tangential = force - glm::dot(force, b.normal) * b.normal;
+  return area > 0.0 ? tangential / area : glm::dvec3(0.0);
+}
+
 std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp,
                                       const SphModel& m, std::vector<glm::dvec3>* reactions) {
   std::vector<glm::dvec3> out(particles.size(), glm::dvec3(0.0));

@@ -83,6 +83,10 @@ SceneBuild buildScene(const Scene& s) {
         out.network = std::move(b.network);
         out.wall = b.wall;
       }
+      // Each layer holds one point per dp^2 of the lumen: a point carries the wall shear of
+      // dp^2 / layers of it.
+      const float shearArea = s.sph.spacing * s.sph.spacing / float(s.vessel->layers);
+      for (std::uint32_t i = 0; i < out.wall; ++i) out.network->points[i].shearArea = shearArea;
       out.network->timeStepFactor = s.vessel->timeStepFactor;
       out.network->substeps = s.vessel->substeps;
     } catch (const std::invalid_argument& e) {

@@ -201,7 +201,7 @@ Progress Simulation::progressOf(const RunOptions& options, std::uint64_t firstSt
 
 RunResult Simulation::run(const RunOptions& options) {
   lastDelivery_ = std::chrono::steady_clock::now();
-  if (options.pipelined && !solver_->solvesPressure() && !stats_ && options.outputEvery == 0) return runPipelined(options);
+  if (options.pipelined && !solver_->solvesPressure() && !stats_ && !wallShear_ && options.outputEvery == 0) return runPipelined(options);
   const auto start = std::chrono::steady_clock::now();
   const double endTime = options.steps ? 3.0e38 : options.until.value_or(scene_.endTime);
   const std::uint64_t targetSteps = options.steps.value_or(~0ull);
@@ -240,6 +240,7 @@ RunResult Simulation::run(const RunOptions& options) {
         recordedDispatches_ += recorder_->dispatchCount() - dispatches;
         recordedBarriers_ += recorder_->barrierCount() - barriers;
         if (stats_ && (steps_ + k) % statsEvery_ == 0) stats_->record(*recorder_, statsRows++);
+        if (wallShear_) solver_->wall()->recordShearSums(*recorder_, solver_->clockParity());
       }
       if (solves) recordedSolveRegions_ += 2 * std::uint64_t(solver_->recordedIterations()) * batch;
       recordReport(*recorder_, reportSlot_, static_cast<std::uint32_t>(batch));
@@ -590,6 +591,37 @@ surface::SurfaceMesh Simulation::extractSurface() {
   recorder_->end();
   recorder_->submitAndWait();
   return surface_->readMesh();
+}
+
+void Simulation::enableWallShear() {
+  if (!solver_->wall()) throw std::logic_error("wall shear: the scene has no vessel wall");
+  if (solver_->solvesPressure()) throw std::logic_error("wall shear: not under DFSPH (a batch run again would count its steps twice)");
+  solver_->wall()->setWallShear(true);
+  wallShear_ = true;
+}
+
+Simulation::WallShearMaps Simulation::readWallShear() const {
+  WallShearMaps m;
+  const MassSpring* wall = solver_->wall();
+  if (!wall) return m;
+  const std::uint32_t points = wall->pointCount();
+  m.wss.assign(points, glm::vec3(0.0f));
+  m.tawss.assign(points, 0.0f);
+  m.osi.assign(points, 0.0f);
+  if (!wallShear_) return m;
+  const auto ids = store_->readIds();
+  const auto tau = wall->wallShearStress().readback<glm::vec4>(ids.size());
+  for (std::size_t slot = 0; slot < ids.size(); ++slot) {
+    if (ids[slot] < points) m.wss[ids[slot]] = glm::vec3(tau[slot]);
+  }
+  const MassSpring::ShearSums sums = wall->readShearSums();
+  m.seconds = sums.seconds;
+  for (std::uint32_t i = 0; i < points; ++i) {
+    const glm::vec4 s = sums.perPoint[i];
+    if (sums.seconds > 0.0) m.tawss[i] = float(s.w / sums.seconds);
+    if (s.w > 0.0f) m.osi[i] = float(0.5 * (1.0 - std::min(1.0, double(glm::length(glm::vec3(s))) / s.w)));
+  }
+  return m;
 }
 
 void Simulation::enableStepStats(std::uint32_t every) {

@@ -27,8 +27,12 @@ struct ForcesPush {
   std::uint32_t groupBase;  // the workgroups of the pass's earlier dispatches (pages)
   std::uint32_t last;       // 1: the pass's last dispatch (it writes the partials' count)
   std::uint32_t substeps;   // the wall's substeps per step
+  std::uint32_t wallShear;  // 1: the wall shear stress too
 };
-static_assert(sizeof(ForcesPush) == 56);
+static_assert(sizeof(ForcesPush) == 60);
+struct ShearPush {  // wall/shear_accumulate.comp
+  std::uint32_t idCount, clockIn;
+};
 struct SubstepPush {  // wall/substep.comp
   std::uint32_t n, first, idCount, substeps, mode, clockIn;
   float endTime;
@@ -80,7 +84,8 @@ struct PressureReactionPush {  // wall/dfsph_reaction.comp
 
 MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, const FluidBuffers& fluid,
                        const SpringNetwork& network, glm::vec3 gravity, float acousticLength, float soundSpeed)
-    : particles_(&particles),
+    : context_(&context),
+      particles_(&particles),
       springCount_(static_cast<std::uint32_t>(network.springs.size())),
       idCount_(static_cast<std::uint32_t>(network.points.size())),
       gravity_{gravity.x, gravity.y, gravity.z, 0.0f},
@@ -95,7 +100,10 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
       counters_(context, 16, gpu::MemoryUse::Device, "wall counters"),
       shade_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 8, gpu::MemoryUse::Device, "wall shade"),
       held_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device,
-            "wall force held over the step") {
+            "wall force held over the step"),
+      wss_(context, std::uint64_t(std::max(particles.capacity(), 1u)) * 16, gpu::MemoryUse::Device, "wall shear stress"),
+      slotOfId_(fluid.slotOfId),
+      clock_(fluid.clock) {
   substeps_ = network.substeps;
   network.validate();
   if (idCount_ > particles.capacity()) {
@@ -134,7 +142,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
   }
   frames_.upload(frames);
   std::vector<glm::vec4> info(std::max<std::size_t>(idCount_, 1), glm::vec4(0.0f));
-  for (std::uint32_t i = 0; i < idCount_; ++i) info[i] = glm::vec4(network.points[i].mass, network.points[i].anchored ? 1.0f : 0.0f, 0.0f, 0.0f);
+  for (std::uint32_t i = 0; i < idCount_; ++i) info[i] = glm::vec4(network.points[i].mass, network.points[i].anchored ? 1.0f : 0.0f, network.points[i].shearArea, 0.0f);
   if (!gpuSprings.empty()) springs_.upload(gpuSprings);
   builtStiffness_.reserve(gpuSprings.size());
   builtDamping_.reserve(gpuSprings.size());
@@ -182,7 +190,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                             {HEMO_SPRINGF_BINDING_SPRINGS_RW, &springs_},
                                             {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
                                             {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts},
-                                            {HEMO_SPRINGF_BINDING_HELD, &held_}}));
+                                            {HEMO_SPRINGF_BINDING_HELD, &held_},
+                                            {HEMO_SPRINGF_BINDING_WSS, &wss_}}));
   }
   if (fluid.kappa) {
     if (fluid.cellWalk || fluid.neighbourListPages.size() != 1) {
@@ -276,12 +285,52 @@ void MassSpring::record(gpu::CommandRecorder& rec, std::uint32_t first, std::uin
   std::uint32_t groupBase = 0;
   forEachPage(first, n, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
     const ForcesPush push{{gravity_[0], gravity_[1], gravity_[2], 0.0f}, hi, idCount_, timeStepFactor_, acousticLength_,
-                          soundSpeed_, lo, dtPartialBase, groupBase, p == lastPage ? 1u : 0u, substeps_};
+                          soundSpeed_, lo, dtPartialBase, groupBase, p == lastPage ? 1u : 0u, substeps_, wallShear_ ? 1u : 0u};
     const gpu::Groups groups = forces_->groupsFor(hi - lo);
     rec.dispatch(*forces_, forcesSets_[p], push, groups);
     rec.computeToCompute();
     groupBase += static_cast<std::uint32_t>(groups.total());
   });
+}
+
+void MassSpring::setWallShear(bool on) {
+  wallShear_ = on;
+  if (!on || shearSums_) return;
+  if (!clock_) throw std::logic_error("wall shear: the wall was built without the fluid's clock");
+  gpu::Context& context = *context_;
+  shearSums_ = std::make_unique<gpu::Buffer>(context, (std::uint64_t(idCount_) + 1) * 16, gpu::MemoryUse::Device, "wall shear sums");
+  resetShearSums();
+  shearAccumulate_ = &context.pipelines().get({"wall/shear_accumulate", HEMO_SHEARACC_BINDING_COUNT, sizeof(ShearPush), kWorkgroup, {},
+                                               1u << HEMO_SHEARACC_BINDING_CLOCK,
+                                               1u << HEMO_SHEARACC_BINDING_IDS_SLOT | 1u << HEMO_SHEARACC_BINDING_WSS});
+  using gpu::texelBinding;
+  using namespace gpu::texel;
+  shearSet_ = shearAccumulate_->makeSet({texelBinding(HEMO_SHEARACC_BINDING_IDS_SLOT, slotOfId_, kUint),
+                                         texelBinding(HEMO_SHEARACC_BINDING_WSS, &wss_, kVec4),
+                                         {HEMO_SHEARACC_BINDING_CLOCK, clock_},
+                                         {HEMO_SHEARACC_BINDING_SUMS, shearSums_.get()}});
+}
+
+void MassSpring::recordShearSums(gpu::CommandRecorder& rec, std::uint32_t clockIn) {
+  if (!wallShear_ || !shearAccumulate_) throw std::logic_error("recordShearSums: wall shear is off");
+  rec.dispatch(*shearAccumulate_, shearSet_, ShearPush{idCount_, clockIn}, shearAccumulate_->groupsFor(std::max(idCount_, 1u)));
+  rec.computeToCompute();
+}
+
+MassSpring::ShearSums MassSpring::readShearSums() const {
+  ShearSums out;
+  if (!shearSums_) {
+    out.perPoint.assign(idCount_, glm::vec4(0.0f));
+    return out;
+  }
+  out.perPoint = shearSums_->readback<glm::vec4>(std::size_t(idCount_) + 1);
+  out.seconds = out.perPoint.back().x;
+  out.perPoint.pop_back();
+  return out;
+}
+
+void MassSpring::resetShearSums() {
+  if (shearSums_) shearSums_->upload(std::vector<glm::vec4>(std::size_t(idCount_) + 1, glm::vec4(0.0f)));
 }
 
 void MassSpring::recordPressureReaction(gpu::CommandRecorder& rec, std::uint32_t first, std::uint32_t n) {

@@ -280,7 +280,9 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
   sim::SphSettings s = wallSettings({0.0f, -1.0f, -9.81f});
   s.soundSpeed = 20.0f;
   s.viscosity = 0.05f;  // large, so the viscous reaction is visible
-  const CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.6f);
+  CoupledCase c = coupledCase(rng, s, 8, 7, 6, 0.6f);
+  // The lumen area each wall point carries the shear of.
+  for (std::size_t i = 0; i < c.net.points.size(); ++i) c.net.points[i].shearArea = (0.4f + 0.2f * float(i % 4)) * s.spacing * s.spacing;
   const auto n = static_cast<std::uint32_t>(c.pos.size());
   // the fluid's list read four entries per texel (capacity 128) and one (capacity 130), the
   // fluid's clusters (interface/sph.h), and no list (the passes walking cells)
@@ -301,6 +303,7 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
     s.neighbourCapacity = capacity;
     s.neighbourSearch = variant.search;
     setUp(c.pos, c.vel, c.normals, c.net, s, glm::vec3(-0.05f), glm::vec3(0.15f));
+    solver_->wall()->setWallShear(true);
     ASSERT_EQ(solver_->walksCells(), cells);
     ASSERT_EQ(solver_->listReadWidth(), cells || capacity % 4u != 0u ? 1u : 4u);
     evaluate();
@@ -351,6 +354,29 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
       EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - want), 2e-4 * (wallScale + reactionScale)) << "wall particle " << i;
     }
     EXPECT_GT(pushed, 100u);
+
+    // The wall shear stress, anchored particles included, against its twin.
+    const auto wss = solver_->wall()->wallShearStress().readback<glm::vec4>(n);
+    std::vector<glm::dvec3> wssRef(c.wall);
+    double wssScale = 0.0;
+    for (std::uint32_t i = 0; i < c.wall; ++i) {
+      wssRef[i] = reference::wallShearStress(ref, rp, model, i, c.net.points[i].shearArea);
+      wssScale = std::max(wssScale, glm::length(wssRef[i]));
+    }
+    ASSERT_GT(wssScale, 0.0);
+    std::size_t wetted = 0;
+    double worst = 0.0;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = ids[slot];
+      if (i >= c.wall) continue;
+      const double error = glm::length(glm::dvec3(glm::vec3(wss[slot])) - wssRef[i]);
+      worst = std::max(worst, error);
+      EXPECT_LT(error, 2e-3 * wssScale) << "wall shear at wall particle " << i;
+      wetted += wss[slot].w == 1.0f;
+    }
+    EXPECT_GT(wetted, 100u);
+    std::printf("wall shear: %zu wall particles wetted, largest %.4g Pa, worst difference from the twin %.3g of it\n", wetted, wssScale,
+                worst / wssScale);
   }
 }
 

@@ -6,10 +6,13 @@
 // whose centre runs 4% fast (its random wall layout holds the no-slip surface a little
 // farther out); the two at most 4.9% of the peak apart.
 #include "gpu_test.hpp"
+#include "interface/sph.h"
 #include "hemo/io/mesh.hpp"
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/mesh_vessel.hpp"
 #include "hemo/sim/simulation.hpp"
+
+#include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <array>
@@ -42,20 +45,37 @@ nlohmann::json tube() {
   })");
 }
 
-// The fluid's mean axial velocity in radial bins of one spacing, averaged over snapshots
-// every 2 ms from 0.032 to 0.04 s (the profile's slowest mode, R^2 / (5.78 nu) = 7 ms, has
-// decayed by then).
-std::array<double, kBins> profile(gpu::Context& ctx, const scene::Scene& scene) {
+struct Flow {
+  std::array<double, kBins> profile{};  // the fluid's mean axial velocity per radial bin (m/s)
+  double meanSpeed = 0.0;               // over the whole lumen (m/s)
+  double wss = 0.0, tawss = 0.0;        // over the wall's points, both layers (Pa): the last step's, time-averaged
+  double axial = 0.0;                   // the mean axial wall shear / the mean magnitude
+  double osi = 0.0;                     // the largest of the points the fluid wets
+};
+
+// Runs to 0.03 s (the profile's slowest mode, R^2 / (5.78 nu) = 7 ms, has decayed by then),
+// then with the wall maps on to 0.04 s: the fluid's mean axial velocity in radial bins of one
+// spacing, averaged over snapshots every 2 ms from 0.032 s, and the wall shear over the wall
+// (each point carries its share: the layers split it, so their mean is the wall's).
+Flow flowOf(gpu::Context& ctx, const scene::Scene& scene) {
   sim::Simulation sim(ctx, scene);
+  sim::RunOptions opt;
+  opt.until = 0.03;
+  sim.run(opt);
+  sim.enableWallShear();
+  Flow out;
   std::array<double, kBins> sum{};
   std::array<int, kBins> count{};
+  double speed = 0.0;
+  int fluid = 0;
   for (double t = 0.032; t < 0.0405; t += 0.002) {
-    sim::RunOptions opt;
     opt.until = t;
     sim.run(opt);
     const sim::Snapshot s = sim.snapshot();
     for (std::size_t i = 0; i < s.positions.size(); ++i) {
       if (s.velocities[i].w != float(sim::ParticleKind::Fluid)) continue;
+      speed += s.velocities[i].x;
+      ++fluid;
       const double r = std::hypot(double(s.positions[i].y), double(s.positions[i].z));
       const int bin = int(r / (kR / kBins));
       if (bin >= kBins) continue;
@@ -64,9 +84,27 @@ std::array<double, kBins> profile(gpu::Context& ctx, const scene::Scene& scene) 
     }
   }
   EXPECT_EQ(sim.escapedParticles(), 0u);
-  std::array<double, kBins> mean{};
-  for (int b = 0; b < kBins; ++b) mean[std::size_t(b)] = sum[std::size_t(b)] / std::max(count[std::size_t(b)], 1);
-  return mean;
+  for (int b = 0; b < kBins; ++b) out.profile[std::size_t(b)] = sum[std::size_t(b)] / std::max(count[std::size_t(b)], 1);
+  out.meanSpeed = speed / std::max(fluid, 1);
+  const sim::Simulation::WallShearMaps maps = sim.readWallShear();
+  EXPECT_NEAR(maps.seconds, 0.01, 1e-4) << "the maps average over the time since they were enabled";
+  const sim::Snapshot s = sim.snapshot();
+  int layer = 0;
+  double axial = 0.0;
+  for (std::size_t i = 0; i < s.positions.size(); ++i) {
+    const std::uint32_t id = s.ids[i];
+    if (s.velocities[i].w != float(HEMO_KIND_WALL) || id >= maps.wss.size()) continue;
+    out.wss += glm::length(maps.wss[id]);
+    axial += maps.wss[id].x;
+    out.tawss += maps.tawss[id];
+    if (maps.tawss[id] > 0.5) out.osi = std::max(out.osi, double(maps.osi[id]));
+    ++layer;
+  }
+  EXPECT_GT(layer, 100);
+  out.wss /= std::max(layer, 1);
+  out.tawss /= std::max(layer, 1);
+  out.axial = axial / std::max(layer, 1) / std::max(out.wss, 1e-30);
+  return out;
 }
 
 TEST_F(MeshFlowTest, TubeFromStlCarriesThePoiseuilleProfile) {
@@ -83,8 +121,10 @@ TEST_F(MeshFlowTest, TubeFromStlCarriesThePoiseuilleProfile) {
   meshed["vessel"]["mesh"] = {{"file", stl.string()},
                               {"unit_m", 0.001},
                               {"ends", {{{"role", "inlet"}, {"at_m", {0.0, 0.0, 0.0}}}, {{"role", "outlet"}, {"at_m", {0.012, 0.0, 0.0}}}}}};
-  const auto analytic = profile(ctx(), scene::parseScene(tube().dump(), "tube.json"));
-  const auto fromMesh = profile(ctx(), scene::parseScene(meshed.dump(), "mesh_tube.json"));
+  const Flow tubeFlow = flowOf(ctx(), scene::parseScene(tube().dump(), "tube.json"));
+  const Flow meshFlow = flowOf(ctx(), scene::parseScene(meshed.dump(), "mesh_tube.json"));
+  const auto& analytic = tubeFlow.profile;
+  const auto& fromMesh = meshFlow.profile;
   std::filesystem::remove(stl);
   const double peak = kG * kR * kR / (4.0 * kNu);
   double rmsTube = 0.0, rmsMesh = 0.0, worstApart = 0.0;
@@ -104,6 +144,20 @@ TEST_F(MeshFlowTest, TubeFromStlCarriesThePoiseuilleProfile) {
   EXPECT_LT(rmsTube, 0.05) << "the analytic tube against the Poiseuille profile";
   EXPECT_LT(rmsMesh, 0.05) << "the mesh tube against the Poiseuille profile";
   EXPECT_LT(worstApart, 0.06) << "the mesh tube against the analytic tube, bin by bin";
+
+  // Wall shear stress: in Poiseuille flow tau_w = 4 mu U_mean / R (= rho G R / 2 = 10 Pa here),
+  // along the flow, steady (OSI 0).
+  const double mu = kNu * 1000.0;
+  for (const auto& [name, f] : {std::pair{"analytic tube", tubeFlow}, std::pair{"mesh tube", meshFlow}}) {
+    const double expect = 4.0 * mu * f.meanSpeed / kR;
+    std::printf("%s: mean speed %.4f m/s, wall shear %.3f Pa (TAWSS %.3f Pa, %.4f of it along x, largest OSI %.2g) against "
+                "4 mu U / R = %.3f Pa (rho G R / 2 = %.3f Pa)\n",
+                name, f.meanSpeed, f.wss, f.tawss, f.axial, f.osi, expect, 1000.0 * kG * kR / 2.0);
+    EXPECT_NEAR(f.wss / expect, 1.0, 0.1) << name;
+    EXPECT_NEAR(f.tawss / expect, 1.0, 0.1) << name;
+    EXPECT_GT(f.axial, 0.98) << name;
+    EXPECT_LT(f.osi, 0.02) << name;
+  }
 }
 
 }  // namespace

@@ -67,6 +67,13 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
 // extrapolation of Adami, Hu & Adams (2012, eq. 22-23).
 std::vector<glm::dvec3> viscousVelocities(const std::vector<SphParticle>& particles, const SphModel& model);
 
+// The wall shear stress (Pa, a vector) boundary particle `wall` carries (wall/spring_forces.comp):
+// the viscous part of the force the fluid exerts on it (minus the viscous pair terms of
+// accelerations(), times the fluid's masses), less its part along the particle's normal, over
+// the lumen area `area` (m^2) it carries.
+glm::dvec3 wallShearStress(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& densityPressure,
+                           const SphModel& model, std::size_t wall, double area);
+
 // Acceleration per particle (zero for boundary particles). With `reactions`, also the force
 // (N) on each boundary particle: minus the sum of m_f times the pair terms each fluid
 // particle f got from it (pressure, viscosity, its share of the normalised repulsion).

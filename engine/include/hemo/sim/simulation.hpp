@@ -136,6 +136,23 @@ class Simulation {
   // Records per-step statistics (hemo/sim/stats.hpp) of every `every`-th step from now on,
   // delivered through RunOptions::onStepStats once per batch.
   void enableStepStats(std::uint32_t every = 1);
+  // The wall maps clinicians read (hemo/sim/wall.hpp, MassSpring::setWallShear): from now on
+  // every step fits the wall shear stress at each wall particle and adds it to time sums, on
+  // the GPU (no host work per step; runs are not pipelined). Throws std::logic_error without a
+  // vessel wall, or under DFSPH (a batch run again would count its steps twice).
+  void enableWallShear();
+  bool wallShearEnabled() const { return wallShear_; }
+  // Per wall point id: the last step's wall shear stress (Pa, as a vector), its magnitude
+  // averaged over the time since enableWallShear (TAWSS, Pa) and the oscillatory shear index
+  // OSI = 0.5 (1 - |mean tau| / mean |tau|) (0 for one-way shear, up to 0.5 when it reverses;
+  // Ku et al. 1985). Points no fluid touches read 0. A readback.
+  struct WallShearMaps {
+    std::vector<glm::vec3> wss;
+    std::vector<float> tawss;
+    std::vector<float> osi;
+    double seconds = 0.0;  // the time averaged over
+  };
+  WallShearMaps readWallShear() const;
   // GPU milliseconds of each stage of one step (median of `repeats` steps, run now and
   // counted like any other step). Empty if the device has no timestamps. Most steps reuse
   // the neighbour list, and so do the profiled ones unless `rebuild` forces the grid and
@@ -254,6 +271,7 @@ class Simulation {
   std::unique_ptr<surface::MarchingCubes> surface_;
   std::unique_ptr<surface::ParticleField> field_;
   std::uint32_t statsEvery_ = 0;
+  bool wallShear_ = false;
   std::uint64_t steps_ = 0;
   std::uint64_t fingerprint_ = 0;
   std::uint64_t recordedDispatches_ = 0, recordedBarriers_ = 0, recordedSteps_ = 0;

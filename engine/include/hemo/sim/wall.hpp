@@ -20,6 +20,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace hemo::gpu {
@@ -44,6 +45,9 @@ struct WallPoint {
   // points A and B (ids, ordered so that n points into the fluid); kNoFrame keeps the
   // particle's normal as it is.
   std::uint32_t frameA = kNoFrame, frameB = kNoFrame;
+  // The lumen area whose wall shear the point carries (m^2): dp^2 over the wall's layers
+  // (each layer holds one point per dp^2 of the lumen). 0: no wall shear.
+  float shearArea = 0.0f;
 };
 
 struct SpringNetwork {
@@ -140,7 +144,7 @@ class MassSpring {
   std::uint32_t workgroups(std::uint32_t first, std::uint32_t n) const;
 
   std::uint32_t springCount() const { return springCount_; }
-  // vec4 per point id below pointCount(): (mass kg, anchored 0/1, 0, 0).
+  // vec4 per point id below pointCount(): (mass kg, anchored 0/1, shear area m^2, 0).
   const gpu::Buffer& pointInfo() const { return wallInfo_; }
   std::uint32_t pointCount() const { return idCount_; }
   std::uint32_t readBrokenCount() const;             // since the last reset (a readback)
@@ -165,12 +169,31 @@ class MassSpring {
   void recordShade(gpu::CommandRecorder& rec, std::uint32_t n);
   const gpu::Buffer& shade() const { return shade_; }
   const gpu::Buffer& springs() const { return springs_; }  // GpuSpring records, broken flags live
+  // Wall shear stress: with it on, the force pass also writes each wall particle's share of
+  // the wall shear stress (the tangential viscous force the fluid exerts on it over its
+  // WallPoint::shearArea; wall/spring_forces.comp) into wallShearStress(), vec4 per slot (tau
+  // in Pa, 1 where fluid wets the particle), and recordShearSums adds each step's into the time
+  // sums behind the maps (wall/shear_accumulate.comp).
+  void setWallShear(bool on);
+  bool wallShear() const { return wallShear_; }
+  const gpu::Buffer& wallShearStress() const { return wss_; }
+  // After a step (clockIn: the clock record holding it): its stress times its dt into the sums.
+  void recordShearSums(gpu::CommandRecorder& rec, std::uint32_t clockIn);
+  // The sums so far, per point id: (sum tau dt (Pa s), sum |tau| dt (Pa s)), and the time
+  // summed (s). A readback; zeros before setWallShear(true).
+  struct ShearSums {
+    std::vector<glm::vec4> perPoint;
+    double seconds = 0.0;
+  };
+  ShearSums readShearSums() const;
+  void resetShearSums();
   // Its buffers, for a checkpoint (hemo/io/checkpoint.hpp).
   void checkpointBuffers(std::vector<gpu::Buffer*>& out) {
     out.insert(out.end(), {&springs_, &first_, &springsOf_, &wallInfo_, &frames_, &counters_, &shade_});
   }
 
  private:
+  gpu::Context* context_;
   const ParticleStore* particles_;
   std::uint32_t springCount_;
   std::uint32_t idCount_;
@@ -182,6 +205,13 @@ class MassSpring {
   std::vector<float> builtStiffness_, builtDamping_;  // as built (setStiffnessScale)
   gpu::Buffer springs_, first_, springsOf_, wallInfo_, frames_, counters_, shade_;
   gpu::Buffer held_;  // vec4 per slot: what the fluid and gravity give a wall particle for the step
+  gpu::Buffer wss_;   // vec4 per slot: the wall shear stress (with wallShear_)
+  bool wallShear_ = false;
+  const gpu::Buffer* slotOfId_ = nullptr;
+  const gpu::Buffer* clock_ = nullptr;
+  std::unique_ptr<gpu::Buffer> shearSums_;  // vec4 per id and one more (setWallShear(true))
+  const gpu::ComputePipeline* shearAccumulate_ = nullptr;
+  gpu::DescriptorSet shearSet_;
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* shadeStage_;
   const gpu::ComputePipeline* pressureReaction_ = nullptr;  // DFSPH only
