@@ -74,6 +74,12 @@ struct ViewState {
   bool panel = true;
   bool wallSurface = false;  // the wall as a shaded surface (T) ...
   bool wallParticles = true; // ... else as particles (W)
+  // What the wall is coloured by (M cycles): spring strain, the wall shear stress, or its time
+  // average since the map was turned on (sim::MassSpring::ShadeBy); the shear's red end (Pa).
+  int wallMap = 0;
+  bool wallMaps = false;  // the scene can have them (a wall, WCSPH)
+  float shearRange = 10.0f;
+  float strainRange = 0.1f;
   bool quit = false;
   bool reset = false;
   hemo::render::FrameOptions frame;
@@ -133,6 +139,9 @@ void handleKey(ViewState& s, int key) {
     case GLFW_KEY_L: s.frame.springs = !s.frame.springs; break;
     case GLFW_KEY_H: s.panel = !s.panel; break;
     case GLFW_KEY_T: s.wallSurface = !s.wallSurface; break;
+    case GLFW_KEY_M:
+      if (s.wallMaps) s.wallMap = (s.wallMap + 1) % 3;
+      break;
     case GLFW_KEY_TAB:
       if (!s.tools.empty()) s.active = (s.active + 1) % std::uint32_t(s.tools.size());
       break;
@@ -221,7 +230,7 @@ const std::map<std::string, int>& scriptKeys() {
       {"p", GLFW_KEY_P},         {"w", GLFW_KEY_W},     {"b", GLFW_KEY_B},       {"c", GLFW_KEY_C},
       {"l", GLFW_KEY_L},         {"h", GLFW_KEY_H},     {"tab", GLFW_KEY_TAB},   {"g", GLFW_KEY_G},
       {"up", GLFW_KEY_UP},       {"down", GLFW_KEY_DOWN}, {"q", GLFW_KEY_Q},    {"escape", GLFW_KEY_ESCAPE},
-      {"t", GLFW_KEY_T}};
+      {"t", GLFW_KEY_T},         {"m", GLFW_KEY_M}};
   return keys;
 }
 
@@ -377,13 +386,13 @@ int main(int argc, char** argv) {
   std::uint32_t width = 1280, height = 720, stepsPerFrame = 8;
   std::uint64_t maxFrames = 0;
   float toolSpeed = 0.25f;
-  std::string handKind;
+  std::string handKind, wallMapName;
   std::vector<ScriptAction> script;
   hemo::scene::Scene scene;
   try {
     args = hemo::cli::parse(argc, argv,
                             {"--device", "--size", "--steps-per-frame", "--frames", "--tool", "--tool-speed", "--script",
-                             "--screenshot"});
+                             "--screenshot", "--wall-map"});
     if (args.positional.size() != 1) throw hemo::cli::UsageError("expected exactly one SCENE.json");
     std::tie(width, height) = args.size("--size", {1280, 720});
     stepsPerFrame = static_cast<std::uint32_t>(args.count("--steps-per-frame", 8, 0, 100000));
@@ -393,8 +402,15 @@ int main(int argc, char** argv) {
     if (!handKind.empty() && handKind != "probe" && handKind != "grasper" && handKind != "blade" && handKind != "none") {
       throw hemo::cli::UsageError("--tool expects probe, grasper, blade or none, got '" + handKind + "'");
     }
+    wallMapName = args.text("--wall-map", "strain");
+    if (wallMapName != "strain" && wallMapName != "wss" && wallMapName != "tawss") {
+      throw hemo::cli::UsageError("--wall-map expects strain, wss or tawss, got '" + wallMapName + "'");
+    }
     if (args.has("--script")) script = loadScript(args.text("--script"));
     scene = hemo::scene::loadScene(args.positional[0]);
+    if (wallMapName != "strain" && (!scene.vessel || scene.sph.pressureSolver == hemo::sim::PressureSolver::Dfsph)) {
+      throw hemo::cli::UsageError("--wall-map " + wallMapName + " needs a vessel wall under WCSPH (fluid.solver \"wcsph\")");
+    }
     if (toolSpeed > 0.5f * scene.sph.soundSpeed) {
       throw hemo::cli::UsageError("--tool-speed must stay below half the scene's speed of sound (" +
                                   std::to_string(scene.sph.soundSpeed) + " m/s)");
@@ -504,6 +520,15 @@ int main(int argc, char** argv) {
     state.wallSurface = sim->wallParticles() > 0 && sim->springs() > 0;
     state.frame.cutaway = !state.wallSurface;
     state.frame.wallOpacity = 0.5f;
+    // The wall maps (wall shear stress and its time average) where the solver makes them; the
+    // shear's colour scale ends at 8 mu U / R (four times Poiseuille's wall shear at the mean
+    // speed U / 2, for the scene's expected speed U and the vessel's radius R).
+    state.wallMaps = sim->springs() > 0 && !sim->solver().solvesPressure();
+    state.wallMap = wallMapName == "wss" ? 1 : wallMapName == "tawss" ? 2 : 0;
+    state.strainRange = state.frame.strainScale;
+    if (scene.vessel && scene.vessel->radius > 0.0f) {
+      state.shearRange = std::max(0.01f, 8.0f * scene.sph.viscosity * std::max(scene.expectedMaxSpeed, 1e-3f) / scene.vessel->radius);
+    }
     state.frame.particleRadius = 0.5f * scene.sph.spacing;
     state.frame.speedScale = std::max(scene.expectedMaxSpeed, 1e-3f);
     state.domainMin = scene.domain.min;
@@ -611,6 +636,13 @@ int main(int argc, char** argv) {
           ImGui::SetNextItemWidth(110.0f);
           ImGui::SliderFloat("opacity", &state.frame.wallOpacity, 0.05f, 1.0f, "%.2f");
         }
+        if (state.wallMaps) {
+          const char* maps[] = {"spring strain", "wall shear stress", "time-averaged WSS"};
+          ImGui::Combo("wall colour (M)", &state.wallMap, maps, 3);
+          if (state.wallMap != 0) {
+            ImGui::SliderFloat("red at (Pa)", &state.shearRange, 0.01f, 1000.0f, "%.3g", ImGuiSliderFlags_Logarithmic);
+          }
+        }
         if (sim->wallParticles() > 0) {
           float stiffness = sim->wallStiffnessScale();
           if (ImGui::SliderFloat("stiffness x", &stiffness, 0.1f, 4.0f, "%.2f", ImGuiSliderFlags_Logarithmic)) {
@@ -687,7 +719,9 @@ int main(int argc, char** argv) {
 
       rec.begin();
       if (state.surface) sim->recordSurface(rec);
-      sim->recordWallShade(rec);
+      if (state.wallMap != 0 && !sim->wallShearEnabled()) sim->enableWallShear();  // (again after a reset)
+      sim->recordWallShade(rec, hemo::sim::MassSpring::ShadeBy(state.wallMap));
+      state.frame.strainScale = state.wallMap == 0 ? state.strainRange : state.shearRange;
       const hemo::render::ToolView tools{state.tools.empty() ? nullptr : &state.tools, state.now};
       hemo::render::WallSurfaceView wallView;
       if (state.wallSurface) {
@@ -722,6 +756,13 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(runSteps), sim->time(), frames / std::max(seconds, 1e-9));
     if (sim->wallParticles() > 0 || sim->fluidParticles() > 0) {
       std::printf("hemo-view: %u springs broken, %u particles escaped\n", sim->brokenSprings(), sim->escapedParticles());
+      if (sim->wallShearEnabled()) {
+        const hemo::sim::Simulation::WallShearMaps maps = sim->readWallShear();
+        double sum = 0.0, most = 0.0;
+        for (float t : maps.tawss) sum += t, most = std::max(most, double(t));
+        std::printf("hemo-view: wall maps over %.4g s: time-averaged wall shear stress %.4g Pa on average, %.4g Pa at most\n",
+                    maps.seconds, maps.tawss.empty() ? 0.0 : sum / double(maps.tawss.size()), most);
+      }
     }
     for (std::size_t k = 0; k < state.tools.size(); ++k) {
       std::printf("hemo-view: tool \"%s\"%s: moved %.3g mm by hand, largest force %.3g N\n", state.tools[k].name.c_str(),

@@ -123,7 +123,9 @@
 #define HEMO_SHADE_BINDING_SPRINGS_OF 6
 #define HEMO_SHADE_BINDING_PARAMS 7
 #define HEMO_SHADE_BINDING_SHADE 8
-#define HEMO_SHADE_BINDING_COUNT 9
+#define HEMO_SHADE_BINDING_WSS 9          // HEMO_SPRINGF_BINDING_WSS (push mode 1)
+#define HEMO_SHADE_BINDING_SHEAR_SUMS 10  // HEMO_SHEARACC_BINDING_SUMS (push mode 2)
+#define HEMO_SHADE_BINDING_COUNT 11
 
 // The wall shear maps' accumulation (wall/shear_accumulate.comp), after each step, per point
 // id: the step's wall shear stress (HEMO_SPRINGF_BINDING_WSS at the point's slot) times the

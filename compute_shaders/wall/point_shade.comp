@@ -3,7 +3,9 @@
 // unbroken springs (|x_b - x_a| / rest - 1, minimum image on periodic axes; 0 when all are
 // compressed or broken), fraction of its springs that broke); vec2(0) for other kinds. A
 // gather over the particle's springs (CSR by id), like wall/spring_forces.comp. The CPU twin
-// is io::wallPointStats.
+// is io::wallPointStats. With push.mode 1 the first component is the particle's wall shear
+// stress instead (|tau|, Pa, the last force pass's), with 2 its time average (sum |tau| dt /
+// sum dt, Pa; wall/shear_accumulate.comp).
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "interface/wall.h"
@@ -20,9 +22,12 @@ layout(std430, binding = HEMO_SHADE_BINDING_FIRST) readonly buffer First { uint 
 layout(std430, binding = HEMO_SHADE_BINDING_SPRINGS_OF) readonly buffer SpringsOf { uint springsOf[]; };
 HEMO_SPH_PARAMS_UNIFORM(HEMO_SHADE_BINDING_PARAMS);
 layout(std430, binding = HEMO_SHADE_BINDING_SHADE) writeonly buffer Shade { vec2 shade[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_WSS) readonly buffer Wss { vec4 wss[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_SHEAR_SUMS) readonly buffer ShearSums { vec4 shearSums[]; };
 layout(push_constant) uniform Push {
   uint n;
   uint idCount;
+  uint mode;  // 0 strain, 1 wall shear stress, 2 its time average
 } pc;
 
 void main() {
@@ -48,5 +53,12 @@ void main() {
     const vec3 delta = hemo_min_image(positions[slotOfId[s.b]].xyz - positions[slotOfId[s.a]].xyz, pp);
     strain = max(strain, length(delta) / s.restLength - 1.0);
   }
-  shade[i] = vec2(strain, total > 0u ? float(broken) / float(total) : 0.0);
+  float value = strain;
+  if (pc.mode == 1u) {
+    value = length(wss[i].xyz);
+  } else if (pc.mode == 2u) {
+    const float seconds = shearSums[pc.idCount].x;
+    value = seconds > 0.0 ? shearSums[id].w / seconds : 0.0;
+  }
+  shade[i] = vec2(value, total > 0u ? float(broken) / float(total) : 0.0);
 }

@@ -581,8 +581,8 @@ void Simulation::recordSurface(gpu::CommandRecorder& rec, gpu::TimestampQueries*
   surface_->record(rec, timestamps);
 }
 
-void Simulation::recordWallShade(gpu::CommandRecorder& rec) {
-  if (auto* wall = solver_->wall()) wall->recordShade(rec, store_->count());
+void Simulation::recordWallShade(gpu::CommandRecorder& rec, MassSpring::ShadeBy by) {
+  if (auto* wall = solver_->wall()) wall->recordShade(rec, store_->count(), by);
 }
 
 surface::SurfaceMesh Simulation::extractSurface() {

@@ -75,7 +75,7 @@ void SpringNetwork::validate() const {
 
 namespace {
 struct ShadePush {
-  std::uint32_t n, idCount;
+  std::uint32_t n, idCount, mode;
 };
 struct PressureReactionPush {  // wall/dfsph_reaction.comp
   std::uint32_t n, first, idCount;
@@ -106,6 +106,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
       clock_(fluid.clock) {
   substeps_ = network.substeps;
   network.validate();
+  wss_.upload(std::vector<glm::vec4>(std::max(particles.capacity(), 1u), glm::vec4(0.0f)));  // (read before the first shear pass)
   if (idCount_ > particles.capacity()) {
     throw std::invalid_argument("spring network: " + std::to_string(idCount_) + " points but the particle store holds " +
                                 std::to_string(particles.capacity()));
@@ -255,20 +256,31 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
     substepToScratchSet_ = substepSet(a.positions, a.velocities, scratchPositions_, scratchVelocities_);
     substepFromScratchSet_ = substepSet(scratchPositions_, scratchVelocities_, a.positions, a.velocities);
   }
+  params_ = fluid.params;
+  makeShadeSet();
+}
+
+void MassSpring::makeShadeSet() {
+  // (before the shear's sums exist, the stress buffer stands in for them: read only in mode 2,
+  // which needs them)
+  const ParticleArrays& a = particles_->live();
   shadeSet_ = shadeStage_->makeSet({{HEMO_SHADE_BINDING_POSITIONS, &a.positions},
                                     {HEMO_SHADE_BINDING_VELOCITIES, &a.velocities},
                                     {HEMO_SHADE_BINDING_IDS, &a.ids},
-                                    {HEMO_SHADE_BINDING_SLOT_OF_ID, fluid.slotOfId},
+                                    {HEMO_SHADE_BINDING_SLOT_OF_ID, slotOfId_},
                                     {HEMO_SHADE_BINDING_SPRINGS, &springs_},
                                     {HEMO_SHADE_BINDING_FIRST, &first_},
                                     {HEMO_SHADE_BINDING_SPRINGS_OF, &springsOf_},
-                                    {HEMO_SHADE_BINDING_PARAMS, fluid.params},
-                                    {HEMO_SHADE_BINDING_SHADE, &shade_}});
+                                    {HEMO_SHADE_BINDING_PARAMS, params_},
+                                    {HEMO_SHADE_BINDING_SHADE, &shade_},
+                                    {HEMO_SHADE_BINDING_WSS, &wss_},
+                                    {HEMO_SHADE_BINDING_SHEAR_SUMS, shearSums_ ? shearSums_.get() : &wss_}});
 }
 
-void MassSpring::recordShade(gpu::CommandRecorder& rec, std::uint32_t n) {
+void MassSpring::recordShade(gpu::CommandRecorder& rec, std::uint32_t n, ShadeBy by) {
+  if (by != ShadeBy::Strain && !wallShear_) throw std::logic_error("recordShade: shading by wall shear needs setWallShear(true)");
   rec.computeToCompute();
-  rec.dispatch(*shadeStage_, shadeSet_, ShadePush{n, idCount_}, shadeStage_->groupsFor(std::max(n, 1u)));
+  rec.dispatch(*shadeStage_, shadeSet_, ShadePush{n, idCount_, std::uint32_t(by)}, shadeStage_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
 }
 
@@ -309,6 +321,7 @@ void MassSpring::setWallShear(bool on) {
                                          texelBinding(HEMO_SHEARACC_BINDING_WSS, &wss_, kVec4),
                                          {HEMO_SHEARACC_BINDING_CLOCK, clock_},
                                          {HEMO_SHEARACC_BINDING_SUMS, shearSums_.get()}});
+  makeShadeSet();
 }
 
 void MassSpring::recordShearSums(gpu::CommandRecorder& rec, std::uint32_t clockIn) {

@@ -375,6 +375,18 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
       wetted += wss[slot].w == 1.0f;
     }
     EXPECT_GT(wetted, 100u);
+    // What the renderer colours the wall by, in the wall shear's mode: |tau| per wall slot.
+    rec_->begin();
+    solver_->wall()->recordShade(*rec_, n, sim::MassSpring::ShadeBy::WallShear);
+    rec_->end();
+    rec_->submitAndWait();
+    const auto shade = solver_->wall()->shade().readback<glm::vec2>(n);
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      if (ids[slot] < c.wall) {
+        const float magnitude = glm::length(glm::vec3(wss[slot]));
+        EXPECT_NEAR(shade[slot].x, magnitude, 1e-6f * magnitude + 1e-30f) << "wall particle " << ids[slot];
+      }
+    }
     std::printf("wall shear: %zu wall particles wetted, largest %.4g Pa, worst difference from the twin %.3g of it\n", wetted, wssScale,
                 worst / wssScale);
   }

@@ -166,9 +166,10 @@ class Simulation {
   void recordSurface(gpu::CommandRecorder& rec, gpu::TimestampQueries* timestamps = nullptr);
   surface::SurfaceMesh extractSurface();
   const surface::MarchingCubes* surfaceExtractor() const { return surface_.get(); }
-  // The wall's per-particle strain and broken fraction for the renderer (recorded on request;
+  // The wall's per-particle strain (or, with the wall maps on, its wall shear stress or the
+  // stress's time average, Pa) and broken fraction for the renderer (recorded on request;
   // nullptr without a wall).
-  void recordWallShade(gpu::CommandRecorder& rec);
+  void recordWallShade(gpu::CommandRecorder& rec, MassSpring::ShadeBy by = MassSpring::ShadeBy::Strain);
   const gpu::Buffer* wallShade() const { return solver_->wall() ? &solver_->wall()->shade() : nullptr; }
   // The wall's outermost layer as a surface for drawing (hemo/sim/wall_surface.hpp): triangles
   // of particle ids with their edges' springs, kWallTriangleWords uints each. Built on first use from the

@@ -165,8 +165,11 @@ class MassSpring {
   const gpu::Buffer& counters() const { return counters_; }  // uint[4] (interface/wall.h)
   // Per slot of the first n: vec2(largest strain of the particle's unbroken springs, fraction
   // of its springs broken) for wall particles, 0 for others (wall/point_shade.comp), into
-  // shade(); what the renderer colours the wall by.
-  void recordShade(gpu::CommandRecorder& rec, std::uint32_t n);
+  // shade(); what the renderer colours the wall by. With ShadeBy::WallShear the first
+  // component is the particle's wall shear stress (Pa) instead, with MeanWallShear its time
+  // average (Pa); both need setWallShear(true).
+  enum class ShadeBy : std::uint32_t { Strain = 0, WallShear = 1, MeanWallShear = 2 };
+  void recordShade(gpu::CommandRecorder& rec, std::uint32_t n, ShadeBy by = ShadeBy::Strain);
   const gpu::Buffer& shade() const { return shade_; }
   const gpu::Buffer& springs() const { return springs_; }  // GpuSpring records, broken flags live
   // Wall shear stress: with it on, the force pass also writes each wall particle's share of
@@ -212,6 +215,8 @@ class MassSpring {
   std::unique_ptr<gpu::Buffer> shearSums_;  // vec4 per id and one more (setWallShear(true))
   const gpu::ComputePipeline* shearAccumulate_ = nullptr;
   gpu::DescriptorSet shearSet_;
+  const gpu::Buffer* params_ = nullptr;
+  void makeShadeSet();
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* shadeStage_;
   const gpu::ComputePipeline* pressureReaction_ = nullptr;  // DFSPH only
