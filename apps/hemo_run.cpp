@@ -242,9 +242,16 @@ int main(int argc, char** argv) {
       const glm::vec3 period = sim.solver().grid().spec().period;
       const auto* wall = sim.solver().wall();
       const std::vector<hemo::sim::GpuSpring> springs = wall ? wall->readSprings() : std::vector<hemo::sim::GpuSpring>{};
+      hemo::sim::Simulation::WallShearMaps maps;
+      hemo::io::WallShearFields shear;
+      if (sim.wallShearEnabled()) {
+        maps = sim.readWallShear();
+        shear = {&maps.wss, &maps.tawss, &maps.osi};
+      }
+      const hemo::io::WallShearFields* shearFields = sim.wallShearEnabled() ? &shear : nullptr;
       if (vtkLegacy) {
         std::snprintf(name, sizeof name, "particles_%08llu.vtk", step);
-        hemo::io::writeParticlesVtk(out / name, snap, p.time, wall ? &springs : nullptr, period);
+        hemo::io::writeParticlesVtk(out / name, snap, p.time, wall ? &springs : nullptr, period, shearFields);
         if (wall) {
           std::snprintf(name, sizeof name, "springs_%08llu.vtk", step);
           hemo::io::writeSpringsVtk(out / name, snap, springs, p.time, period);
@@ -252,13 +259,7 @@ int main(int argc, char** argv) {
         return;
       }
       std::snprintf(name, sizeof name, "particles_%08llu.vtu", step);
-      hemo::sim::Simulation::WallShearMaps maps;
-      hemo::io::WallShearFields shear;
-      if (sim.wallShearEnabled()) {
-        maps = sim.readWallShear();
-        shear = {&maps.wss, &maps.tawss, &maps.osi};
-      }
-      hemo::io::writeParticlesVtu(out / name, snap, p.time, wall ? &springs : nullptr, period, sim.wallShearEnabled() ? &shear : nullptr);
+      hemo::io::writeParticlesVtu(out / name, snap, p.time, wall ? &springs : nullptr, period, shearFields);
       if (!particleSeries) particleSeries.emplace(out / "particles.pvd", keepFrame);
       particleSeries->add(p.time, name);
       if (wall) {
@@ -269,9 +270,9 @@ int main(int argc, char** argv) {
       }
     };
     // The wall maps (wall shear stress, its time average and the oscillatory shear index) go
-    // into the XML particle files of a vessel under WCSPH: averaged from the run's start (or
-    // its resumption).
-    if (vtkEvery && !vtkLegacy && sim.solver().wall() && !sim.solver().solvesPressure()) sim.enableWallShear();
+    // into the particle files of a vessel under WCSPH: averaged from the run's start (or its
+    // resumption).
+    if (vtkEvery && sim.solver().wall() && !sim.solver().solvesPressure()) sim.enableWallShear();
     // (written under a temporary name during the run, renamed when it ends: hemo/io/atomic_file.hpp)
     std::unique_ptr<hemo::io::AtomicFile> csvFile;
     if (statsEvery) {

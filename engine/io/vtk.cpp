@@ -80,7 +80,7 @@ WallPointStats wallPointStats(const sim::Snapshot& s, const std::vector<sim::Gpu
 }
 
 void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s, double time,
-                       const std::vector<sim::GpuSpring>* springs, glm::vec3 period) {
+                       const std::vector<sim::GpuSpring>* springs, glm::vec3 period, const WallShearFields* shear) {
   AtomicFile file(path);
   std::ostream& out = vtkHeader(file, "hemo particles", time);
   const std::size_t n = s.positions.size();
@@ -106,6 +106,19 @@ void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s
     for (float x : w.maxStrain) out << x << '\n';
     out << "SCALARS broken_fraction float 1\nLOOKUP_TABLE default\n";
     for (float x : w.brokenFraction) out << x << '\n';
+  }
+  if (shear && shear->wss && shear->tawss && shear->osi) {
+    // wall points only (by id), 0 for the rest
+    auto wall = [&](std::size_t i) { return s.ids[i] < shear->wss->size() && std::uint32_t(s.velocities[i].w) == 2u; };
+    out << "VECTORS wss_Pa float\n";
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+      const glm::vec3 t = wall(i) ? (*shear->wss)[s.ids[i]] : glm::vec3(0.0f);
+      out << t.x << ' ' << t.y << ' ' << t.z << '\n';
+    }
+    out << "SCALARS tawss_Pa float 1\nLOOKUP_TABLE default\n";
+    for (std::size_t i = 0; i < s.positions.size(); ++i) out << (wall(i) ? (*shear->tawss)[s.ids[i]] : 0.0f) << '\n';
+    out << "SCALARS osi float 1\nLOOKUP_TABLE default\n";
+    for (std::size_t i = 0; i < s.positions.size(); ++i) out << (wall(i) ? (*shear->osi)[s.ids[i]] : 0.0f) << '\n';
   }
   file.commit();
 }

@@ -115,15 +115,21 @@ TEST(VtkXml, ParticleArraysReadBackBitForBit) {
   const Case c = randomCase(57, 40);
   const double time = 0.0123456789012345;
   const glm::vec3 period(0.015f, 0.0f, 0.0f);
-  for (const bool withSprings : {false, true}) {
-    SCOPED_TRACE(withSprings ? "with springs" : "without springs");
+  // The wall maps, per wall point id (ids below 40 here; kind 2 rows are wall points).
+  std::vector<glm::vec3> wss(40);
+  std::vector<float> tawss(40), osi(40);
+  for (std::size_t k = 0; k < 40; ++k) wss[k] = glm::vec3(0.5f * k, -0.25f * k, 1.0f + k), tawss[k] = 0.1f * k, osi[k] = 0.01f * k;
+  const io::WallShearFields maps{&wss, &tawss, &osi};
+  for (const int variant : {0, 1, 2}) {
+    const bool withSprings = variant > 0, withShear = variant == 2;
+    SCOPED_TRACE(withShear ? "with springs and wall maps" : withSprings ? "with springs" : "without springs");
     const fs::path path = dir / "p.vtu";
-    io::writeParticlesVtu(path, c.snap, time, withSprings ? &c.springs : nullptr, period);
+    io::writeParticlesVtu(path, c.snap, time, withSprings ? &c.springs : nullptr, period, withShear ? &maps : nullptr);
     const XmlFile f = parse(path);
     EXPECT_NE(f.header.find("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"),
               std::string::npos);
     EXPECT_NE(f.header.find("<Piece NumberOfPoints=\"57\" NumberOfCells=\"57\">"), std::string::npos);
-    EXPECT_EQ(f.arrays.size(), withSprings ? 13u : 11u);
+    EXPECT_EQ(f.arrays.size(), withShear ? 16u : withSprings ? 13u : 11u);
     EXPECT_EQ(values<double>(f, "TimeValue", "Float64", 1), std::vector<double>{time});
     const auto x = values<float>(f, "position_m", "Float32", 3);
     const auto v = values<float>(f, "velocity_m_s", "Float32", 3);
@@ -163,6 +169,22 @@ TEST(VtkXml, ParticleArraysReadBackBitForBit) {
       const io::WallPointStats w = io::wallPointStats(c.snap, c.springs, period);
       EXPECT_EQ(values<float>(f, "max_strain", "Float32", 1), w.maxStrain);
       EXPECT_EQ(values<float>(f, "broken_fraction", "Float32", 1), w.brokenFraction);
+    }
+    if (withShear) {
+      const auto w = values<float>(f, "wss_Pa", "Float32", 3);
+      const auto t = values<float>(f, "tawss_Pa", "Float32", 1);
+      const auto o = values<float>(f, "osi", "Float32", 1);
+      ASSERT_EQ(w.size(), 3u * 57u);
+      std::size_t mapped = 0;
+      for (std::size_t i = 0; i < 57; ++i) {
+        const std::uint32_t id = c.snap.ids[i];
+        const bool wall = c.snap.velocities[i].w == 2.0f && id < 40;
+        mapped += wall;
+        for (int a = 0; a < 3; ++a) EXPECT_EQ(w[3 * i + a], wall ? wss[id][a] : 0.0f);
+        EXPECT_EQ(t[i], wall ? tawss[id] : 0.0f);
+        EXPECT_EQ(o[i], wall ? osi[id] : 0.0f);
+      }
+      EXPECT_GT(mapped, 5u);
     }
   }
 }

@@ -31,8 +31,17 @@ SpringStats springStats(const sim::Snapshot& snapshot, const std::vector<sim::Gp
 // pressure (Pa), kind (0 fluid, 1 boundary, 2 wall) and id; with springs also the wall's
 // max_strain and broken_fraction (wallPointStats). Throws std::runtime_error naming the file
 // if it cannot be written.
+// With `shear` (per wall point id; hemo/sim/simulation.hpp, Simulation::readWallShear) also
+// the wall maps: wss_Pa (the last step's wall shear stress), tawss_Pa and osi (0 for
+// particles that are not wall points).
+struct WallShearFields {
+  const std::vector<glm::vec3>* wss = nullptr;
+  const std::vector<float>* tawss = nullptr;
+  const std::vector<float>* osi = nullptr;
+};
 void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& snapshot, double time,
-                       const std::vector<sim::GpuSpring>* springs = nullptr, glm::vec3 period = glm::vec3(0.0f));
+                       const std::vector<sim::GpuSpring>* springs = nullptr, glm::vec3 period = glm::vec3(0.0f),
+                       const WallShearFields* shear = nullptr);
 
 // The spring network as VTK lines between particle positions, with per-spring strain,
 // tension (N, the elastic part k (|d| - rest)) and broken flag (0/1). A spring across a
@@ -47,14 +56,6 @@ void writeSpringsVtk(const std::filesystem::path& path, const sim::Snapshot& sna
 // Every array is appended raw (UInt64 byte counts, the host's byte order, named in the
 // header), and the time (s) is the field TimeValue. Throws std::runtime_error naming the file
 // if it cannot be written.
-// With `shear` (per wall point id; hemo/sim/simulation.hpp, Simulation::readWallShear) also
-// the wall maps: wss_Pa (the last step's wall shear stress), tawss_Pa and osi (0 for
-// particles that are not wall points).
-struct WallShearFields {
-  const std::vector<glm::vec3>* wss = nullptr;
-  const std::vector<float>* tawss = nullptr;
-  const std::vector<float>* osi = nullptr;
-};
 void writeParticlesVtu(const std::filesystem::path& path, const sim::Snapshot& snapshot, double time,
                        const std::vector<sim::GpuSpring>* springs = nullptr, glm::vec3 period = glm::vec3(0.0f),
                        const WallShearFields* shear = nullptr);
