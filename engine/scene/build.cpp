@@ -32,6 +32,7 @@ AneurysmSpec vesselSpec(const Vessel& v, const sim::SphSettings& fluid) {
   t.anchorEnds = v.anchorEnds;
   t.fluidMass = fluid.particleMass();
   a.mesh = v.mesh;
+  for (const MeshRegion& r : v.meshRegions) a.regions.push_back({glm::dvec3(r.centre), double(r.radius), r.stiffnessScale, r.strengthScale});
   if (v.shape == Vessel::Shape::SaccularAneurysm) {
     a.sacRadius = v.sacRadius;
     a.neckWidth = v.neckWidth;

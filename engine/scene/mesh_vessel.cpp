@@ -540,7 +540,18 @@ MeshVesselBuild buildMeshVessel(const AneurysmSpec& spec) {
     std::sort(near.begin(), near.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
     for (const auto& [j, d] : near) {
       const double length = glm::length(d);
-      linkSpring(net, adjacent, {i, j, float(length), t.stiffness, t.damping, t.maxForce});
+      float k = t.stiffness, maxForce = t.maxForce;  // (the damping stays, as on the analytic sac)
+      const glm::dvec3 mid = pos[i] + 0.5 * d;
+      for (const AneurysmSpec::Region& r : spec.regions) {
+        glm::dvec3 off = mid - r.centre;
+        if (t.periodic) off.x -= L * std::round(off.x / L);
+        if (glm::length(off) < r.radius) {
+          k *= r.stiffnessScale;
+          maxForce *= r.strengthScale;
+          break;
+        }
+      }
+      linkSpring(net, adjacent, {i, j, float(length), k, t.damping, maxForce});
       const double g = glm::dot(d / length, inward[i] - inward[j]);  // outward normals' difference, j minus i
       b.sumG2 += g * g;
       b.maxG = std::max(b.maxG, g);

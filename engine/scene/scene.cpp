@@ -106,6 +106,13 @@ const std::vector<Field>& schema() {
                      {"role", Kind::Choice, "", 0, 0, false, nullptr, "What the end is: the inlet (on the domain's min x plane when vessel.inflow drives the flow: the zone starts there) or an outlet.", {"inlet", "outlet"}},
                      {"at_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "A point at the end's centre (within its radius): which loop the entry names."},
                  }},
+                {"regions", Kind::Objects, "", 0, kInf, false, Json::array(), "Parts of the wall with other tissue, such as an aneurysm's thinner, weaker dome: a spring whose midpoint lies within a region's sphere takes its stiffness and strength scales (the first region that holds it).", {},
+                 {
+                     {"centre_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "Centre of the region's sphere."},
+                     {"radius_m", Kind::Number, "m", 0, 1e3, true, nullptr, "Radius of the region's sphere."},
+                     {"stiffness_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "The springs' stiffness there / the wall's."},
+                     {"strength_scale", Kind::Number, "1", 0, 1e6, true, 1.0, "The springs' maximum force there / the wall's."},
+                 }},
             }},
            {"start_m", Kind::Vec3, "m", -1e6, 1e6, false, Json::array({0.0, 0.0, 0.0}), "Start of the axis. With a periodic x axis the tube spans the domain: start x = domain min x."},
            {"length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length along +x (with a periodic x axis: the domain's period)."},
@@ -494,6 +501,20 @@ void parseMesh(const Checker& c, const Json& v, const Json& raw, const Scene& s,
   if (!inside(need, s.domain, slack)) {
     c.fail("vessel.mesh", "the mesh with its wall (x " + fmt(need.min.x) + ".." + fmt(need.max.x) + ", y " + fmt(need.min.y) + ".." +
                               fmt(need.max.y) + ", z " + fmt(need.min.z) + ".." + fmt(need.max.z) + " m) reaches outside the domain");
+  }
+  for (std::size_t k = 0; k < m["regions"].size(); ++k) {
+    const Json& r = m["regions"][k];
+    MeshRegion region;
+    region.centre = vec3(r["centre_m"]);
+    region.radius = r["radius_m"].get<float>();
+    region.stiffnessScale = r["stiffness_scale"].get<float>();
+    region.strengthScale = r["strength_scale"].get<float>();
+    // A region must hold some of the wall: its sphere reaches the surface's box.
+    const glm::dvec3 nearest = glm::clamp(glm::dvec3(region.centre), lo, hi);
+    if (!(glm::length(nearest - glm::dvec3(region.centre)) < double(region.radius) + room)) {
+      c.fail("vessel.mesh.regions[" + std::to_string(k) + "].centre_m", "the region's sphere does not reach the mesh's wall");
+    }
+    w.meshRegions.push_back(region);
   }
   w.mesh = std::move(vm);
 }

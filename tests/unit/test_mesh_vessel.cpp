@@ -356,11 +356,42 @@ TEST(MeshVessel, SceneErrorsNameTheProblem) {
     j["domain"]["max_m"][0] = 0.014;
     scene::expectError(j, {"domain.periodic", "needs a periodic x axis"});
   }
+  {  // a region of other tissue that holds none of the wall
+    nlohmann::json j = meshScene(stl);
+    j["vessel"]["mesh"]["regions"] = {{{"centre_m", {0.006, 0.0, 0.5}}, {"radius_m", 0.001}, {"strength_scale", 0.5}}};
+    scene::expectError(j, {"vessel.mesh.regions[0].centre_m", "does not reach the mesh's wall"});
+  }
   {  // the mesh sticks out of the domain
     nlohmann::json j = meshScene(stl);
     j["domain"]["max_m"][2] = 0.0025;
     scene::expectError(j, {"vessel.mesh", "reaches outside the domain"});
   }
+}
+
+// A region of other tissue: the springs whose midpoint lies in its sphere (across the periodic
+// seam too) take its scales, the others the wall's.
+TEST(MeshVessel, RegionsScaleTheirSprings) {
+  nlohmann::json j = meshScene(tubeStl());
+  j["vessel"]["max_force_N"] = 0.01;
+  j["vessel"]["mesh"]["regions"] = {{{"centre_m", {0.0115, 0.0, 0.002}}, {"radius_m", 0.0015}, {"stiffness_scale", 0.25}, {"strength_scale", 0.5}}};
+  const scene::Scene s = scene::parseScene(j.dump(), "regions.json");
+  const scene::SceneBuild b = scene::buildScene(s);
+  std::size_t inside = 0, across = 0;
+  for (const sim::Spring& sp : b.network->springs) {
+    const glm::dvec3 a(b.particles.positions[sp.a]), c(b.particles.positions[sp.b]);
+    glm::dvec3 d = c - a;
+    d.x -= 0.012 * std::round(d.x / 0.012);
+    glm::dvec3 off = a + 0.5 * d - glm::dvec3(0.0115, 0.0, 0.002);
+    off.x -= 0.012 * std::round(off.x / 0.012);
+    const bool in = glm::length(off) < 0.0015;
+    inside += in;
+    across += in && (a.x + 0.5 * d.x >= 0.012 || a.x + 0.5 * d.x < 0.0);
+    EXPECT_FLOAT_EQ(sp.stiffness, in ? 50.0f : 200.0f);
+    EXPECT_FLOAT_EQ(sp.maxForce, in ? 0.005f : 0.01f);
+    EXPECT_FLOAT_EQ(sp.damping, 0.01f);
+  }
+  EXPECT_GT(inside, 100u);
+  EXPECT_GT(across, 0u) << "the region reaches across the periodic seam";
 }
 
 // The curved tube with a sac: every fluid particle inside the lumen and clear of the wall,

@@ -34,6 +34,14 @@ struct AneurysmSpec {
   // A vessel from a surface mesh instead (hemo/scene/mesh_vessel.hpp): the tube's spacing,
   // layers and spring parameters apply; x0 and length give the periodic span.
   std::shared_ptr<const VesselMesh> mesh;
+  // Mesh vessels: spheres (centre xyz m, radius m) where the springs take other scales
+  // (stiffness, strength); the first that holds a spring's midpoint applies.
+  struct Region {
+    glm::dvec3 centre{0.0};
+    double radius = 0.0;
+    float stiffnessScale = 1.0f, strengthScale = 1.0f;
+  };
+  std::vector<Region> regions;
 };
 
 // The inner radius (m) of the vessel at axial position x: the tube's, or on a fusiform

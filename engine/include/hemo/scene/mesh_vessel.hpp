@@ -95,7 +95,8 @@ struct MeshVesselBuild {
 // bisection so that every layer holds one point per dp^2 of the lumen's area (as the tube's
 // rings), then evened out by rounds of repulsion on the moved surface (the greedy sample's
 // holes are as wide as its exclusion distance): the same mesh always gives the same points.
-// Springs join wall points nearer than 1.75 dp (within and across layers); each point's frame
+// Springs join wall points nearer than 1.75 dp (within and across layers), with the wall's
+// stiffness and strength scaled where their midpoint lies in one of spec.regions; each point's frame
 // takes the pair of same-layer neighbours that best spans the surface. The fluid fills the dp
 // lattice (aligned with x0 and the inlet's centre) inside the lumen. Throws
 // std::invalid_argument naming the problem. docs/meshes.md.

@@ -55,6 +55,15 @@ struct Tank {
 // +z side, halfway along), with a fusiform aneurysm (a bulge all round, halfway along), or a
 // bifurcation (two branches that split off at +-angle in the x-y plane and merge again, halfway
 // along a periodic tube). Periodic along x when the domain is (the tube then spans it).
+// A part of a mesh vessel's wall with other tissue: springs whose midpoint lies in the sphere
+// take the scales.
+struct MeshRegion {
+  glm::vec3 centre{0.0f};  // m
+  float radius = 0.0f;     // m
+  float stiffnessScale = 1.0f;
+  float strengthScale = 1.0f;
+};
+
 // A vessel can also come from a triangle surface of its lumen (Shape::Mesh, an STL or OBJ
 // file; hemo/scene/mesh_vessel.hpp): start, length and radius then describe its ends (start:
 // the domain's min x and the inlet's centre; radius: the inlet's equivalent radius).
@@ -94,6 +103,7 @@ struct Vessel {
   // (VesselMesh::ends order): "inlet" or "outlet".
   std::shared_ptr<const VesselMesh> mesh;
   std::vector<std::string> endRoles;
+  std::vector<MeshRegion> meshRegions;
 };
 
 // The blood surface's grid (hemo/surface/marching_cubes.hpp).
