@@ -9,7 +9,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <limits>
 #include <map>
 #include <numbers>
@@ -83,14 +82,14 @@ struct Grid {
 // Spreads a layer's points evenly over its surface (the triangles `tris` on `verts`, with
 // unit `normals` at the corners): the greedy sample leaves holes up to its exclusion radius
 // wide, where the fluid could slip between wall points; a few rounds of mutual repulsion
-// between points nearer than 1.5 radii (each moved by at most a quarter radius, then put back
+// between points nearer than 1.5 radii (or one bin cell; each moved by at most a quarter radius, then put back
 // on the nearest point of the surface) even them out towards a triangular lattice. A move
 // that would leave `allowed` points (clear of the lumen) is not made. `empty` supplies the
 // binning (periodic or not) for the rounds.
 template <class Allowed, class Wrap, class Bins>
 void relaxOnSurface(std::vector<glm::dvec3>& pts, std::vector<glm::dvec3>& normals, const std::vector<glm::dvec3>& verts,
                     const std::vector<std::array<std::uint32_t, 3>>& tris, const std::vector<glm::dvec3>& cornerNormals, double radius,
-                    Allowed allowed, Wrap wrap, const Bins& empty) {
+                    Allowed allowed, Wrap wrap, const Bins& empty, double binCell) {
   constexpr int kRounds = 24;
   glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
   double edges = 0.0;
@@ -130,7 +129,7 @@ void relaxOnSurface(std::vector<glm::dvec3>& pts, std::vector<glm::dvec3>& norma
           }
     return found;
   };
-  const double reach = 1.5 * radius;
+  const double reach = std::min(1.5 * radius, binCell);  // (the bins find neighbours within one cell)
   for (int round = 0; round < kRounds; ++round) {
     Bins bins = empty;
     for (std::size_t i = 0; i < pts.size(); ++i) bins.add(pts[i], std::uint32_t(i));
@@ -235,7 +234,16 @@ VesselMesh::VesselMesh(io::TriangleMesh mesh) : mesh_(std::move(mesh)) {
     }
   std::vector<std::uint32_t> parent(T.size());
   for (std::size_t i = 0; i < T.size(); ++i) parent[i] = std::uint32_t(i);
-  std::function<std::uint32_t(std::uint32_t)> root = [&](std::uint32_t i) { return parent[i] == i ? i : parent[i] = root(parent[i]); };
+  auto root = [&](std::uint32_t i) {  // (iterative: a segmented vessel has up to millions of triangles)
+    std::uint32_t r = i;
+    while (parent[r] != r) r = parent[r];
+    while (parent[i] != r) {
+      const std::uint32_t up = parent[i];
+      parent[i] = r;
+      i = up;
+    }
+    return r;
+  };
   std::map<std::uint32_t, std::uint32_t> next;  // boundary: the surface runs u -> v
   for (const auto& [key, users] : edges) {
     const std::string edge = "the edge from " + at(V[key.first]) + " to " + at(V[key.second]);
@@ -518,7 +526,7 @@ MeshVesselBuild buildMeshVessel(const AneurysmSpec& spec) {
     for (std::uint32_t i : kept) layerPos.push_back(cand[i].p), layerNormal.push_back(cand[i].n);
     relaxOnSurface(layerPos, layerNormal, q, T, N, best, [&](glm::dvec3 p) {
       return !(m.distance(p, offset) < kLayerClearance * offset) && !m.inside(p);
-    }, wrap, Bins(binX0, period, kLinkRadius * dp));
+    }, wrap, Bins(binX0, period, kLinkRadius * dp), kLinkRadius * dp);
     for (std::size_t i = 0; i < layerPos.size(); ++i) {
       const auto id = std::uint32_t(pos.size());
       wallBins.add(layerPos[i], id);
