@@ -97,18 +97,20 @@ void relaxOnSurface(std::vector<glm::dvec3>& pts, std::vector<glm::dvec3>& norma
     for (std::uint32_t v : t) lo = glm::min(lo, verts[v]), hi = glm::max(hi, verts[v]);
     edges += glm::length(verts[t[1]] - verts[t[0]]);
   }
+  // A point moves at most a quarter radius off the surface: its projection lies within 0.3.
+  const double search = 0.3 * radius;
   Grid<3> grid;
-  grid.init(lo - radius, hi + radius, std::max(2.0 * edges / double(tris.size()), radius));
+  grid.init(lo - radius, hi + radius, std::max(2.0 * edges / double(tris.size()), search));
   for (std::size_t i = 0; i < tris.size(); ++i) {
     const auto& t = tris[i];
     grid.add(std::uint32_t(i), glm::min(verts[t[0]], glm::min(verts[t[1]], verts[t[2]])), glm::max(verts[t[0]], glm::max(verts[t[1]], verts[t[2]])));
   }
-  // The nearest point of the surface within `radius` of p (and the normal there), if any.
+  // The nearest point of the surface within `search` of p (and the normal there), if any.
   auto project = [&](glm::dvec3 p, glm::dvec3& at, glm::dvec3& normal) {
-    double best = radius;
+    double best = search;
     bool found = false;
     std::array<long, 3> i0{}, i1{};
-    for (int a = 0; a < 3; ++a) i0[a] = grid.clampIndex(a, p[a] - radius), i1[a] = grid.clampIndex(a, p[a] + radius);
+    for (int a = 0; a < 3; ++a) i0[a] = grid.clampIndex(a, p[a] - search), i1[a] = grid.clampIndex(a, p[a] + search);
     for (long x = i0[0]; x <= i1[0]; ++x)
       for (long y = i0[1]; y <= i1[1]; ++y)
         for (long z = i0[2]; z <= i1[2]; ++z)
@@ -340,7 +342,8 @@ VesselMesh::VesselMesh(io::TriangleMesh mesh) : mesh_(std::move(mesh)) {
     if (len > 0.0) n /= len;
   }
 
-  // The indexes: about sqrt(triangles) columns a side; 3D cells of twice the mean edge.
+  // The indexes: about sqrt(triangles) columns a side; 3D cells of twice the mean edge, and at
+  // least 1/64 of the box's diagonal (a query a few spacings wide visits few cells).
   const auto side = std::clamp(long(std::sqrt(double(index->closed.size()))), 1L, 512L);
   const double colCell = std::max({max_.y - min_.y, max_.z - min_.z, 1e-12}) / double(side);
   index->columns.init(glm::dvec3(min_.y, min_.z, 0.0), glm::dvec3(max_.y, max_.z, 0.0), colCell);
@@ -356,7 +359,7 @@ VesselMesh::VesselMesh(io::TriangleMesh mesh) : mesh_(std::move(mesh)) {
   }
   double edgeSum = 0.0;
   for (const auto& t : T) edgeSum += glm::length(V[t[1]] - V[t[0]]);
-  const double cell = std::max(2.0 * edgeSum / double(T.size()), diag / 256.0);
+  const double cell = std::max(2.0 * edgeSum / double(T.size()), diag / 64.0);
   index->cells.init(min_, max_, cell);
   for (std::size_t i = 0; i < T.size(); ++i) {
     const glm::dvec3 a = V[T[i][0]], b = V[T[i][1]], c = V[T[i][2]];
@@ -470,26 +473,36 @@ MeshVesselBuild buildMeshVessel(const AneurysmSpec& spec) {
     const double offset = (l + 0.5) * dp;
     std::vector<glm::dvec3> q(V.size());
     for (std::size_t v = 0; v < V.size(); ++v) q[v] = V[v] + offset * N[v];
-    // Candidates: a barycentric grid a quarter spacing apart on every triangle of the layer.
+    // Candidates: a barycentric grid a quarter spacing apart on every triangle of the layer
+    // (a triangle smaller than that: its centroid).
     struct Candidate {
-      glm::dvec3 p, n;
+      glm::dvec3 p, n, moved;  // wrapped into the period; the normal; as moved (unwrapped)
+      std::int8_t state;       // 0 not checked yet, 1 clear of the surface, -1 not
     };
     std::vector<Candidate> cand;
     for (const auto& tri : T) {
       const glm::dvec3 a = q[tri[0]], bb = q[tri[1]], c = q[tri[2]];
       const double edge = std::max({glm::length(bb - a), glm::length(c - bb), glm::length(a - c)});
       const auto n = std::max(1L, long(std::ceil(edge / (kCandidateStep * dp))));
+      auto add = [&](double u, double v) {
+        const double w = 1.0 - u - v;
+        const glm::dvec3 p = u * a + v * bb + w * c;
+        cand.push_back({wrap(p), glm::normalize(u * N[tri[0]] + v * N[tri[1]] + w * N[tri[2]]), p, 0});
+      };
+      if (n == 1 && edge < kCandidateStep * dp) {
+        add(1.0 / 3.0, 1.0 / 3.0);
+        continue;
+      }
       for (long i = 0; i <= n; ++i)
-        for (long j = 0; i + j <= n; ++j) {
-          const double u = double(i) / n, v = double(j) / n, w = 1.0 - u - v;
-          const glm::dvec3 p = u * a + v * bb + w * c;
-          const glm::dvec3 normal = u * N[tri[0]] + v * N[tri[1]] + w * N[tri[2]];
-          // Where the surface curves more tightly than the offset (a concave fold), the moved
-          // layer crosses itself: keep only points that stand clear of the surface.
-          if (m.distance(p, offset) < kLayerClearance * offset || m.inside(p)) continue;
-          cand.push_back({wrap(p), glm::normalize(normal)});
-        }
+        for (long j = 0; i + j <= n; ++j) add(double(i) / n, double(j) / n);
     }
+    // Where the surface curves more tightly than the offset (a concave fold), the moved layer
+    // crosses itself: only points that stand clear of the surface are kept. Checked when a
+    // candidate would be kept, once (most never come to it).
+    auto clear = [&](Candidate& k) {
+      if (k.state == 0) k.state = m.distance(k.moved, offset) < kLayerClearance * offset || m.inside(k.moved) ? -1 : 1;
+      return k.state > 0;
+    };
     // A fixed pseudo-random order (Fisher-Yates with the standard's exactly specified engine).
     std::mt19937_64 rng(0x6d657368u + l);
     for (std::size_t i = cand.size(); i > 1; --i) std::swap(cand[i - 1], cand[rng() % i]);
@@ -502,7 +515,7 @@ MeshVesselBuild buildMeshVessel(const AneurysmSpec& spec) {
       for (std::uint32_t i = 0; i < cand.size(); ++i) {
         bool crowded = false;
         bins.near(cand[i].p, radius, [&](std::uint32_t, glm::dvec3) { crowded = true; });
-        if (crowded) continue;
+        if (crowded || !clear(cand[i])) continue;
         bins.add(cand[i].p, i);
         ++count;
         if (kept) kept->push_back(i);
