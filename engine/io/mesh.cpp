@@ -53,9 +53,11 @@ class Welder {
   std::map<std::array<std::uint32_t, 3>, std::uint32_t> index_;
 };
 
-void checkFinite(const std::filesystem::path& path, const glm::dvec3& p, const std::string& where) {
+// `where` names the place (built only for the message).
+template <class Where>
+void checkFinite(const std::filesystem::path& path, const glm::dvec3& p, Where where) {
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-    throw MeshError(path.string() + ": " + where + " has a coordinate that is not a finite number");
+    throw MeshError(path.string() + ": " + where() + " has a coordinate that is not a finite number");
   }
 }
 
@@ -69,7 +71,7 @@ TriangleMesh readBinaryStl(const std::filesystem::path& path, const std::string&
     std::memcpy(c, rec + 12, sizeof c);  // after the facet normal, which is recomputed from the corners
     std::array<std::uint32_t, 3> tri{};
     for (int k = 0; k < 3; ++k) {
-      checkFinite(path, glm::dvec3(c[3 * k], c[3 * k + 1], c[3 * k + 2]), "triangle " + std::to_string(t));
+      checkFinite(path, glm::dvec3(c[3 * k], c[3 * k + 1], c[3 * k + 2]), [&] { return "triangle " + std::to_string(t); });
       tri[k] = weld.vertex(c[3 * k], c[3 * k + 1], c[3 * k + 2]);
     }
     mesh.triangles.push_back(tri);
@@ -102,7 +104,7 @@ TriangleMesh readAsciiStl(const std::filesystem::path& path, const std::string& 
       if (!inFacet) fail("'vertex' outside a facet");
       double x, y, z;
       if (!(words >> x >> y >> z)) fail("expected three numbers after 'vertex'");
-      checkFinite(path, {x, y, z}, "line " + std::to_string(lineNo));
+      checkFinite(path, {x, y, z}, [&] { return "line " + std::to_string(lineNo); });
       corners.push_back(weld.vertex(float(x), float(y), float(z)));
     } else if (word == "endfacet") {
       if (!inFacet) fail("'endfacet' without 'facet'");
@@ -165,7 +167,7 @@ TriangleMesh readObj(const std::filesystem::path& path) {
     if (word == "v") {
       double x, y, z;
       if (!(words >> x >> y >> z)) fail("expected three numbers after 'v'");
-      checkFinite(path, {x, y, z}, "line " + std::to_string(lineNo));
+      checkFinite(path, {x, y, z}, [&] { return "line " + std::to_string(lineNo); });
       mesh.vertices.emplace_back(x, y, z);
     } else if (word == "f") {
       std::vector<std::uint32_t> poly;

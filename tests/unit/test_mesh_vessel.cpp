@@ -17,6 +17,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <random>
@@ -157,6 +158,17 @@ TEST(MeshIo, AsciiStlAndObj) {
     }
   }
   EXPECT_THROW(io::readMesh(scratch("missing.stl")), io::MeshError);
+  {  // a binary STL with a coordinate that is not a number
+    io::TriangleMesh bad = tetrahedron();
+    bad.vertices[2].y = std::numeric_limits<double>::quiet_NaN();
+    io::writeStl(scratch("nan.stl"), bad);
+    try {
+      io::readMesh(scratch("nan.stl"));
+      ADD_FAILURE() << "nan.stl accepted";
+    } catch (const io::MeshError& e) {
+      EXPECT_NE(std::string(e.what()).find("nan.stl: triangle 0 has a coordinate that is not a finite number"), std::string::npos) << e.what();
+    }
+  }
 }
 
 void expectMeshError(io::TriangleMesh m, const std::string& fragment) {
