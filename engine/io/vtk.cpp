@@ -1,6 +1,7 @@
 #include "hemo/io/output.hpp"
 
 #include "hemo/io/atomic_file.hpp"
+#include "interface/sph.h"
 
 #include <glm/geometric.hpp>
 
@@ -79,6 +80,19 @@ WallPointStats wallPointStats(const sim::Snapshot& s, const std::vector<sim::Gpu
   return w;
 }
 
+WallShearArrays wallShearArrays(const sim::Snapshot& s, const WallShearFields& shear) {
+  const std::size_t n = s.positions.size();
+  WallShearArrays a{std::vector<float>(3 * n, 0.0f), std::vector<float>(n, 0.0f), std::vector<float>(n, 0.0f)};
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t id = s.ids[i];
+    if (id >= shear.wss->size() || std::uint32_t(s.velocities[i].w) != HEMO_KIND_WALL) continue;
+    for (int c = 0; c < 3; ++c) a.wss[3 * i + std::size_t(c)] = (*shear.wss)[id][c];
+    a.tawss[i] = (*shear.tawss)[id];
+    a.osi[i] = (*shear.osi)[id];
+  }
+  return a;
+}
+
 void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s, double time,
                        const std::vector<sim::GpuSpring>* springs, glm::vec3 period, const WallShearFields* shear) {
   AtomicFile file(path);
@@ -108,17 +122,13 @@ void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s
     for (float x : w.brokenFraction) out << x << '\n';
   }
   if (shear && shear->wss && shear->tawss && shear->osi) {
-    // wall points only (by id), 0 for the rest
-    auto wall = [&](std::size_t i) { return s.ids[i] < shear->wss->size() && std::uint32_t(s.velocities[i].w) == 2u; };
+    const WallShearArrays a = wallShearArrays(s, *shear);
     out << "VECTORS wss_Pa float\n";
-    for (std::size_t i = 0; i < s.positions.size(); ++i) {
-      const glm::vec3 t = wall(i) ? (*shear->wss)[s.ids[i]] : glm::vec3(0.0f);
-      out << t.x << ' ' << t.y << ' ' << t.z << '\n';
-    }
+    for (std::size_t i = 0; i < n; ++i) out << a.wss[3 * i] << ' ' << a.wss[3 * i + 1] << ' ' << a.wss[3 * i + 2] << '\n';
     out << "SCALARS tawss_Pa float 1\nLOOKUP_TABLE default\n";
-    for (std::size_t i = 0; i < s.positions.size(); ++i) out << (wall(i) ? (*shear->tawss)[s.ids[i]] : 0.0f) << '\n';
+    for (float x : a.tawss) out << x << '\n';
     out << "SCALARS osi float 1\nLOOKUP_TABLE default\n";
-    for (std::size_t i = 0; i < s.positions.size(); ++i) out << (wall(i) ? (*shear->osi)[s.ids[i]] : 0.0f) << '\n';
+    for (float x : a.osi) out << x << '\n';
   }
   file.commit();
 }

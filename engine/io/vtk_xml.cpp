@@ -94,17 +94,10 @@ void writeParticlesVtu(const std::filesystem::path& path, const sim::Snapshot& s
     pointData.push_back(arrays.add("Float32", "broken_fraction", 1, w.brokenFraction));
   }
   if (shear && shear->wss && shear->tawss && shear->osi) {
-    std::vector<float> wss(3 * n, 0.0f), tawss(n, 0.0f), osi(n, 0.0f);
-    for (std::size_t i = 0; i < n; ++i) {
-      const std::uint32_t id = s.ids[i];
-      if (id >= shear->wss->size() || std::uint32_t(s.velocities[i].w) != 2u) continue;  // wall points only
-      for (int c = 0; c < 3; ++c) wss[3 * i + std::size_t(c)] = (*shear->wss)[id][c];
-      tawss[i] = (*shear->tawss)[id];
-      osi[i] = (*shear->osi)[id];
-    }
-    pointData.push_back(arrays.add("Float32", "wss_Pa", 3, wss));
-    pointData.push_back(arrays.add("Float32", "tawss_Pa", 1, tawss));
-    pointData.push_back(arrays.add("Float32", "osi", 1, osi));
+    const WallShearArrays a = wallShearArrays(s, *shear);
+    pointData.push_back(arrays.add("Float32", "wss_Pa", 3, a.wss));
+    pointData.push_back(arrays.add("Float32", "tawss_Pa", 1, a.tawss));
+    pointData.push_back(arrays.add("Float32", "osi", 1, a.osi));
   }
   const std::string points = arrays.add("Float32", "position_m", 3, xyz(s.positions));
   // one vertex cell (VTK_VERTEX = 1) per particle

@@ -39,6 +39,12 @@ struct WallShearFields {
   const std::vector<float>* tawss = nullptr;
   const std::vector<float>* osi = nullptr;
 };
+// The wall maps per row of the snapshot, as both particle writers store them: wss xyz (3 per
+// row), tawss and osi, the wall point's values for wall rows, 0 for the rest.
+struct WallShearArrays {
+  std::vector<float> wss, tawss, osi;
+};
+WallShearArrays wallShearArrays(const sim::Snapshot& snapshot, const WallShearFields& shear);
 void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& snapshot, double time,
                        const std::vector<sim::GpuSpring>* springs = nullptr, glm::vec3 period = glm::vec3(0.0f),
                        const WallShearFields* shear = nullptr);
