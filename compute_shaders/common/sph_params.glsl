@@ -1,5 +1,5 @@
 // The SPH parameter block (see interface/sph.h for units), bound as a uniform buffer (its
-// layout is the same under std140 and std430: scalars and vec4 only, 272 bytes).
+// layout is the same under std140 and std430: scalars and vec4 only, 288 bytes).
 struct SphParams {
   vec4 gravity;
   float h;
@@ -37,13 +37,14 @@ struct SphParams {
   uint listPageMask;  // the list's pages (interface/sph.h): a slot's index in its page is slot & mask
   uint pressureSolver;  // 0: Tait equation of state (WCSPH); 1: DFSPH's solve (interface/sph.h)
   float solveFloor;  // DFSPH: the least denominator of the stiffness (kg^2 m^-8; interface/sph.h)
-  uint pad2;
+  float rheologyExponent;  // non-Newtonian blood: (n - 1) / a (interface/sph.h, "Viscosity")
   // The neighbour grid (common/grid.glsl, HemoGrid; dims.w unused), for the cell walks
   // (common/cell_walk.glsl).
   vec4 gridOrigin;
   vec4 gridInvCell;
   uvec4 gridDims;
   uvec4 gridPeriodic;
+  vec4 carreau;  // non-Newtonian blood: (mu_inf, mu_0 - mu_inf, lambda, a) (interface/sph.h, "Viscosity")
 };
 
 // Declares `params` at a binding slot. A uniform buffer, not a storage buffer: llvmpipe reads a

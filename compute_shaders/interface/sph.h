@@ -99,11 +99,13 @@
 //                            boundary particles surround (none of it fluid) has a sum that
 //                            nearly cancels, and its stiffness, unbounded, threw it out at
 //                            10^13 m/s (the dam break without repulsion)
-//   uint  pad
+//   float rheologyExponent   non-Newtonian blood: (n - 1) / a of the Carreau-Yasuda law (see "Viscosity")
 //   vec4  gridOrigin         the neighbour grid (common/grid.glsl, HemoGrid), fixed for a solver:
 //   vec4  gridInvCell        origin (m), cells per m, cells per axis, periodic axes and parts;
 //   uvec4 gridDims           what the cell walks (common/cell_walk.glsl) find a slot's
 //   uvec4 gridPeriodic       candidate ranges with, as the list build does from its push constants
+//   vec4  carreau            non-Newtonian blood: (mu_inf, mu_0 - mu_inf (Pa s, over the lattice
+//                            factor), lambda (s), a); all 0 for Newtonian blood (see "Viscosity")
 
 // sph/build_list.comp: the neighbour (Verlet) list, over a grid of two parts (interface/grid.h:
 // the fluid's slots first, then the boundary and wall particles', each part by cell).
@@ -292,7 +294,9 @@
 // clusters' capacity and the first boundary cluster; NCOUNT and NLIST are the clusters' counts
 // and lists (RGBA32UI texels), and the active list holds clusters (relative to the first).
 
-// sph/sps_stress.comp: the SPS stress tau of each fluid particle from its strain rate.
+// sph/sps_stress.comp: from each fluid particle's strain rate, its SPS stress tau (with the
+// SPS term) and its viscosity (non-Newtonian blood, see "Viscosity" below); the force pass
+// and the wall's reaction read both at the pair's fluid particles.
 // NCOUNT / NLIST here and in the force pass: the interacting pairs (PAIR_COUNT / PAIR_LIST of
 // the density pass), not the neighbour list.
 #define HEMO_SPS_BINDING_POSITIONS 0
@@ -303,7 +307,28 @@
 #define HEMO_SPS_BINDING_NLIST 5
 #define HEMO_SPS_BINDING_TAU_A 6  // vec4 (xx, yy, zz, xy) of tau (Pa)
 #define HEMO_SPS_BINDING_TAU_B 7  // vec4 (xz, yz, 0, 0)
-#define HEMO_SPS_BINDING_COUNT 8
+#define HEMO_SPS_BINDING_VISCOSITY 8  // float per fluid slot: mu_i (Pa s, over the lattice factor)
+#define HEMO_SPS_BINDING_VISCOUS_VEL 9  // the pair data's viscous velocity (v, +-V), for the viscosity
+#define HEMO_SPS_BINDING_COUNT 10
+// Viscosity. Newtonian blood has one mu (params.mu). Non-Newtonian blood (Carreau-Yasuda)
+// has its own per fluid particle from its shear rate |S| = sqrt(2 S:S):
+//   mu_i = mu_inf + (mu_0 - mu_inf) (1 + (lambda |S|)^a)^((n - 1) / a),
+// S from the corrected velocity gradient G M^-1 (Bonet & Lok 1999), with
+// G = sum_j V_j (u_j - u_i) (x) gradW_ij and M = sum_j V_j (x_j - x_i) (x) gradW_ij, exact for a
+// linear field (on the lattice M = 0.97 I at h/dp = 1.3), and u_j a boundary particle's no-slip
+// velocity (the viscous term's, extrapolated from the fluid: Adami et al. 2012): with the
+// wall's own velocity there, a particle next to the wall saw half its shear rate, and a
+// shear-thinning fluid was too viscous there (a Carreau-Yasuda tube flowed 7% slow). Where
+// M is nearly singular (det M < 1/4: a particle with few neighbours, at a free surface or in a
+// splash) G alone.
+// (params.carreau = (mu_inf, mu_0 - mu_inf, lambda, a), params.rheologyExponent = (n - 1) / a,
+// the viscosities over the lattice factor as params.mu). A fluid pair's viscous term then
+// takes mu_i + mu_j where the Newtonian one takes 2 mu, and a pair of a fluid particle and a
+// boundary or wall particle 2 mu_i (the wall has no shear rate of its own): the harmonic
+// and arithmetic means differ little where the shear rate varies over a support, and the
+// sum keeps the pair terms symmetric. Compiled in by specialization constant 3 of the strain
+// and force passes and 2 of the wall's reaction (hemo::sim::Rheology).
+
 
 // sph/forces.comp: pressure, viscosity, repulsion, gravity; per-particle time-step limit.
 #define HEMO_FORCES_BINDING_POSITIONS 0
@@ -325,7 +350,8 @@
 // stage's spring pass:
 #define HEMO_FORCES_BINDING_DT_PARTIALS 15  // vec2 (min, max) per SIMD group of both passes
 #define HEMO_FORCES_BINDING_DT_COUNTS 16    // uint[2]: the partials each pass wrote
-#define HEMO_FORCES_BINDING_COUNT 17
+#define HEMO_FORCES_BINDING_VISCOSITY 17    // HEMO_SPS_BINDING_VISCOSITY, as an R32F texel buffer
+#define HEMO_FORCES_BINDING_COUNT 18
 
 // sph/dt_reduce.comp: the time step's reduction's second level (one workgroup).
 #define HEMO_DTREDUCE_BINDING_PARTIALS 0  // texel vec2 (RG32F): HEMO_FORCES_BINDING_DT_PARTIALS

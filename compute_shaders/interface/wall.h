@@ -62,7 +62,10 @@
 // (the wall shear stress the fluid exerts, Pa: the tangential viscous force on the particle
 // over the lumen area it carries, wall info z; 1 where fluid wets the particle else 0).
 #define HEMO_SPRINGF_BINDING_WSS 24
-#define HEMO_SPRINGF_BINDING_COUNT 25
+// float per fluid slot (R32F texel): the fluid's viscosity, with non-Newtonian blood
+// (interface/sph.h, "Viscosity"; HEMO_SPS_BINDING_VISCOSITY).
+#define HEMO_SPRINGF_BINDING_VISCOSITY 25
+#define HEMO_SPRINGF_BINDING_COUNT 26
 
 // wall/dfsph_reaction.comp (DFSPH scenes only): after the density solve, each wall particle
 // adds the reaction of the pressure the solve gave its fluid neighbours through the mirrored

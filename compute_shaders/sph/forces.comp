@@ -8,7 +8,9 @@
 //             (Crespo et al. 2015). m_i a_ij = -V_i V_j (p_i + p_j) gradW_ij: pairwise forces
 //             are equal and opposite.
 //  viscosity  a += m_j 2 mu / (rho_i rho_j) (x_ij . gradW_ij) / (r^2 + eta^2) v_ij
-//             (laminar term of Morris et al. 1997 / Lo & Shao 2002)
+//             (laminar term of Morris et al. 1997 / Lo & Shao 2002); with non-Newtonian blood
+//             (constant 3) 2 mu is mu_i + mu_j for a fluid pair and 2 mu_i for a boundary one,
+//             mu_i from sph/sps_stress.comp (interface/sph.h, "Viscosity")
 //  boundary   neighbours take part with the pressure, density and no-slip velocity
 //             extrapolated to them from the fluid (boundary_pressure.comp), and repel: F = n N(x) T(y) with
 //             N(x) = Psi (1 - r) / sqrt(r), r = x / 2h, for 0 < x < D (normal distance),
@@ -54,12 +56,16 @@ layout(binding = HEMO_FORCES_BINDING_PAIR_POSITION) uniform samplerBuffer pairPo
 // The time step's reduction's first level (common/dt_fold.glsl).
 layout(std430, binding = HEMO_FORCES_BINDING_DT_PARTIALS) writeonly buffer DtPartials { vec2 dtPartials[]; };
 layout(std430, binding = HEMO_FORCES_BINDING_DT_COUNTS) writeonly buffer DtCounts { uint dtCounts[2]; };
+layout(binding = HEMO_FORCES_BINDING_VISCOSITY) uniform samplerBuffer viscosityT;  // at fluid slots
 // 1 when the scene enables the SPS term. A specialization constant rather than a branch on
 // the parameter block: llvmpipe runs a branch's body under a lane mask even when no lane
 // takes it, and the dead SPS loads cost ~10% of the pass (dam break, docs/benchmarks.md).
 layout(constant_id = 1) const uint kSps = 0u;
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 2) const uint kListWidth = 1u;
+// 1: non-Newtonian blood, each fluid particle's viscosity from viscosityT (interface/sph.h,
+// "Viscosity"); 0: params.mu for all.
+layout(constant_id = 3) const uint kViscosity = 0u;
 #if HEMO_CELL_WALK
 #define HEMO_WALK_BUILD_POSITIONS neighbourCount
 #define HEMO_WALK_CELL_START neighbourList
@@ -90,7 +96,8 @@ HemoPairParams gPp;
 float gInvH, gGradNorm, gEtaSq;
 HemoRepulsionParams gRp;
 vec3 gStress;     // sum V_j [ -(p_i + p_j) I + tau_i + tau_j ] . gradW
-vec3 gViscous;    // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij
+vec3 gViscous;    // sum V_j (x_ij . gradW) / (r^2 + eta^2) v_ij, times mu_i + mu_j with kViscosity
+float gMuI;       // kViscosity: mu_i
 vec3 gRepulsion;
 float gRepulsionWeight;
 #if HEMO_CELL_WALK
@@ -116,7 +123,12 @@ void pair(uint j, const bool boundary) {
   const vec4 vj = texelFetch(viscousVel, int(j));  // (fluid: own velocity, boundary: no-slip velocity; +-V_j)
   const float volumeJ = abs(vj.w);
   gStress -= (volumeJ * gPI + pj.w) * gradW;
-  gViscous += (volumeJ * dot(d, gradW) / (r2 + gEtaSq)) * (gVi - vj.xyz);
+  if (kViscosity != 0u) {
+    const float muPair = gMuI + (boundary ? gMuI : texelFetch(viscosityT, int(j)).x);
+    gViscous += (muPair * volumeJ * dot(d, gradW) / (r2 + gEtaSq)) * (gVi - vj.xyz);
+  } else {
+    gViscous += (volumeJ * dot(d, gradW) / (r2 + gEtaSq)) * (gVi - vj.xyz);
+  }
   if (kSps != 0u && !boundary) {
     // sub-particle-scale stress (Dalrymple & Rogers 2006), fluid pairs only
     gStress += volumeJ * ((gSpsI + hemo_sps_tensor(j)) * gradW);
@@ -169,7 +181,9 @@ float hemo_forces(uint i) {
   const float h = gPp.h;
   gInvH = 1.0 / h;
   gGradNorm = hemo_kernel_grad_norm(h, gPp.kernelNorm);
-  const float twoMu = 2.0 * params.mu;
+  // (non-Newtonian: the pair terms carry mu_i + mu_j themselves)
+  const float twoMu = kViscosity != 0u ? 1.0 : 2.0 * params.mu;
+  gMuI = kViscosity != 0u ? texelFetch(viscosityT, int(i)).x : 0.0;
   gEtaSq = params.etaSq;
   gRp = hemo_repulsion_params(h, params.psi, params.repulsionCutoff, params.wallSpacing);
   gXi = xi;

@@ -52,6 +52,7 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_DT_COUNTS) writeonly buffer DtCoun
 layout(std430, binding = HEMO_SPRINGF_BINDING_HELD) writeonly buffer Held { vec4 held[]; };
 // The wall shear stress at wall slots, when push.wallShear is set (see hemo_fluid_reaction).
 layout(std430, binding = HEMO_SPRINGF_BINDING_WSS) writeonly buffer Wss { vec4 wss[]; };
+layout(binding = HEMO_SPRINGF_BINDING_VISCOSITY) uniform samplerBuffer viscosityT;  // at fluid slots
 
 #define positions(k) texelFetch(positionsT, int(k))
 #define velocities(k) texelFetch(velocitiesT, int(k))
@@ -62,6 +63,9 @@ layout(std430, binding = HEMO_SPRINGF_BINDING_WSS) writeonly buffer Wss { vec4 w
 
 // 4: the fluid's list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
+// 1: non-Newtonian blood: the fluid neighbour's own viscosity, 2 mu_f, where Newtonian blood
+// has 2 params.mu (interface/sph.h, "Viscosity"; as sph/forces.comp's boundary pairs).
+layout(constant_id = 2) const uint kViscosity = 0u;
 #if HEMO_CELL_WALK
 #define HEMO_WALK_BUILD_POSITIONS neighbourCountT
 #define HEMO_WALK_CELL_START neighbourListT
@@ -90,7 +94,7 @@ layout(push_constant) uniform Push {
 // the repulsion with f's normalisation 1 / max(sum T, 1) from accel[f].w. With V = m / rho,
 // m_f (V_w / rho_f) = V_w V_f, so the pressure and viscous terms come from f's pair data
 // alone (two vec4, as in the force pass): m_f a = V_w [ -(V_f p_f + V_f p_w) gradW
-// + 2 mu V_f (x . gradW) / (r^2 + eta^2) (v_f - v_w) ].
+// + 2 mu V_f (x . gradW) / (r^2 + eta^2) (v_f - v_w) ] (2 mu_f with non-Newtonian blood).
 // The reaction loop's state, shared by its body (reactionPair()) whichever way the list is read.
 HemoPairParams gPp;
 HemoRepulsionParams gRp;
@@ -116,7 +120,8 @@ void reactionPair(uint f, bool valid) {
   }
   const vec3 gradW = d * hemo_kernel_grad_factor(sqrt(r2), gInvH, gGradNorm);  // as sph/forces.comp
   const vec4 vf = viscousVel(f);  // (v_f, V_f)
-  const vec3 viscous = (vf.w * gTwoMu * dot(d, gradW) / (r2 + gEtaSq)) * (vf.xyz - gVw);
+  const float twoMu = kViscosity != 0u ? 2.0 * texelFetch(viscosityT, int(f)).x : gTwoMu;
+  const vec3 viscous = (vf.w * twoMu * dot(d, gradW) / (r2 + gEtaSq)) * (vf.xyz - gVw);
   gSum += -(pf.w + vf.w * gPW) * gradW + viscous;
   if (gShear) {
     gVisc += viscous;

@@ -1,6 +1,8 @@
 #include "hemo/reference/sph.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/matrix.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -95,35 +97,87 @@ std::vector<glm::dvec2> densityPressure(const std::vector<SphParticle>& particle
   return out;
 }
 
-std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& particles,
-                                             const std::vector<glm::dvec2>& rp, const SphModel& m) {
-  std::vector<std::array<double, 9>> out(particles.size(), std::array<double, 9>{});
+namespace {
+// The velocity gradient g[a][b] = d u_a / d x_b of fluid particle i.
+std::array<double, 9> velocityGradient(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp,
+                                       const SphModel& m, std::size_t i) {
+  std::array<double, 9> g{};
   const double support = 2.0 * m.h;
+  for (std::size_t j = 0; j < particles.size(); ++j) {
+    if (j == i) continue;
+    const glm::dvec3 d = separation(m, particles[i].x, particles[j].x);
+    const double r = glm::length(d);
+    if (r >= support || r == 0.0) continue;
+    const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
+    const glm::dvec3 du = (particles[j].v - particles[i].v) * (particles[j].mass / rp[j].x);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) g[std::size_t(a * 3 + b)] += du[a] * gradW[b];
+  }
+  return g;
+}
+}  // namespace
+
+std::vector<double> shearRates(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp,
+                               const SphModel& m) {
+  std::vector<double> out(particles.size(), 0.0);
+  const double support = 2.0 * m.h;
+  const auto vv = viscousVelocities(particles, m);
   for (std::size_t i = 0; i < particles.size(); ++i) {
     if (particles[i].kind != 0) continue;
-    double g[3][3] = {};  // g[a][b] = d u_a / d x_b
+    // G = sum_j V_j (u_j - u_i) (x) gradW (boundary particles' no-slip velocity) and
+    // M = sum_j V_j (x_j - x_i) (x) gradW, then G M^-1
+    glm::dmat3 g(0.0), mm(0.0);  // (column b, row a)
     for (std::size_t j = 0; j < particles.size(); ++j) {
       if (j == i) continue;
       const glm::dvec3 d = separation(m, particles[i].x, particles[j].x);
       const double r = glm::length(d);
       if (r >= support || r == 0.0) continue;
       const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
-      const glm::dvec3 du = (particles[j].v - particles[i].v) * (particles[j].mass / rp[j].x);
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) g[a][b] += du[a] * gradW[b];
+      const double volume = particles[j].mass / rp[j].x;
+      g += glm::outerProduct((vv[j] - particles[i].v) * volume, gradW);
+      mm -= glm::outerProduct(d * volume, gradW);
     }
+    const glm::dmat3 c = glm::determinant(mm) > 0.25 ? g * glm::inverse(mm) : g;
+    double s2 = 0.0;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) {
+        const double sab = 0.5 * (c[b][a] + c[a][b]);
+        s2 += 2.0 * sab * sab;
+      }
+    out[i] = std::sqrt(s2);
+  }
+  return out;
+}
+
+std::vector<double> viscosities(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& rp,
+                                const SphModel& m) {
+  if (!m.carreauYasuda) return std::vector<double>(particles.size(), m.mu);
+  std::vector<double> out = shearRates(particles, rp, m);
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (particles[i].kind != 0) continue;
+    out[i] = m.muInf + (m.mu0 - m.muInf) * std::pow(1.0 + std::pow(m.lambda * out[i], m.yasuda), (m.powerIndex - 1.0) / m.yasuda);
+  }
+  return out;
+}
+
+std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& particles,
+                                             const std::vector<glm::dvec2>& rp, const SphModel& m) {
+  std::vector<std::array<double, 9>> out(particles.size(), std::array<double, 9>{});
+  for (std::size_t i = 0; i < particles.size(); ++i) {
+    if (particles[i].kind != 0) continue;
+    const auto gv = velocityGradient(particles, rp, m, i);
     double S[3][3], s2 = 0.0, trace = 0.0;
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) {
-        S[a][b] = 0.5 * (g[a][b] + g[b][a]);
+        S[a][b] = 0.5 * (gv[std::size_t(a * 3 + b)] + gv[std::size_t(b * 3 + a)]);
         s2 += 2.0 * S[a][b] * S[a][b];
       }
     for (int a = 0; a < 3; ++a) trace += S[a][a];
     const double nuT = m.spsSmagorinsky * std::sqrt(s2);
     for (int a = 0; a < 3; ++a)
       for (int b = 0; b < 3; ++b) {
-        out[i][a * 3 + b] = rp[i].x * (2.0 * nuT * (S[a][b] - (a == b ? trace / 3.0 : 0.0)) -
-                                       (a == b ? (2.0 / 3.0) * m.spsBlinn * s2 : 0.0));
+        out[i][std::size_t(a * 3 + b)] = rp[i].x * (2.0 * nuT * (S[a][b] - (a == b ? trace / 3.0 : 0.0)) -
+                                                    (a == b ? (2.0 / 3.0) * m.spsBlinn * s2 : 0.0));
       }
   }
   return out;
@@ -154,6 +208,7 @@ glm::dvec3 wallShearStress(const std::vector<SphParticle>& particles, const std:
                            std::size_t wall, double area) {
   const SphParticle& b = particles[wall];
   const auto vv = viscousVelocities(particles, m);
+  const auto mu = viscosities(particles, rp, m);
   const double etaSq = 0.01 * m.h * m.h;
   glm::dvec3 force(0.0);
   for (std::size_t i = 0; i < particles.size(); ++i) {
@@ -163,8 +218,8 @@ glm::dvec3 wallShearStress(const std::vector<SphParticle>& particles, const std:
     const double r = glm::length(d);
     if (r >= 2.0 * m.h || r == 0.0) continue;
     const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
-    // minus m_i times the viscous pair term of accelerations(): V_i V_b 2 mu (x_ib . gradW) / (r^2 + eta^2) (v_i - v_b)
-    force -= (pi.mass / rp[i].x) * (b.mass / rp[wall].x) * 2.0 * m.mu * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[wall]);
+    // minus m_i times the viscous pair term of accelerations(): V_i V_b 2 mu_i (x_ib . gradW) / (r^2 + eta^2) (v_i - v_b)
+    force -= (pi.mass / rp[i].x) * (b.mass / rp[wall].x) * 2.0 * mu[i] * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[wall]);
   }
   const glm::dvec3 tangential = force - glm::dot(force, b.normal) * b.normal;
   return area > 0.0 ? tangential / area : glm::dvec3(0.0);
@@ -183,6 +238,7 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
   const double support = 2.0 * m.h;
   const double etaSq = 0.01 * m.h * m.h;
   const auto tau = m.sps ? spsStress(particles, rp, m) : std::vector<std::array<double, 9>>();
+  const auto mu = viscosities(particles, rp, m);
   for (std::size_t i = 0; i < particles.size(); ++i) {
     const SphParticle& pi = particles[i];
     if (pi.kind != 0) continue;
@@ -197,11 +253,13 @@ std::vector<glm::dvec3> accelerations(const std::vector<SphParticle>& particles,
       if (r >= support || r == 0.0) continue;
       const glm::dvec3 gradW = d * (kernelDwdr(r, m.h) / r);
       const bool fluidJ = pj.kind == 0;
-      // a_i = (1 / rho_i) sum_j V_j [ -(p_i + p_j) gradW + 2 mu (x_ij . gradW) / (r^2 + eta^2) v_ij ]
+      // a_i = (1 / rho_i) sum_j V_j [ -(p_i + p_j) gradW + 2 mu (x_ij . gradW) / (r^2 + eta^2) v_ij ],
+      // 2 mu = mu_i + mu_j for a fluid pair, 2 mu_i for a boundary pair
       const double volumeJ = pj.mass / rp[j].x;
+      const double muPair = mu[i] + (fluidJ ? mu[j] : mu[i]);
       const glm::dvec3 pairAccel = volumeJ / rp[i].x *
                                    (-(rp[i].y + rp[j].y) * gradW +
-                                    2.0 * m.mu * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[j]));
+                                    muPair * glm::dot(d, gradW) / (r * r + etaSq) * (pi.v - vv[j]));
       a += pairAccel;
       if (m.sps && fluidJ) {
         // a += (1 / rho_i) sum_j V_j (tau_i + tau_j) . gradW

@@ -53,14 +53,23 @@ const std::vector<Field>& schema() {
            {"spacing_m", Kind::Number, "m", 0, 10, true, nullptr, "Initial particle spacing dp (fluid and boundary lattice)."},
            {"smoothing_ratio", Kind::Number, "1", 0.5, 3, false, 1.3, "Smoothing length h / dp; the kernel support is 2h."},
            {"neighbour_capacity", Kind::Integer, "1", 8, 1024, false, 128, "Neighbour-list entries per particle; exceeding it stops the run."},
-           {"list_layout", Kind::Choice, "", 0, 0, false, "auto", "How the neighbour list lies in memory: interleaved (entry k of consecutive particles side by side: a GPU's loads coalesce; the default on GPUs), contiguous (each particle's entries together, read four per texel: fewer, wider loads; the default on CPU devices), clusters (CPU devices: one list per four consecutive fluid particles; WCSPH with summation density and no SPS term only, else contiguous), or auto. Results differ only in the order of the sums; for benchmarks and devices where the default is not the fastest.", {"auto", "interleaved", "contiguous", "clusters"}},
+           {"list_layout", Kind::Choice, "", 0, 0, false, "auto", "How the neighbour list lies in memory: interleaved (entry k of consecutive particles side by side: a GPU's loads coalesce; the default on GPUs), contiguous (each particle's entries together, read four per texel: fewer, wider loads; the default on CPU devices), clusters (CPU devices: one list per four consecutive fluid particles; WCSPH with summation density, Newtonian blood and no SPS term only, else contiguous), or auto. Results differ only in the order of the sums; for benchmarks and devices where the default is not the fastest.", {"auto", "interleaved", "contiguous", "clusters"}},
            {"neighbour_search", Kind::Choice, "", 0, 0, false, "auto", "How the passes find a particle's neighbours: a neighbour list (fastest where it fits; 8 x neighbour_capacity bytes per particle), cells (no list: each pass walks the grid cells around the particle, for scenes the list would not fit; the same results bit for bit), or auto (the list where the device's memory holds it, else cells).", {"auto", "list", "cells"}},
            {"list_skin", Kind::Number, "1", 0, 1, false, 0.1, "Neighbour-list radius = 2h (1 + skin). A larger skin rebuilds the list less often but makes it longer: 0.1 suits the dam break, 0.25 (with a capacity of 176) the vessel scenes, whose shear flows spread the displacements (docs/benchmarks.md)."},
        }},
       {"fluid", Kind::Section, "", 0, 0, false, nullptr, "The fluid (blood defaults are density 1060, viscosity 3.5e-3).", {},
        {
            {"density_kg_m3", Kind::Number, "kg/m^3", 1, 1e5, false, 1000.0, "Rest density rho0."},
-           {"viscosity_pa_s", Kind::Number, "Pa s", 0, 100, false, 1e-3, "Dynamic viscosity mu (laminar term)."},
+           {"viscosity_pa_s", Kind::Number, "Pa s", 0, 100, false, 1e-3, "Dynamic viscosity mu (laminar term) of Newtonian blood."},
+           {"rheology", Kind::Section, "", 0, 0, false, Json::object(), "How the viscosity depends on the shear rate (docs/physics.md, \"Non-Newtonian blood\"). The defaults are Cho & Kensey's (1991) fit to whole blood.", {},
+            {
+                {"model", Kind::Choice, "", 0, 0, false, "newtonian", "newtonian (viscosity_pa_s everywhere) or carreau_yasuda: each particle's viscosity mu_inf + (mu_0 - mu_inf) (1 + (lambda g)^a)^((n - 1) / a) at its shear rate g (shear-thinning blood; viscosity_pa_s does not apply).", {"newtonian", "carreau_yasuda"}},
+                {"zero_shear_viscosity_pa_s", Kind::Number, "Pa s", 0, 100, true, 0.056, "mu_0: the viscosity at rest (the largest; it sets the viscous time-step limit)."},
+                {"infinite_shear_viscosity_pa_s", Kind::Number, "Pa s", 0, 100, false, 0.00345, "mu_inf: the viscosity at high shear rates (at most mu_0)."},
+                {"relaxation_time_s", Kind::Number, "s", 0, 1e3, true, 3.313, "lambda: the inverse of the shear rate where thinning sets in."},
+                {"power_index", Kind::Number, "1", 0, 1, true, 0.3568, "n: the power-law index (below 1: shear thinning)."},
+                {"yasuda_exponent", Kind::Number, "1", 0, 10, true, 2.0, "a: how sharp the transition is (2: the Carreau law)."},
+            }},
            {"speed_of_sound_m_s", Kind::Number, "m/s", 0, 1e5, false, 0.0, "Speed of sound c0; 0 derives 10 x expected_max_speed_m_s."},
            {"expected_max_speed_m_s", Kind::Number, "m/s", 0, 1e4, true, nullptr, "Largest flow speed expected; sets c0 unless given."},
            {"clamp_negative_pressure", Kind::Bool, "", 0, 0, false, true, "Clamp Tait pressure at 0 (free surfaces)."},
@@ -846,6 +855,25 @@ Scene parseScene(const std::string& text, const std::string& source, const std::
   const Json& fluid = j["fluid"];
   s.sph.restDensity = fluid["density_kg_m3"].get<float>();
   s.sph.viscosity = fluid["viscosity_pa_s"].get<float>();
+  {
+    const Json& r = fluid["rheology"];
+    const Json& given = raw.contains("fluid") && raw["fluid"].contains("rheology") ? raw["fluid"]["rheology"] : Json::object();
+    if (r["model"].get<std::string>() == "carreau_yasuda") {
+      s.sph.rheology = sim::Rheology::CarreauYasuda;
+      if (raw["fluid"].contains("viscosity_pa_s")) {
+        c.fail("fluid.viscosity_pa_s", "does not apply with fluid.rheology.model \"carreau_yasuda\" (the law gives each particle its viscosity)");
+      }
+      s.sph.carreau = {r["zero_shear_viscosity_pa_s"].get<float>(), r["infinite_shear_viscosity_pa_s"].get<float>(),
+                       r["relaxation_time_s"].get<float>(), r["power_index"].get<float>(), r["yasuda_exponent"].get<float>()};
+      if (s.sph.carreau.muInf > s.sph.carreau.mu0) {
+        c.fail("fluid.rheology.infinite_shear_viscosity_pa_s", "must not exceed zero_shear_viscosity_pa_s (" + fmt(s.sph.carreau.mu0) + " Pa s)");
+      }
+    } else {
+      for (auto it = given.begin(); it != given.end(); ++it) {
+        if (it.key() != "model") c.fail("fluid.rheology." + it.key(), "only applies with fluid.rheology.model \"carreau_yasuda\"");
+      }
+    }
+  }
   s.expectedMaxSpeed = fluid["expected_max_speed_m_s"].get<float>();
   const float c0 = fluid["speed_of_sound_m_s"].get<float>();
   s.sph.soundSpeed = c0 > 0.0f ? c0 : 10.0f * s.expectedMaxSpeed;

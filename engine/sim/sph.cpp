@@ -213,11 +213,12 @@ std::uint32_t rebuildGateSlots(const gpu::Context& context, const SphSettings& s
 }
 
 // Whether the fluid walks clusters (ListLayout): on CPU devices, where a fetch costs per lane,
-// for summation density without the SPS term (the cluster passes have neither), with the list
+// for summation density with Newtonian blood and without the SPS term (the cluster passes have none of them), with the list
 // in one page.
 bool clusterLayout(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
   const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
-  const bool clusterable = s.neighbourSearch != NeighbourSearch::Cells && !s.sps && s.densityMethod == DensityMethod::Summation &&
+  const bool clusterable = s.neighbourSearch != NeighbourSearch::Cells && !s.sps && !s.nonNewtonian() &&
+                           s.densityMethod == DensityMethod::Summation &&
                            s.pressureSolver == PressureSolver::Wcsph &&
                            particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS && listPagesFor(context, s, particles) == 1;
   return clusterable && (s.listLayout == ListLayout::Clusters || (s.listLayout == ListLayout::Auto && cpu));
@@ -242,6 +243,15 @@ void SphSettings::validate() const {
           "smoothing ratio h/dp must be between 0.5 and 3");
   require(finitePositive(restDensity), "rest density must be positive (kg/m^3)");
   require(std::isfinite(viscosity) && viscosity >= 0.0f, "viscosity must be >= 0 (Pa s)");
+  if (rheology == Rheology::CarreauYasuda) {
+    const CarreauYasuda& cy = carreau;
+    require(finitePositive(cy.mu0), "Carreau-Yasuda zero-shear viscosity must be positive (Pa s)");
+    require(std::isfinite(cy.muInf) && cy.muInf >= 0.0f && cy.muInf <= cy.mu0,
+            "Carreau-Yasuda infinite-shear viscosity must be in [0, zero-shear viscosity] (Pa s)");
+    require(finitePositive(cy.lambda), "Carreau-Yasuda relaxation time must be positive (s)");
+    require(finitePositive(cy.n) && cy.n <= 1.0f, "Carreau-Yasuda power-law index must be in (0, 1] (shear-thinning blood)");
+    require(finitePositive(cy.a) && cy.a <= 10.0f, "Carreau-Yasuda exponent a must be in (0, 10]");
+  }
   require(finitePositive(soundSpeed), "speed of sound must be positive (m/s)");
   for (int a = 0; a < 3; ++a) {
     require(std::isfinite(gravity[a]) && std::isfinite(bodyForce[a]), "gravity and body force must be finite");
@@ -272,6 +282,12 @@ void SphSettings::validate() const {
     require(listLayout != ListLayout::Clusters, "the DFSPH pressure solver does not walk clusters");
   }
 }
+
+double CarreauYasuda::at(double shearRate) const {
+  return double(muInf) + (double(mu0) - muInf) * std::pow(1.0 + std::pow(double(lambda) * shearRate, double(a)), (double(n) - 1.0) / a);
+}
+
+double SphSettings::maxViscosity() const { return rheology == Rheology::CarreauYasuda ? std::max(carreau.mu0, carreau.muInf) : viscosity; }
 
 float SphSettings::particleMass() const {
   const double dp = spacing, hh = h();
@@ -337,7 +353,16 @@ SphParams makeParams(const SphSettings& s) {
   p.wallSpacing = s.spacing;
   p.cflAcoustic = s.cflAcoustic;
   p.cflForce = s.cflForce;
-  p.dtViscous = s.viscosity > 0.0f ? float(0.125 * h * h * s.restDensity / s.viscosity) : 3.0e38f;
+  p.dtViscous = s.maxViscosity() > 0.0 ? float(0.125 * h * h * s.restDensity / s.maxViscosity()) : 3.0e38f;
+  if (s.rheology == Rheology::CarreauYasuda) {
+    const double lattice = s.viscousLatticeFactor();
+    p.carreau[0] = float(s.carreau.muInf / lattice);
+    p.carreau[1] = float((double(s.carreau.mu0) - s.carreau.muInf) / lattice);
+    p.carreau[2] = s.carreau.lambda;
+    p.carreau[3] = s.carreau.a;
+    p.rheologyExponent = float((double(s.carreau.n) - 1.0) / s.carreau.a);
+    p.mu = float(s.carreau.mu0 / lattice);  // (unused by the passes, which read each particle's)
+  }
   p.dtMax = s.maxTimeStep;
   p.c0 = s.soundSpeed;
   p.clampNegativePressure = s.clampNegativePressure ? 1u : 0u;
@@ -493,6 +518,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       stepDt_(context, 4, gpu::MemoryUse::Device, "step dt"),
       tauA_(context, settings_.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau a"),
       tauB_(context, settings_.sps ? perParticle(particles, 16) : 16, gpu::MemoryUse::Device, "sps tau b"),
+      viscosity_(context, settings_.nonNewtonian() ? perParticle(particles, 4) : 4, gpu::MemoryUse::Device, "viscosity"),
       // Partials for the force pass's SIMD groups over all slots and the wall stage's over the
       // non-fluid ones.
       dtPartials_(context, 2 * partialsPerPass(particles) * 8, gpu::MemoryUse::Device, "time-step partials"),
@@ -616,19 +642,23 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                   1u << HEMO_BPRESSURE_BINDING_POSITIONS | 1u << HEMO_BPRESSURE_BINDING_VELOCITIES |
                                       1u << HEMO_BPRESSURE_BINDING_NCOUNT | 1u << HEMO_BPRESSURE_BINDING_NLIST |
                                       1u << HEMO_BPRESSURE_BINDING_FLUID_STATE});
-  spsStress_ = &cache.get({pairPass("sph/sps_stress"), HEMO_SPS_BINDING_COUNT, sizeof(SpsPush), kWorkgroup, pairSpecialization({listWidth_}), 1u << HEMO_SPS_BINDING_PARAMS,
+  // constants 1: the list's read width; 2: the SPS stress; 3: the non-Newtonian viscosity
+  const std::uint32_t variableViscosity = settings.nonNewtonian() ? 1u : 0u;
+  spsStress_ = &cache.get({pairPass("sph/sps_stress"), HEMO_SPS_BINDING_COUNT, sizeof(SpsPush), kWorkgroup,
+                           pairSpecialization({listWidth_, settings.sps ? 1u : 0u, variableViscosity}), 1u << HEMO_SPS_BINDING_PARAMS,
                            1u << HEMO_SPS_BINDING_POSITIONS | 1u << HEMO_SPS_BINDING_VELOCITIES | 1u << HEMO_SPS_BINDING_STATE |
-                               1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST});
-  // constant 1: the SPS term compiled in or out; 2: the list's read width
+                               1u << HEMO_SPS_BINDING_NCOUNT | 1u << HEMO_SPS_BINDING_NLIST | 1u << HEMO_SPS_BINDING_VISCOUS_VEL});
+  // constant 1: the SPS term compiled in or out; 2: the list's read width; 3: the
+  // non-Newtonian viscosity
   dtReduce_ = &cache.get({"sph/dt_reduce", HEMO_DTREDUCE_BINDING_COUNT, sizeof(DtReducePush), kWorkgroup, {},
                           1u << HEMO_DTREDUCE_BINDING_TOOLS,
                           1u << HEMO_DTREDUCE_BINDING_PARTIALS | 1u << HEMO_DTREDUCE_BINDING_TOOL_PARTIALS});
   forces_ = &cache.get({pairPass("sph/forces"), HEMO_FORCES_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup,
-                        pairSpecialization({settings.sps ? 1u : 0u, listWidth_}), 1u << HEMO_FORCES_BINDING_PARAMS,
+                        pairSpecialization({settings.sps ? 1u : 0u, listWidth_, variableViscosity}), 1u << HEMO_FORCES_BINDING_PARAMS,
                         1u << HEMO_FORCES_BINDING_POSITIONS | 1u << HEMO_FORCES_BINDING_VELOCITIES | 1u << HEMO_FORCES_BINDING_STATE |
                             1u << HEMO_FORCES_BINDING_NCOUNT | 1u << HEMO_FORCES_BINDING_NORMALS | 1u << HEMO_FORCES_BINDING_NLIST | 1u << HEMO_FORCES_BINDING_TAU_A |
                             1u << HEMO_FORCES_BINDING_TAU_B | 1u << HEMO_FORCES_BINDING_VISCOUS_VEL |
-                            1u << HEMO_FORCES_BINDING_PAIR_POSITION});
+                            1u << HEMO_FORCES_BINDING_PAIR_POSITION | 1u << HEMO_FORCES_BINDING_VISCOSITY});
   // constant 2: the stage (symplectic Euler, or RK2's two), one pipeline each; constant 3: the
   // inflow zone's code compiled in or out (llvmpipe runs a branch's body under an empty lane
   // mask: the zone's test, waveform and mass supply cost the dam break's integrator about a
@@ -788,7 +818,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                             countsAt(HEMO_SPS_BINDING_NCOUNT, &pairCount_),
                                             listAt(HEMO_SPS_BINDING_NLIST, &pairList_[p]),
                                             {HEMO_SPS_BINDING_TAU_A, &tauA_},
-                                            {HEMO_SPS_BINDING_TAU_B, &tauB_}}));
+                                            {HEMO_SPS_BINDING_TAU_B, &tauB_},
+                                            {HEMO_SPS_BINDING_VISCOSITY, &viscosity_},
+                                            gpu::texelBinding(HEMO_SPS_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4)}));
   }
   makeDtReduceSet();
   for (std::uint32_t p = 0; p < pages; ++p) {
@@ -808,7 +840,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                             gpu::texelBinding(HEMO_FORCES_BINDING_TAU_A, &tauA_, gpu::texel::kVec4),
                                             gpu::texelBinding(HEMO_FORCES_BINDING_TAU_B, &tauB_, gpu::texel::kVec4),
                                             gpu::texelBinding(HEMO_FORCES_BINDING_VISCOUS_VEL, &viscousVel_, gpu::texel::kVec4),
-                                            gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4)}));
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_PAIR_POSITION, &pairPosition_, gpu::texel::kVec4),
+                                            gpu::texelBinding(HEMO_FORCES_BINDING_VISCOSITY, &viscosity_, gpu::texel::kFloat)}));
   }
   integrateSet_ = integrate_[0][HEMO_INTEGRATE_SYMPLECTIC_EULER]->makeSet({{HEMO_INTEGRATE_BINDING_POSITIONS, &a.positions},
                                        {HEMO_INTEGRATE_BINDING_VELOCITIES, &a.velocities},
@@ -904,6 +937,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   tileBoxes_.upload(std::vector<std::uint32_t>(std::size_t(tileSpec_.tiles()) * HEMO_TILE_WORDS, 0u));
   tileResult_.upload(std::vector<float>{0.0f});
   tileOccupied_.upload(std::vector<std::uint32_t>{0u, 0u});
+  viscosity_.upload(std::vector<float>(viscosity_.size() / 4, 0.0f));
 }
 
 std::vector<std::uint32_t> SphSolver::pairSpecialization(std::vector<std::uint32_t> constants) const {
@@ -925,7 +959,7 @@ void SphSolver::attachWall(const SpringNetwork& network) {
                            counts,             countsFormat, pages,          pageSlots_,     &viscousVel_,
                            &pairPosition_,     listWidth_,   &dtPartials_,   &dtCounts_,     pairSpecialization({listWidth_}),
                            cellWalk_,          solvesPressure() ? &kappa_ : nullptr,
-                           &dtResult_,         &clock_};
+                           &dtResult_,         &clock_,        &viscosity_,    settings_.nonNewtonian()};
   if (network.substeps > 1 && settings_.integrator != Integrator::SymplecticEuler) {
     throw std::invalid_argument("the wall's substeps step with symplectic Euler (the scene's integrator is RK2)");
   }
@@ -1164,7 +1198,7 @@ void SphSolver::recordForces(gpu::CommandRecorder& rec) { recordForcesOver(rec, 
 void SphSolver::recordForcesOver(gpu::CommandRecorder& rec, std::uint32_t fluidSlots,
                                  gpu::TimestampQueries* timestamps) {
   const std::uint32_t n = particles_->count();
-  if (settings_.sps) {  // only scenes that ask for turbulence pay for it
+  if (settings_.sps || settings_.nonNewtonian()) {  // only scenes that ask for turbulence or blood's thinning pay for it
     forEachPage(rec, 0, fluidSlots, [&](std::uint32_t p, std::uint32_t lo, std::uint32_t hi) {
       rec.dispatch(*spsStress_, spsSets_[p], SpsPush{hi, lo}, spsStress_->groupsFor(hi - lo));
     });
@@ -1476,7 +1510,7 @@ void SphSolver::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
   }
   out.insert(out.end(), {&ccount_, &clist_, &corder_, &pairPosition_, &activeSlots_, &activeArgs_, &activeAppended_,
                          &integrateArgs_, &clock_, &status_, &log_, &inflow_, &savedPos_, &savedVel_, &stepDt_, &tauA_,
-                         &tauB_, &dtPartials_, &dtCounts_, &dtResult_, &checkPartials_, &checkCount_, &checkResult_,
+                         &tauB_, &viscosity_, &dtPartials_, &dtCounts_, &dtResult_, &checkPartials_, &checkCount_, &checkResult_,
                          &tileGrid_, &tileBoxes_, &tileResult_, &tileOccupied_, &kappa_, &solvePartials_, &solveStats_});
   pressureGate_.checkpointBuffers(out);
   if (wall_) wall_->checkpointBuffers(out);

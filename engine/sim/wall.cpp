@@ -159,8 +159,13 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
       1u << HEMO_SPRINGF_BINDING_SLOT_OF_ID | 1u << HEMO_SPRINGF_BINDING_SPRINGS | 1u << HEMO_SPRINGF_BINDING_FIRST |
       1u << HEMO_SPRINGF_BINDING_SPRINGS_OF | 1u << HEMO_SPRINGF_BINDING_WALL_INFO | 1u << HEMO_SPRINGF_BINDING_STATE |
       1u << HEMO_SPRINGF_BINDING_NCOUNT | 1u << HEMO_SPRINGF_BINDING_NLIST | 1u << HEMO_SPRINGF_BINDING_FRAMES |
-      1u << HEMO_SPRINGF_BINDING_WALL_VEL | 1u << HEMO_SPRINGF_BINDING_PAIR_POSITION | 1u << HEMO_SPRINGF_BINDING_FLUID_ACCEL;
-  forces_ = &cache.get({fluid.cellWalk ? "wall/spring_forces_cells" : "wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, fluid.reactionSpecialization,
+      1u << HEMO_SPRINGF_BINDING_WALL_VEL | 1u << HEMO_SPRINGF_BINDING_PAIR_POSITION | 1u << HEMO_SPRINGF_BINDING_FLUID_ACCEL |
+      1u << HEMO_SPRINGF_BINDING_VISCOSITY;
+  if (!fluid.viscosity) throw std::invalid_argument("the wall's reaction needs the fluid's viscosity buffer");
+  // constant 2 of the spring pass: the fluid's viscosity per particle (non-Newtonian blood)
+  std::vector<std::uint32_t> springSpecialization = fluid.reactionSpecialization;
+  springSpecialization.at(1) = fluid.variableViscosity ? 1u : 0u;
+  forces_ = &cache.get({fluid.cellWalk ? "wall/spring_forces_cells" : "wall/spring_forces", HEMO_SPRINGF_BINDING_COUNT, sizeof(ForcesPush), kWorkgroup, springSpecialization,
                         1u << HEMO_SPRINGF_BINDING_PARAMS, springTexels});
   shadeStage_ = &cache.get({"wall/point_shade", HEMO_SHADE_BINDING_COUNT, sizeof(ShadePush), kWorkgroup, {}, 1u << HEMO_SHADE_BINDING_PARAMS});
   const ParticleArrays& a = particles.live();
@@ -192,7 +197,8 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
                                             {HEMO_SPRINGF_BINDING_DT_PARTIALS, fluid.dtPartials},
                                             {HEMO_SPRINGF_BINDING_DT_COUNTS, fluid.dtCounts},
                                             {HEMO_SPRINGF_BINDING_HELD, &held_},
-                                            {HEMO_SPRINGF_BINDING_WSS, &wss_}}));
+                                            {HEMO_SPRINGF_BINDING_WSS, &wss_},
+                                            texelBinding(HEMO_SPRINGF_BINDING_VISCOSITY, fluid.viscosity, kFloat)}));
   }
   if (fluid.kappa) {
     if (fluid.cellWalk || fluid.neighbourListPages.size() != 1) {

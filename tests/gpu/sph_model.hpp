@@ -30,6 +30,12 @@ inline reference::SphModel modelOf(const sim::SphParams& p, double time = 0.0) {
   m.c0 = p.c0;
   m.dfsph = p.pressureSolver != 0;
   m.gravityOnly = {p.gravityOnly[0], p.gravityOnly[1], p.gravityOnly[2]};
+  m.carreauYasuda = p.carreau[2] > 0.0f;  // (lambda is positive for non-Newtonian blood, else 0)
+  m.muInf = p.carreau[0];
+  m.mu0 = double(p.carreau[0]) + p.carreau[1];
+  m.lambda = p.carreau[2];
+  m.yasuda = p.carreau[3];
+  m.powerIndex = 1.0 + double(p.rheologyExponent) * p.carreau[3];
   return m;
 }
 

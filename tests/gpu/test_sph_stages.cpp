@@ -912,6 +912,81 @@ TEST_F(SphStageTest, SpsTurbulenceMatchesReference) {
   }
 }
 
+// Non-Newtonian blood (interface/sph.h, "Viscosity"): each fluid particle's viscosity from its
+// shear rate (the Carreau-Yasuda law), then the accelerations with mu_i + mu_j in the viscous
+// pair terms, against the reference; the list read four entries per texel and one, and the
+// passes walking cells. The law must matter here: the viscosities spread over a factor of
+// two or more, and the viscous term differs from that of Newtonian blood at mu_0.
+TEST_F(SphStageTest, CarreauYasudaViscosityMatchesReference) {
+  auto rng = rngFor();
+  sim::SphSettings s = settings();
+  s.rheology = sim::Rheology::CarreauYasuda;
+  // from 1 Pa s at rest to 0.05, thinning from about 50 1/s; the random velocities (3 m/s)
+  // shear the fluid at hundreds. A softer fluid (c0 = 10 m/s) than the other cases', so the
+  // viscous term is not lost next to the pressure of the jittered lattice.
+  s.carreau = {1.0f, 0.05f, 0.02f, 0.3f, 1.5f};
+  s.soundSpeed = 10.0f;
+  const Case c = makeCase(rng, s, 8, 7, 6, 3.0f);
+  const auto n = static_cast<std::uint32_t>(c.pos.size());
+  struct Variant {
+    std::uint32_t capacity;
+    sim::NeighbourSearch search;
+  };
+  for (const Variant variant : {Variant{128u, sim::NeighbourSearch::List}, Variant{130u, sim::NeighbourSearch::List},
+                                Variant{128u, sim::NeighbourSearch::Cells}}) {
+    SCOPED_TRACE(testing::Message() << "capacity " << variant.capacity
+                                    << (variant.search == sim::NeighbourSearch::Cells ? ", walking cells" : ""));
+    s.listLayout = sim::ListLayout::Auto;  // (non-Newtonian blood never walks clusters)
+    s.neighbourCapacity = variant.capacity;
+    s.neighbourSearch = variant.search;
+    const Stages st = runStages(c, s, glm::vec3(0.12f));
+    ASSERT_FALSE(st.solver->usesClusters());
+    const auto slotIds = st.store->readIds();
+    const auto accel = st.solver->accel().readback<glm::vec4>(n);
+    const auto mu = st.solver->viscosities().readback<float>(n);
+    auto model = modelOf(st.solver->params());
+    ASSERT_TRUE(model.carreauYasuda);
+    EXPECT_NEAR(model.powerIndex, 0.3, 1e-6);
+    const auto rp = reference::densityPressure(c.ref, model);
+    const auto muRef = reference::viscosities(c.ref, rp, model);
+    const auto want = reference::accelerations(c.ref, rp, model);
+    double lo = 1e30, hi = 0.0, worstMu = 0.0;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = slotIds[slot];
+      if (c.ref[i].kind != 0) continue;
+      lo = std::min(lo, muRef[i]);
+      hi = std::max(hi, muRef[i]);
+      worstMu = std::max(worstMu, std::abs(mu[slot] - muRef[i]) / muRef[i]);
+      EXPECT_NEAR(mu[slot], muRef[i], 1e-4 * muRef[i]) << "particle " << i;
+    }
+    EXPECT_GT(hi, 2.0 * lo) << "the viscosities should spread: " << lo << " to " << hi << " Pa s";
+    // The viscous term against that of Newtonian blood at mu_0 and of inviscid fluid.
+    reference::SphModel newtonian = model;
+    newtonian.carreauYasuda = false;
+    newtonian.mu = model.mu0;
+    const auto atRest = reference::accelerations(c.ref, rp, newtonian);
+    newtonian.mu = 0.0;
+    const auto inviscid = reference::accelerations(c.ref, rp, newtonian);
+    double scale = 0.0, lawScale = 0.0, viscousScale = 0.0, worst = 0.0;
+    for (std::size_t i = 0; i < want.size(); ++i) {
+      scale = std::max(scale, glm::length(want[i]));
+      lawScale = std::max(lawScale, glm::length(want[i] - atRest[i]));
+      viscousScale = std::max(viscousScale, glm::length(want[i] - inviscid[i]));
+    }
+    EXPECT_GT(viscousScale, 0.02 * scale) << "the viscous term should matter in this case: " << viscousScale << " of " << scale;
+    EXPECT_GT(lawScale, 0.3 * viscousScale) << "the law should matter: " << lawScale << " of the viscous term's " << viscousScale;
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t i = slotIds[slot];
+      if (c.ref[i].kind != 0) continue;
+      worst = std::max(worst, glm::length(glm::dvec3(accel[slot]) - want[i]) / scale);
+      EXPECT_LT(glm::length(glm::dvec3(accel[slot]) - want[i]), 2e-4 * scale) << "particle " << i;
+    }
+    std::printf("viscosities %.4g to %.4g Pa s (worst relative difference %.2g); viscous term %.3g and the law's effect "
+                "%.3g of the largest acceleration, worst difference %.2g of it\n",
+                lo, hi, worstMu, viscousScale / scale, lawScale / scale, worst);
+  }
+}
+
 // DFSPH (interface/sph.h, "The pressure solver"): the divergence solve in the density pass
 // (after a last step of 2e-4 s) and the density solve after the force pass, three corrections
 // each (a tolerance no prediction meets, so both stop at the cap), against the reference's

@@ -285,20 +285,29 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
   for (std::size_t i = 0; i < c.net.points.size(); ++i) c.net.points[i].shearArea = (0.4f + 0.2f * float(i % 4)) * s.spacing * s.spacing;
   const auto n = static_cast<std::uint32_t>(c.pos.size());
   // the fluid's list read four entries per texel (capacity 128) and one (capacity 130), the
-  // fluid's clusters (interface/sph.h), and no list (the passes walking cells)
+  // fluid's clusters (interface/sph.h), and no list (the passes walking cells); and
+  // non-Newtonian blood (each fluid particle's viscosity from its shear rate: the reaction
+  // and the wall shear take the fluid particle's), with the list and walking cells
   struct Variant {
     sim::ListLayout layout;
     std::uint32_t capacity;
     sim::NeighbourSearch search = sim::NeighbourSearch::List;
+    bool carreau = false;
   };
   for (const Variant variant : {Variant{sim::ListLayout::Contiguous, 128u}, Variant{sim::ListLayout::Contiguous, 130u},
                                 Variant{sim::ListLayout::Clusters, 128u},
-                                Variant{sim::ListLayout::Contiguous, 128u, sim::NeighbourSearch::Cells}}) {
+                                Variant{sim::ListLayout::Contiguous, 128u, sim::NeighbourSearch::Cells},
+                                Variant{sim::ListLayout::Contiguous, 128u, sim::NeighbourSearch::List, true},
+                                Variant{sim::ListLayout::Contiguous, 130u, sim::NeighbourSearch::Cells, true}}) {
     const std::uint32_t capacity = variant.capacity;
     const bool cells = variant.search == sim::NeighbourSearch::Cells;
     SCOPED_TRACE(testing::Message() << "capacity " << capacity
                                     << (variant.layout == sim::ListLayout::Clusters ? ", clusters" : "")
-                                    << (cells ? ", walking cells" : ""));
+                                    << (cells ? ", walking cells" : "") << (variant.carreau ? ", Carreau-Yasuda" : ""));
+    // (viscosities from 0.1 at rest to 0.01 Pa s, thinning from shear rates of about 2 1/s;
+    // the case's random velocities shear the fluid at tens)
+    s.rheology = variant.carreau ? sim::Rheology::CarreauYasuda : sim::Rheology::Newtonian;
+    s.carreau = {0.1f, 0.01f, 0.5f, 0.4f, 1.5f};
     s.listLayout = variant.layout;
     s.neighbourCapacity = capacity;
     s.neighbourSearch = variant.search;
@@ -311,11 +320,18 @@ TEST_F(WallTest, FluidAndWallAccelerationsMatchReference) {
 
     // References: the fluid model (all wall particles as boundary particles), then the springs.
     const reference::SphModel model = modelOf(solver_->params());
+    ASSERT_EQ(model.carreauYasuda, variant.carreau);
     std::vector<reference::SphParticle> ref(n);
     for (std::uint32_t i = 0; i < n; ++i) {
       ref[i] = {glm::dvec3(c.pos[i]), glm::dvec3(c.vel[i]), glm::dvec3(c.normals[i]), c.pos[i].w, i < c.wall ? 1 : 0};
     }
     const auto rp = reference::densityPressure(ref, model);
+    if (variant.carreau) {  // the law must matter: the fluid's viscosities spread widely
+      const auto mu = reference::viscosities(ref, rp, model);
+      double lo = 1e30, hi = 0.0;
+      for (std::uint32_t i = c.wall; i < n; ++i) lo = std::min(lo, mu[i]), hi = std::max(hi, mu[i]);
+      EXPECT_GT(hi, 2.0 * lo) << "viscosities " << lo << " to " << hi << " Pa s";
+    }
     std::vector<glm::dvec3> reactions;
     const auto fluidAcc = reference::accelerations(ref, rp, model, &reactions);
     std::vector<reference::RefSpring> springs;

@@ -7,6 +7,7 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 
 #include <fstream>
@@ -198,6 +199,57 @@ TEST(Scene, PressureSolverSettingsAreCheckedAndItsLimitsNamed) {
   EXPECT_EQ(vessel.sph.pressureSolver, sim::PressureSolver::Dfsph);
   EXPECT_GT(vessel.sph.backgroundPressure, 0.0f);
   ASSERT_TRUE(vessel.vessel.has_value());
+}
+
+TEST(Scene, RheologyIsParsedAndChecked) {
+  EXPECT_EQ(parseScene(validScene().dump(), "ok.json").sph.rheology, sim::Rheology::Newtonian);
+  Json j = validScene();
+  j["fluid"]["rheology"] = {{"model", "carreau_yasuda"}};
+  Scene s = parseScene(j.dump(), "ok.json");
+  EXPECT_EQ(s.sph.rheology, sim::Rheology::CarreauYasuda);
+  EXPECT_TRUE(s.sph.nonNewtonian());
+  // the defaults: Cho & Kensey's whole blood
+  EXPECT_FLOAT_EQ(s.sph.carreau.mu0, 0.056f);
+  EXPECT_FLOAT_EQ(s.sph.carreau.muInf, 0.00345f);
+  EXPECT_FLOAT_EQ(s.sph.carreau.lambda, 3.313f);
+  EXPECT_FLOAT_EQ(s.sph.carreau.n, 0.3568f);
+  EXPECT_FLOAT_EQ(s.sph.carreau.a, 2.0f);
+  EXPECT_DOUBLE_EQ(s.sph.maxViscosity(), double(0.056f));
+  // the law: mu_0 at rest, mu_inf at high shear, the power law between
+  EXPECT_NEAR(s.sph.carreau.at(0.0), 0.056, 1e-8);
+  EXPECT_NEAR(s.sph.carreau.at(1e9), 0.00345, 1e-6);
+  const double g = 100.0, lg = 3.313 * g;
+  EXPECT_NEAR(s.sph.carreau.at(g), 0.00345 + (0.056 - 0.00345) * std::pow(1.0 + lg * lg, (0.3568 - 1.0) / 2.0), 1e-7);
+  j["fluid"]["rheology"] = {{"model", "carreau_yasuda"}, {"zero_shear_viscosity_pa_s", 0.2}, {"infinite_shear_viscosity_pa_s", 0.05},
+                            {"relaxation_time_s", 0.05}, {"power_index", 0.3}, {"yasuda_exponent", 1.5}};
+  s = parseScene(j.dump(), "ok.json");
+  EXPECT_FLOAT_EQ(s.sph.carreau.mu0, 0.2f);
+  EXPECT_FLOAT_EQ(s.sph.carreau.muInf, 0.05f);
+  EXPECT_FLOAT_EQ(s.sph.carreau.lambda, 0.05f);
+  EXPECT_FLOAT_EQ(s.sph.carreau.n, 0.3f);
+  EXPECT_FLOAT_EQ(s.sph.carreau.a, 1.5f);
+  // the viscous time-step limit follows the largest viscosity, mu_0
+  const sim::SphParams p = sim::makeParams(s.sph);
+  EXPECT_NEAR(p.dtViscous, 0.125 * s.sph.h() * s.sph.h() * s.sph.restDensity / 0.2, 1e-6 * p.dtViscous);
+  EXPECT_GT(p.carreau[2], 0.0f);
+  EXPECT_EQ(sim::makeParams(parseScene(validScene().dump(), "ok.json").sph).carreau[2], 0.0f);
+
+  auto bad = [&](const Json& rheology, std::initializer_list<const char*> words) {
+    Json k = validScene();
+    k["fluid"]["rheology"] = rheology;
+    expectError(k, words);
+  };
+  bad({{"model", "casson"}}, {"fluid.rheology.model", "newtonian", "carreau_yasuda"});
+  bad({{"model", "carreau_yasuda"}, {"zero_shear_viscosity_pa_s", 0.01}, {"infinite_shear_viscosity_pa_s", 0.02}},
+      {"fluid.rheology.infinite_shear_viscosity_pa_s", "zero_shear_viscosity_pa_s"});
+  bad({{"model", "carreau_yasuda"}, {"power_index", 1.5}}, {"fluid.rheology.power_index"});
+  bad({{"model", "carreau_yasuda"}, {"relaxation_time_s", 0}}, {"fluid.rheology.relaxation_time_s"});
+  bad({{"model", "carreau_yasuda"}, {"yasuda_exponent", -1}}, {"fluid.rheology.yasuda_exponent"});
+  bad({{"power_index", 0.5}}, {"fluid.rheology.power_index", "carreau_yasuda"});
+  Json k = validScene();
+  k["fluid"]["rheology"] = {{"model", "carreau_yasuda"}};
+  k["fluid"]["viscosity_pa_s"] = 0.0035;
+  expectError(k, {"fluid.viscosity_pa_s", "carreau_yasuda"});
 }
 
 TEST(Scene, BoxesWithMinAboveMaxAreNamed) {

@@ -44,6 +44,12 @@ struct SphModel {
   // expansion only, p = max(B ((min(rho, rho0) / rho0)^7 - 1) + p_bg, 0); boundary particles
   // take rho0 and their fluid neighbours' kernel-weighted mean pressure, within [0, p_bg].
   bool dfsph = false;
+  // Non-Newtonian blood (interface/sph.h, "Viscosity"): each fluid particle's viscosity
+  // muInf + (mu0 - muInf) (1 + (lambda |S|)^a)^((n - 1) / a) at its shear rate (shearRates());
+  // a fluid pair's viscous term takes mu_i + mu_j and a
+  // pair with a boundary particle 2 mu_i, where the Newtonian term takes 2 mu.
+  bool carreauYasuda = false;
+  double mu0 = 0.0, muInf = 0.0, lambda = 0.0, powerIndex = 1.0, yasuda = 2.0;
 };
 
 // x_i - x_j, by the minimum image on periodic axes.
@@ -53,6 +59,18 @@ glm::dvec3 separation(const SphModel& model, const glm::dvec3& xi, const glm::dv
 // boundary particles).
 std::vector<std::array<double, 9>> spsStress(const std::vector<SphParticle>& particles,
                                              const std::vector<glm::dvec2>& densityPressure, const SphModel& model);
+
+// The shear rate |S| = sqrt(2 S:S) (1/s) of each fluid particle (0 for boundary particles), with
+// S the symmetric part of the corrected velocity gradient G M^-1 (interface/sph.h, "Viscosity"):
+// G = sum_j V_j (u_j - u_i) (x) gradW_ij with boundary particles' no-slip velocities
+// (viscousVelocities()), M = sum_j V_j (x_j - x_i) (x) gradW_ij; G alone where det M < 1/4.
+std::vector<double> shearRates(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& densityPressure,
+                               const SphModel& model);
+
+// Each particle's viscosity (Pa s): model.mu, or with model.carreauYasuda the law at its shear
+// rate (fluid particles; boundary particles 0).
+std::vector<double> viscosities(const std::vector<SphParticle>& particles, const std::vector<glm::dvec2>& densityPressure,
+                                const SphModel& model);
 
 // Wendland C2 in 3D with support 2h.
 double kernelW(double r, double h);

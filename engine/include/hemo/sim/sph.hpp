@@ -46,7 +46,7 @@ enum class DensityMethod { Summation, Continuity };
 // apply and contiguous lists otherwise on CPU devices (lavapipe), interleaved on GPUs.
 // Clusters: the fluid walks one list per cluster of HEMO_CLUSTER_SIZE consecutive slots
 // (interface/sph.h), the other particles contiguous lists; they apply to summation density
-// without the SPS term, else the solver uses contiguous lists. Results do
+// with Newtonian blood and without the SPS term, else the solver uses contiguous lists. Results do
 // not depend on the layout beyond the order of the sums.
 enum class ListLayout { Auto, Interleaved, Contiguous, Clusters };
 
@@ -68,12 +68,29 @@ enum class NeighbourSearch { Auto, List, Cells };
 // symplectic Euler, the neighbour list in one buffer (not in clusters), and without a vessel.
 enum class PressureSolver { Wcsph, Dfsph };
 
+// Blood's viscosity (docs/physics.md, "Non-Newtonian blood"): Newtonian (one mu), or the
+// Carreau-Yasuda law, each fluid particle's viscosity from its own shear rate
+// (interface/sph.h, "Viscosity").
+enum class Rheology { Newtonian, CarreauYasuda };
+// mu(g) = muInf + (mu0 - muInf) (1 + (lambda g)^a)^((n - 1) / a) at shear rate g (1/s). The
+// defaults are the fit to whole blood of Cho & Kensey (1991) (a = 2, the Carreau law).
+struct CarreauYasuda {
+  float mu0 = 0.056f;      // zero-shear viscosity (Pa s)
+  float muInf = 0.00345f;  // infinite-shear viscosity (Pa s)
+  float lambda = 3.313f;   // relaxation time (s)
+  float n = 0.3568f;       // power-law index (shear thinning: n <= 1)
+  float a = 2.0f;          // Yasuda exponent
+  double at(double shearRate) const;  // mu (Pa s)
+};
+
 // Physical and numerical settings (SI units).
 struct SphSettings {
   float spacing = 0.0f;             // initial particle spacing dp (m)
   float smoothingRatio = 1.3f;      // h / dp
   float restDensity = 1000.0f;      // rho0 (kg/m^3)
-  float viscosity = 1.0e-3f;        // dynamic viscosity mu (Pa s)
+  float viscosity = 1.0e-3f;        // dynamic viscosity mu (Pa s) of Newtonian blood
+  Rheology rheology = Rheology::Newtonian;
+  CarreauYasuda carreau;            // the law's parameters (Rheology::CarreauYasuda)
   float soundSpeed = 0.0f;          // c0 (m/s)
   glm::vec3 gravity{0.0f, 0.0f, -9.81f};  // m/s^2
   glm::vec3 bodyForce{0.0f};        // extra uniform acceleration (m/s^2)
@@ -106,6 +123,10 @@ struct SphSettings {
   std::uint32_t solverMaxIterations = 50;  // DFSPH: the cap on each solve's corrections per step
 
   float h() const { return smoothingRatio * spacing; }
+  bool nonNewtonian() const { return rheology != Rheology::Newtonian; }
+  // The largest viscosity the fluid can have (Pa s), which bounds the viscous time step: mu0
+  // for shear-thinning blood.
+  double maxViscosity() const;
   float supportRadius() const { return 2.0f * h(); }
   float listRadius() const { return supportRadius() * (1.0f + listSkin); }
   // Mass per particle such that summation density on the initial cubic lattice equals rho0
@@ -145,12 +166,15 @@ struct SphParams {
   std::uint32_t listPageMask;  // set by the solver: slot i's index in its page of the list is i & mask
   std::uint32_t pressureSolver;  // 0: Tait (WCSPH), 1: DFSPH's solve (interface/sph.h)
   float solveFloor;  // DFSPH: the least denominator of the stiffness, kg^2 m^-8 (interface/sph.h)
-  std::uint32_t pad;
+  float rheologyExponent;  // non-Newtonian blood: (n - 1) / a (interface/sph.h, "Viscosity")
   // set by the solver: its neighbour grid (NeighbourGrid::Push, n unused), for the cell walks
   float gridOrigin[4], gridInvCell[4];
   std::uint32_t gridDims[4], gridPeriodic[4];
+  // non-Newtonian blood: (mu_inf, mu_0 - mu_inf (Pa s, over the lattice factor), lambda (s), a);
+  // zeros for Newtonian blood
+  float carreau[4];
 };
-static_assert(sizeof(SphParams) == 272);
+static_assert(sizeof(SphParams) == 288);
 
 SphParams makeParams(const SphSettings& s);
 
@@ -292,6 +316,9 @@ class SphSolver {
   NeighbourGrid& grid() { return grid_; }
   const gpu::Buffer& state() const { return state_; }     // vec4 (rho, p, d rho/dt with continuity density and RK2, else 0, 0) per slot
   const gpu::Buffer& accel() const { return accel_; }     // vec4 (a, 0) per slot
+  // Non-Newtonian blood: each fluid slot's viscosity at the last force evaluation, a float
+  // (Pa s, over SphSettings::viscousLatticeFactor; interface/sph.h, "Viscosity").
+  const gpu::Buffer& viscosities() const { return viscosity_; }
   const gpu::Buffer& dtLimits() const { return dtLimit_; }
   // vec2 (min, max) of those limits at the last force evaluation (the wall stage's included),
   // reduced on the GPU for the integrator's dt (common/dt_fold.glsl).
@@ -468,6 +495,7 @@ class SphSolver {
   gpu::Buffer inflow_;  // InflowParams
   gpu::Buffer savedPos_, savedVel_, stepDt_;  // RK2: state at the start of the step, its dt
   gpu::Buffer tauA_, tauB_;  // SPS stress per density (16 bytes each when SPS is off)
+  gpu::Buffer viscosity_;    // non-Newtonian blood: mu per fluid slot (4 bytes for Newtonian blood)
   // The time step's reduction: partials of the force pass and the wall stage (vec2 per SIMD
   // group; common/dt_fold.glsl), how many each wrote, and the result (min, max) that
   // sph/dt_reduce.comp reduces them to.

@@ -105,6 +105,10 @@ struct FluidBuffers {
   // (vec2) and the clock's two records.
   const gpu::Buffer* stepLimits = nullptr;
   const gpu::Buffer* clock = nullptr;
+  // Each fluid slot's viscosity (float), read by the reaction when the blood is non-Newtonian
+  // (interface/sph.h, "Viscosity"); bound either way.
+  const gpu::Buffer* viscosity = nullptr;
+  bool variableViscosity = false;
 };
 
 class MassSpring {
