@@ -114,6 +114,10 @@ void writeParticlesVtk(const std::filesystem::path& path, const sim::Snapshot& s
   for (const auto& p : s.positions) out << p.w << '\n';
   out << "SCALARS id unsigned_int 1\nLOOKUP_TABLE default\n";
   for (auto id : s.ids) out << id << '\n';
+  if (s.viscosity.size() == n) {
+    out << "SCALARS viscosity_Pa_s float 1\nLOOKUP_TABLE default\n";
+    for (float x : s.viscosity) out << x << '\n';
+  }
   if (springs) {
     const WallPointStats w = wallPointStats(s, *springs, period);
     out << "SCALARS max_strain float 1\nLOOKUP_TABLE default\n";

@@ -88,6 +88,7 @@ void writeParticlesVtu(const std::filesystem::path& path, const sim::Snapshot& s
   pointData.push_back(arrays.add("UInt8", "kind", 1, kind));
   pointData.push_back(arrays.add("Float32", "mass_kg", 1, mass));
   pointData.push_back(arrays.add("UInt32", "id", 1, s.ids));
+  if (s.viscosity.size() == n) pointData.push_back(arrays.add("Float32", "viscosity_Pa_s", 1, s.viscosity));
   if (springs) {
     const WallPointStats w = wallPointStats(s, *springs, period);
     pointData.push_back(arrays.add("Float32", "max_strain", 1, w.maxStrain));

@@ -654,6 +654,16 @@ Snapshot Simulation::snapshot() const {
     s.densityPressure[id] = glm::vec2(state[slot]);
     s.ids[id] = id;
   }
+  if (solver_->settings().nonNewtonian()) {
+    // the solver's viscosities are over the lattice factor (interface/sph.h, params.mu)
+    const auto mu = solver_->viscosities().readback<float>(n);
+    const double factor = solver_->settings().viscousLatticeFactor();
+    s.viscosity.assign(n, 0.0f);
+    for (std::uint32_t slot = 0; slot < n; ++slot) {
+      const std::uint32_t id = ids[slot];
+      if (id < n && vel[slot].w == float(ParticleKind::Fluid)) s.viscosity[id] = float(mu[slot] * factor);
+    }
+  }
   return s;
 }
 

@@ -120,16 +120,23 @@ TEST(VtkXml, ParticleArraysReadBackBitForBit) {
   std::vector<float> tawss(40), osi(40);
   for (std::size_t k = 0; k < 40; ++k) wss[k] = glm::vec3(0.5f * k, -0.25f * k, 1.0f + k), tawss[k] = 0.1f * k, osi[k] = 0.01f * k;
   const io::WallShearFields maps{&wss, &tawss, &osi};
-  for (const int variant : {0, 1, 2}) {
-    const bool withSprings = variant > 0, withShear = variant == 2;
-    SCOPED_TRACE(withShear ? "with springs and wall maps" : withSprings ? "with springs" : "without springs");
+  // non-Newtonian blood: each particle's viscosity
+  sim::Snapshot viscous = c.snap;
+  for (std::size_t i = 0; i < viscous.positions.size(); ++i) viscous.viscosity.push_back(0.001f * float(i) + 0.0035f);
+  for (const int variant : {0, 1, 2, 3}) {
+    const bool withSprings = variant == 1 || variant == 2, withShear = variant == 2, withViscosity = variant == 3;
+    SCOPED_TRACE(withShear ? "with springs and wall maps" : withSprings ? "with springs" : withViscosity ? "with viscosities" : "without springs");
     const fs::path path = dir / "p.vtu";
-    io::writeParticlesVtu(path, c.snap, time, withSprings ? &c.springs : nullptr, period, withShear ? &maps : nullptr);
+    io::writeParticlesVtu(path, withViscosity ? viscous : c.snap, time, withSprings ? &c.springs : nullptr, period,
+                          withShear ? &maps : nullptr);
     const XmlFile f = parse(path);
     EXPECT_NE(f.header.find("<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt64\">"),
               std::string::npos);
     EXPECT_NE(f.header.find("<Piece NumberOfPoints=\"57\" NumberOfCells=\"57\">"), std::string::npos);
-    EXPECT_EQ(f.arrays.size(), withShear ? 16u : withSprings ? 13u : 11u);
+    EXPECT_EQ(f.arrays.size(), withShear ? 16u : withSprings ? 13u : withViscosity ? 12u : 11u);
+    if (withViscosity) {
+      EXPECT_EQ(values<float>(f, "viscosity_Pa_s", "Float32", 1), viscous.viscosity);
+    }
     EXPECT_EQ(values<double>(f, "TimeValue", "Float64", 1), std::vector<double>{time});
     const auto x = values<float>(f, "position_m", "Float32", 3);
     const auto v = values<float>(f, "velocity_m_s", "Float32", 3);

@@ -92,6 +92,9 @@ struct Snapshot {
   std::vector<glm::vec4> velocities;  // xyz m/s, w kind
   std::vector<glm::vec2> densityPressure;  // kg/m^3, Pa (of the last density pass)
   std::vector<std::uint32_t> ids;
+  // Non-Newtonian blood only (else empty): each fluid particle's viscosity at the last force
+  // evaluation (Pa s; 0 for other particles and before the first step).
+  std::vector<float> viscosity;
 };
 
 class Simulation {
