@@ -521,6 +521,44 @@ Json accuracy(Context& ctx, const std::string& only, const std::string& solverOn
       }
     }
   }
+  if (only.empty() || only == "carreau_tube") {
+    // Non-Newtonian blood (NonNewtonianFlowTest): a periodic tube of R = 2 mm driven by a body
+    // force of 10 m/s^2, Carreau-Yasuda viscosity from 0.2 Pa s at rest to 0.05 (lambda 0.05 s,
+    // n = 0.3, a = 2), at 4 and 8 particles across the radius (6 and 3 mm long: the least
+    // period is 2.5 list radii). The error is the RMS over four radial bins of the mean axial
+    // velocity (averaged over snapshots every 2 ms from 0.102 to 0.11 s) against the law's
+    // steady profile (sim::carreauTubeProfile), over its peak. WCSPH only (the force pass is
+    // the solvers' common part).
+    const double R = 0.002, G = 10.0;
+    constexpr int kBins = 4;
+    for (int across : {4, 8}) {
+      if (skip(false)) continue;
+      const double dp = R / across, length = across == 4 ? 0.006 : 0.003;
+      const std::string text = R"({"scene": "carreau_tube_bench", "particles": {"spacing_m": )" + std::to_string(dp) +
+                               R"(}, "fluid": {"expected_max_speed_m_s": 0.2, "rheology": {"model": "carreau_yasuda",
+          "zero_shear_viscosity_pa_s": 0.2, "infinite_shear_viscosity_pa_s": 0.05, "relaxation_time_s": 0.05,
+          "power_index": 0.3, "yasuda_exponent": 2.0}},
+        "vessel": {"shape": "tube", "length_m": )" + std::to_string(length) +
+                               R"(, "radius_m": 0.002, "point_mass_kg": 1e-3, "stiffness_N_m": 50.0, "damping_N_s_m": 0.005},
+        "forces": {"gravity_m_s2": [0, 0, 0], "body_force_m_s2": [10.0, 0, 0]},
+        "time": {"steps_per_batch": 64},
+        "domain": {"min_m": [0.0, -0.004, -0.004], "max_m": [)" + std::to_string(length) +
+                               R"(, 0.004, 0.004], "periodic": ["x"]}})";
+      const hemo::scene::Scene scene = hemo::scene::parseScene(text, "carreau_tube_bench");
+      hemo::sim::Simulation sim(ctx, scene);
+      double wall = runTo(sim, 0.1);
+      std::vector<double> profile(kBins, 0.0);
+      for (int k = 1; k <= 5; ++k) {
+        wall += runTo(sim, 0.1 + 0.002 * k);
+        const std::vector<double> p = hemo::sim::radialProfile(sim.snapshot(), R, kBins);
+        for (int b = 0; b < kBins; ++b) profile[std::size_t(b)] += p[std::size_t(b)] / 5.0;
+      }
+      const std::vector<double> exact = hemo::sim::carreauTubeProfile(scene.sph.carreau, scene.sph.restDensity, G, R, kBins);
+      double sq = 0.0;
+      for (int b = 0; b < kBins; ++b) sq += std::pow(profile[std::size_t(b)] - exact[std::size_t(b)], 2.0) / kBins;
+      row("carreau_tube", scene, std::sqrt(sq) / exact[0], "rms_over_peak_steady", sim, wall);
+    }
+  }
   if (only.empty() || only == "dam_break") {
     // scenes/dam_break.json geometry; mean |dZ| against Martin & Moyce (1952) over T in
     // [0, 3] with the gate-release offset dT = 0.15 of docs/physics.md. Both integrators at
@@ -1189,7 +1227,7 @@ int main(int argc, char** argv) {
       "         (device: what hemo reads from the device: sizes, limits, timestamps, memory types)\n"
       "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
       "                speed: whole runs, default 3)\n"
-      "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, dam_break, laplace)\n"
+      "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, carreau_tube, dam_break, laplace)\n"
       "  --solver NAME accuracy: only the runs of this pressure solver (wcsph, dfsph)\n"
       "  --scene FILE  speed, soak: the scene to run (default scenes/dam_break.json; soak: scenes/aneurysm.json)\n"
       "  --until S     speed: simulated seconds per run (default: the scene's time.end_time_s)\n"
@@ -1225,8 +1263,9 @@ int main(int argc, char** argv) {
     if (args.has("--solver") && solverOnly != "wcsph" && solverOnly != "dfsph") {
       throw hemo::cli::UsageError("unknown --solver '" + solverOnly + "' (expected wcsph or dfsph)");
     }
-    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "dam_break" && only != "laplace") {
-      throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille, dam_break or laplace)");
+    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "carreau_tube" && only != "dam_break" &&
+        only != "laplace") {
+      throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille, carreau_tube, dam_break or laplace)");
     }
     if (args.has("--until") && suite != "speed") throw hemo::cli::UsageError("--until applies to the speed suite only");
     if (args.has("--scene") && suite != "speed" && suite != "soak") {

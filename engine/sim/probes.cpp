@@ -104,4 +104,47 @@ double poiseuilleProfileError(const Snapshot& s, std::uint32_t fluid, double dp,
   return std::sqrt(sq / layers) / (F * L * L / (8.0 * nu));
 }
 
+std::vector<double> radialProfile(const Snapshot& s, double radius, int bins) {
+  std::vector<double> sum(std::size_t(bins), 0.0);
+  std::vector<int> count(std::size_t(bins), 0);
+  for (std::size_t i = 0; i < s.positions.size(); ++i) {
+    if (s.velocities[i].w != float(ParticleKind::Fluid)) continue;
+    const double r = std::hypot(double(s.positions[i].y), double(s.positions[i].z));
+    const int bin = int(r / (radius / bins));
+    if (bin >= bins) continue;
+    sum[std::size_t(bin)] += s.velocities[i].x;
+    ++count[std::size_t(bin)];
+  }
+  for (std::size_t b = 0; b < sum.size(); ++b) sum[b] /= std::max(count[b], 1);
+  return sum;
+}
+
+double carreauShearRate(const CarreauYasuda& law, double stress) {
+  double lo = 0.0, hi = 1.0;
+  while (law.at(hi) * hi < stress) hi *= 2.0;
+  for (int k = 0; k < 100; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (law.at(mid) * mid < stress ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+std::vector<double> carreauTubeProfile(const CarreauYasuda& law, double rho, double G, double R, int bins) {
+  constexpr int kSteps = 4000;  // midpoint rule from the wall inwards
+  std::vector<double> u(kSteps + 1, 0.0);
+  const double dr = R / kSteps;
+  for (int k = kSteps - 1; k >= 0; --k) {
+    u[std::size_t(k)] = u[std::size_t(k) + 1] + carreauShearRate(law, rho * G * (k + 0.5) * dr / 2.0) * dr;
+  }
+  std::vector<double> out(std::size_t(bins), 0.0), weight(std::size_t(bins), 0.0);
+  for (int k = 0; k < kSteps; ++k) {
+    const double r = (k + 0.5) * dr;
+    const auto b = std::size_t(std::min(int(r / (R / bins)), bins - 1));
+    out[b] += 0.5 * (u[std::size_t(k)] + u[std::size_t(k) + 1]) * r;
+    weight[b] += r;
+  }
+  for (std::size_t b = 0; b < out.size(); ++b) out[b] /= weight[b];
+  return out;
+}
+
 }  // namespace hemo::sim

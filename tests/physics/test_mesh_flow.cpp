@@ -10,6 +10,7 @@
 #include "hemo/io/mesh.hpp"
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/mesh_vessel.hpp"
+#include "hemo/sim/probes.hpp"
 #include "hemo/sim/simulation.hpp"
 
 #include <glm/geometric.hpp>
@@ -191,37 +192,6 @@ namespace {
 
 class NonNewtonianFlowTest : public GpuTest {};
 
-// The steady profile of a shear-thinning fluid in a tube driven by a body force G: the shear
-// stress is rho G r / 2 at radius r whatever the fluid, so the shear rate g(r) solves
-// mu(g) g = rho G r / 2 (mu(g) g grows with g for n > 0: bisection), and u(r) = integral
-// from r to R of g. Returns the profile averaged over each bin's annulus (weight r).
-double shearRateAt(const sim::CarreauYasuda& law, double stress) {
-  double lo = 0.0, hi = 1.0;
-  while (law.at(hi) * hi < stress) hi *= 2.0;
-  for (int k = 0; k < 100; ++k) {
-    const double mid = 0.5 * (lo + hi);
-    (law.at(mid) * mid < stress ? lo : hi) = mid;
-  }
-  return 0.5 * (lo + hi);
-}
-std::array<double, kBins> carreauProfile(const sim::CarreauYasuda& law, double rho) {
-  auto shearRate = [&](double stress) { return shearRateAt(law, stress); };
-  constexpr int kSteps = 4000;  // midpoint rule from the wall inwards
-  std::vector<double> u(kSteps + 1, 0.0);
-  const double dr = kR / kSteps;
-  for (int k = kSteps - 1; k >= 0; --k) u[std::size_t(k)] = u[std::size_t(k) + 1] + shearRate(rho * kG * (k + 0.5) * dr / 2.0) * dr;
-  std::array<double, kBins> out{};
-  std::array<double, kBins> weight{};
-  for (int k = 0; k < kSteps; ++k) {
-    const double r = (k + 0.5) * dr;
-    const auto b = std::size_t(std::min(int(r / (kR / kBins)), kBins - 1));
-    out[b] += 0.5 * (u[std::size_t(k)] + u[std::size_t(k) + 1]) * r;
-    weight[b] += r;
-  }
-  for (std::size_t b = 0; b < kBins; ++b) out[b] /= weight[b];
-  return out;
-}
-
 // Issue 41: non-Newtonian blood. The analytic tube of MeshFlowTest with a Carreau-Yasuda fluid
 // (viscosity 0.2 Pa s at rest to 0.05, thinning from 20 1/s; n = 0.3) carries the blunted
 // profile of that law, not the parabola of a Newtonian fluid with the same mean speed (whose
@@ -243,11 +213,12 @@ TEST_F(NonNewtonianFlowTest, TubeCarriesTheCarreauYasudaProfile) {
                             {"yasuda_exponent", 2.0}};
   const scene::Scene scene = scene::parseScene(j.dump(), "carreau_tube.json");
   ASSERT_TRUE(scene.sph.nonNewtonian());
-  const auto exact = carreauProfile(scene.sph.carreau, scene.sph.restDensity);
+  // the steady profile of the law (the shear stress is rho G r / 2 whatever the fluid)
+  const auto exact = sim::carreauTubeProfile(scene.sph.carreau, scene.sph.restDensity, kG, kR, kBins);
   // the viscosity the law gives at radius r in the exact flow
   const sim::CarreauYasuda law = scene.sph.carreau;
   const double rho = scene.sph.restDensity;
-  const Flow f = flowOf(ctx(), scene, 0.1, [&](double r) { return law.at(shearRateAt(law, rho * kG * r / 2.0)); });
+  const Flow f = flowOf(ctx(), scene, 0.1, [&](double r) { return law.at(sim::carreauShearRate(law, rho * kG * r / 2.0)); });
   // the Newtonian parabola with the measured mean speed, averaged over the bins likewise
   const double uMax = 2.0 * f.meanSpeed;
   const double peak = exact[0];

@@ -2,6 +2,8 @@
 // Measurements taken from a snapshot, shared by the validation tests and hemo-bench.
 #include "hemo/sim/simulation.hpp"
 
+#include <vector>
+
 namespace hemo::sim {
 
 // Vertical force (N) the fluid exerts on the boundary particles below z = floorZ: the
@@ -29,5 +31,18 @@ double pressureGradient(const Snapshot& snapshot, std::uint32_t fluidParticles, 
 // the steady peak F L^2 / (8 nu). Throws std::runtime_error if a layer has no particles.
 double poiseuilleProfileError(const Snapshot& snapshot, std::uint32_t fluidParticles, double dp, double L, double F,
                               double nu, double t);
+
+// Flow along x in a straight tube whose axis is the x axis (y = z = 0): the mean x-velocity of
+// the fluid in each of `bins` radial bins of width radius / bins (m/s; 0 for an empty bin).
+std::vector<double> radialProfile(const Snapshot& snapshot, double radius, int bins);
+
+// Steady flow of a Carreau-Yasuda fluid (density rho) in a tube of radius R driven by a body
+// force G (m/s^2) along it. The shear stress is rho G r / 2 at radius r whatever the fluid, so
+// the shear rate g(r) solves mu(g) g = rho G r / 2 (mu(g) g grows with g for n > 0), and
+// u(r) = integral of g from r to R. carreauShearRate solves the first (1/s, by bisection);
+// carreauTubeProfile gives u averaged over each of `bins` annuli of equal width (weight r),
+// as radialProfile measures it.
+double carreauShearRate(const CarreauYasuda& law, double stress);
+std::vector<double> carreauTubeProfile(const CarreauYasuda& law, double rho, double G, double R, int bins);
 
 }  // namespace hemo::sim
