@@ -30,7 +30,8 @@ layout(std430, binding = HEMO_SPS_BINDING_VISCOSITY) writeonly buffer Viscosity 
 layout(binding = HEMO_SPS_BINDING_VISCOUS_VEL) uniform samplerBuffer viscousVel;  // the pair data (v_j, +-V_j)
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 1) const uint kListWidth = 1u;
-// 1: the SPS stress (tauA, tauB written); 2: the non-Newtonian viscosity (viscosity written).
+// 1 where the pass writes the SPS stress (tauA, tauB) and the non-Newtonian viscosity
+// (viscosity) respectively.
 layout(constant_id = 2) const uint kStress = 1u;
 layout(constant_id = 3) const uint kViscosity = 0u;
 #if HEMO_CELL_WALK
