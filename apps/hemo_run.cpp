@@ -447,6 +447,16 @@ int main(int argc, char** argv) {
                                           std::max(1u, sim.fluidParticles() + sim.boundaryParticles() + sim.wallParticles())},
                {"finite", finite}};
     summary["solver"] = sim.solver().solvesPressure() ? "dfsph" : "wcsph";
+    if (sim.openEnds()) {
+      // Open ends: the lumen's mass balance (kg), from the GPU's crossing counts.
+      const auto o = sim.openCounts();
+      const double m = scene.sph.particleMass();
+      summary["open_fluid_particles_now"] = sim.activeFluidParticles();
+      summary["open_mass_in_kg"] = m * (double(o.in) - double(o.inBack));
+      summary["open_mass_out_kg"] = m * (double(o.out) - double(o.outBack));
+      summary["open_particles_parked"] = o.parkedEnd + o.parkedStart;
+      summary["open_particles_spawned"] = o.spawned;
+    }
     if (!scene.tools.empty()) {
       summary["tools_file"] = "tools.csv";
       nlohmann::json names = nlohmann::json::array();

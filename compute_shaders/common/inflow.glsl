@@ -19,6 +19,19 @@ struct InflowParams {
   float baseMass;     // kg, the initial particle mass (the floor)
   float reserved1;
   vec4 waveform[16];
+  // Open ends (hemo/sim/inflow.hpp; open = 0: the periodic vessel above). x planes (m): the
+  // inlet plane (= zoneEnd: the buffer [zoneStart, zoneEnd) lies upstream of it), the outlet
+  // plane, and the tube's two ends, past which fluid is parked (the outlet buffer lies in
+  // [outletPlane, endX)).
+  float inletPlane;
+  float outletPlane;
+  float startX;
+  float endX;
+  vec4 parking;       // xyz: where parked slots lie (m); w: the spawn's shift upstream (m, the buffer's length)
+  float pendingMargin; // m past the inlet plane at which a crosser still owed its image forces the refill (sph/integrate.comp)
+  uint open;          // 1: open ends
+  uint reserved2;
+  uint reserved3;
 };
 
 // Sample k of the waveform of the block `block` (a macro: a function taking the struct by

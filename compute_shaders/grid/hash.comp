@@ -1,6 +1,7 @@
 #version 450
 // Neighbour grid, step 1 of the counting sort (interface/grid.h): the key of every particle,
-// its cell, or in a grid of two parts cell + cellCount for a particle that is not fluid, so
+// its cell, or in a grid of two parts cell + cellCount for a particle that is not fluid (nor a
+// parked fluid slot), so
 // the fluid sorts first; and its rank among the particles of that key, from an atomic count
 // per key (the order of those ranks depends on scheduling; grid/reorder.comp removes it).
 // Particles outside the grid are clamped into the border cells and counted (on periodic
@@ -44,11 +45,12 @@ void main() {
     bool outside;
     const ivec3 c = hemo_cell_coords(p, pc.grid, outside);
     cell = hemo_cell_linear(c, pc.grid.dimsN.xyz);
-    if (outside) {
+    // (a parked slot lies outside on purpose: interface/sph.h, HEMO_KIND_PARKED)
+    if (outside && uint(v4.w) != HEMO_GRID_PARKED_KIND) {
       atomicAdd(counters[HEMO_COUNTER_OUTSIDE], 1u);
     }
   }
-  if (pc.grid.periodic.w == 2u && uint(v4.w) != HEMO_GRID_FLUID_KIND) {
+  if (pc.grid.periodic.w == 2u && uint(v4.w) != HEMO_GRID_FLUID_KIND && uint(v4.w) != HEMO_GRID_PARKED_KIND) {
     const uvec3 dims = pc.grid.dimsN.xyz;
     cell += dims.x * dims.y * dims.z;
   }

@@ -11,6 +11,9 @@
 // cell + part * cellCount, part 0 for fluid particles (velocities.w = HEMO_GRID_FLUID_KIND)
 // and 1 for the others; cellStart then has 2 cellCount + 1 entries.
 #define HEMO_GRID_FLUID_KIND 0  // = HEMO_KIND_FLUID of interface/sph.h
+// Parked fluid slots (HEMO_KIND_PARKED of interface/sph.h) stay in part 0 and are not counted
+// as outside the grid, where they lie on purpose.
+#define HEMO_GRID_PARKED_KIND 3
 
 // The build is a counting sort by key, stable (ties keep their slot order), so the same input
 // always gives the same order (engine/include/hemo/sim/neighbour_grid.hpp):

@@ -33,6 +33,12 @@
 #define HEMO_KIND_BOUNDARY 1  // rigid: fixed position, counts in density, viscosity, repulsion
 #define HEMO_KIND_WALL 2      // vessel wall: a boundary particle for the fluid that moves as a mass
                               // point of the spring network (compute_shaders/wall/)
+// A fluid slot with no particle in it (open vessel ends, hemo/sim/inflow.hpp): it lies in
+// the fluid's part of the grid at the parking point, far outside the domain, so no pair pass
+// finds it within the support; it builds no list of its own, the density pass gives it no
+// volume, and the integrator leaves it where it is. The outlet parks the fluid that leaves;
+// the inlet's spawns (sph/open_spawn.comp) take parked slots.
+#define HEMO_KIND_PARKED 3
 
 // Layout of the params storage buffer (std430), mirrored by hemo::sim::SphParams in C++.
 //   vec4  gravity            xyz: gravity + body force (m/s^2)
@@ -368,6 +374,39 @@
 #define HEMO_DTREDUCE_BINDING_TOOL_LOG 8
 #define HEMO_DTREDUCE_BINDING_COUNT 9
 
+// Open vessel ends' counters (uint each): fluid particles that crossed the inlet plane
+// downstream and back upstream, the outlet plane downstream and back, were parked past the
+// tube's end and before its start, and spawned into the inlet buffer.
+#define HEMO_OPEN_COUNTER_IN 0
+#define HEMO_OPEN_COUNTER_IN_BACK 1
+#define HEMO_OPEN_COUNTER_OUT 2
+#define HEMO_OPEN_COUNTER_OUT_BACK 3
+#define HEMO_OPEN_COUNTER_PARKED_END 4
+#define HEMO_OPEN_COUNTER_PARKED_START 5
+#define HEMO_OPEN_COUNTER_SPAWNED 6
+#define HEMO_OPEN_COUNTER_COUNT 8
+
+// sph/open_spawn.comp: the inlet buffer's refill, at the start of every step that rebuilds
+// the neighbour list (inside the rebuild gate, before the grid), over the fluid's slots
+// [0, N): every particle that crossed the inlet plane since the last refill gets its image a
+// buffer length upstream, in a parked slot: the k-th such particle in slot order takes the
+// k-th parked slot in slot order (a prefix scan of both flags, no float atomics).
+#define HEMO_SPAWN_BINDING_POSITIONS 0
+#define HEMO_SPAWN_BINDING_VELOCITIES 1
+#define HEMO_SPAWN_BINDING_NORMALS 2
+#define HEMO_SPAWN_BINDING_PENDING 3   // uint per fluid slot (HEMO_INTEGRATE_BINDING_PENDING)
+#define HEMO_SPAWN_BINDING_SCAN 4      // uint[2N + 1]: pending flags, then parked flags, then 0; scanned
+#define HEMO_SPAWN_BINDING_CROSSERS 5  // uint per fluid slot: the slot of the k-th pending particle
+#define HEMO_SPAWN_BINDING_INFLOW 6    // InflowParams
+#define HEMO_SPAWN_BINDING_COUNTERS 7  // HEMO_OPEN_COUNTER_*
+#define HEMO_SPAWN_BINDING_STATUS 8
+#define HEMO_SPAWN_BINDING_COUNT 9
+// push constants: uint n (fluid slots N), uint mode
+#define HEMO_SPAWN_FLAGS 0    // scan[i] = pending, scan[N + i] = parked, scan[2N] = 0
+#define HEMO_SPAWN_SCATTER 1  // (after the scan) crossers[scan[i]] = i for each pending slot i
+#define HEMO_SPAWN_COPY 2     // each parked slot of rank k < crossings takes crosser k's image;
+                              // the crossers served clear their flag, the others count a shortfall
+
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
 // step, clock, status. Specialization constant 2, the stage:
 #define HEMO_INTEGRATE_SYMPLECTIC_EULER 0
@@ -394,7 +433,13 @@
 // fraction of a storage read; no record is read after it is written in the pass).
 #define HEMO_INTEGRATE_BINDING_POSITIONS_IN 16
 #define HEMO_INTEGRATE_BINDING_VELOCITIES_IN 17
-#define HEMO_INTEGRATE_BINDING_COUNT 23
+// Open vessel ends (InflowParams.open, specialization constant 3 = 2): the counts of fluid
+// crossing the inlet and outlet planes (HEMO_OPEN_COUNTER_*, integers: sums that do not
+// depend on the order) and, per fluid slot, whether the particle crossed the inlet plane since
+// the last spawn pass and still owes the inlet buffer its image (sph/open_spawn.comp).
+#define HEMO_INTEGRATE_BINDING_OPEN_COUNTERS 23
+#define HEMO_INTEGRATE_BINDING_PENDING 24
+#define HEMO_INTEGRATE_BINDING_COUNT 25
 
 // The rebuild test (docs/architecture.md, "the rebuild test"), in the integrator's full
 // stages (symplectic Euler, RK2's second): each slot's x displacement d.x since the list
@@ -550,6 +595,8 @@
 #define HEMO_STATUS_MAX_NEIGHBOURS 3      // most neighbours any particle had
 #define HEMO_STATUS_BAD_INPUT_ID 4        // lowest id entering the force pass non-finite (init ~0u)
 #define HEMO_STATUS_BAD_FORCE_ID 5        // lowest id whose acceleration came out non-finite (init ~0u)
+// spawns at the open inlet that found no parked slot (the reserve ran out; the run stops)
+#define HEMO_STATUS_OPEN_SHORTFALL 6
 #define HEMO_STATUS_COUNT 8
 
 #endif

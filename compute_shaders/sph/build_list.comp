@@ -56,7 +56,9 @@ void main() {
   vec3 u = (xi - pc.grid.origin.xyz) * pc.grid.invCell.xyz;
   const vec3 dimsF = vec3(pc.grid.dimsN.xyz);
   u = mix(u, u - dimsF * floor(u / dimsF), notEqual(pc.grid.periodic.xyz, uvec3(0u)));
-  const uint rangeCount = hemo_list_ranges(pc.grid, c, u, u, fluidI, params.listRadius);
+  // (a parked slot lists nothing: interface/sph.h, HEMO_KIND_PARKED)
+  const uint rangeCount =
+      uint(xi4.w) == HEMO_KIND_PARKED ? 0u : hemo_list_ranges(pc.grid, c, u, u, fluidI, params.listRadius);
   // The candidates: every slot of the ranges in order, as one flat loop. A loop per range
   // ran, per SIMD group, each range as long as its longest lane's; this one runs as long as
   // the group's largest total.

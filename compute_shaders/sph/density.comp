@@ -119,6 +119,18 @@ void main() {
   }
   gI = i;
   gVi = texelFetch(velocities, int(i));
+  if (uint(gVi.w) == HEMO_KIND_PARKED) {
+    // No particle here (interface/sph.h): no volume, so a list built before it was parked
+    // finds nothing in it (its position is the parking point's: beyond every support).
+    const vec4 x = texelFetch(positions, int(i));
+#if !HEMO_CELL_WALK
+    pairCount[i] = 0u;
+#endif
+    state[i] = vec4(params.rho0, 0.0, 0.0, 0.0);
+    pairPosition[i] = vec4(x.xyz, 0.0);
+    viscousVel[i] = vec4(0.0);
+    return;
+  }
   if (uint(gVi.w) != HEMO_KIND_FLUID) {
     return;
   }

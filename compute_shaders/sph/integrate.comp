@@ -84,9 +84,15 @@ layout(constant_id = 1) const uint kContinuity = 0u;
 // llvmpipe runs the body of a branch under a lane mask even when no lane takes it, and the
 // stores of the RK2 stages cost the symplectic step about a third of this pass.
 layout(constant_id = 2) const uint kMode = 0u;
-// 1: the scene has an inflow zone (common/inflow.glsl); 0 compiles its code out, for llvmpipe
-// runs the body of a branch no lane takes.
+// 1: the scene has an inflow zone (common/inflow.glsl); 2: and open ends (below); 0 compiles
+// its code out, for llvmpipe runs the body of a branch no lane takes.
 layout(constant_id = 3) const uint kInflow = 1u;
+// Open ends (kInflow 2; hemo/sim/inflow.hpp): fluid crossing the inlet and outlet planes is
+// counted, a crosser of the inlet plane is flagged until the refill gives the buffer its image,
+// the outlet buffer is driven as the inlet buffer is, and fluid past either end of the tube is
+// parked.
+layout(std430, binding = HEMO_INTEGRATE_BINDING_OPEN_COUNTERS) buffer OpenCounters { uint openCounters[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_PENDING) buffer Pending { uint pending[]; };
 // 1: this symplectic-Euler integrator collects the tile boxes (see gCollectTiles).
 layout(constant_id = 4) const uint kCollect = 0u;
 layout(push_constant) uniform Push {
@@ -137,6 +143,15 @@ vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v, out vec3 d, out vec3 x0) {
   x0 = texelFetch(posAtBuildT, int(i)).xyz;
   d = hemo_min_image(x - x0, hemo_pair_params());
   float r = length(d - vec3(hemo_predicted_middle(), 0.0, 0.0));
+  if (kInflow == 2u) {
+    // A crosser of the inlet plane whose image the buffer still lacks (it appears at the next
+    // rebuild, sph/open_spawn.comp) fails both tests once it is `pendingMargin` past the plane:
+    // the refill comes before the buffer's gap nears the lumen, in any flow (a plug flow alone
+    // would never rebuild the list).
+    if (pending[i] != 0u && x.x - inflow.inletPlane >= inflow.pendingMargin) {
+      r = 3.0e38;
+    }
+  }
   if (kMode == HEMO_INTEGRATE_RK2_FULL) {
     const float speed = length(v);
     r += 0.5 * speed * min(params.dtMax, params.cflAcoustic * params.h / max(params.c0 + speed, 1.0e-30));
@@ -243,17 +258,59 @@ float hemo_inflow_mean_speed(float time) {
 bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2) {
   u = vec3(0.0);
   s2 = 0.0;
-  if (kInflow == 0u || inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || x.x < inflow.zoneStart || x.x >= inflow.zoneEnd) {
+  // (open ends: the outlet buffer [outletPlane, endX) is driven as the inlet's, hemo/sim/inflow.hpp)
+  const bool zone = (x.x >= inflow.zoneStart && x.x < inflow.zoneEnd) || (kInflow == 2u && x.x >= inflow.outletPlane);
+  if (kInflow == 0u || inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || !zone) {
     return false;
   }
   const vec2 d = x.yz - vec2(inflow.centreY, inflow.centreZ);
   s2 = dot(d, d) / (inflow.radius * inflow.radius);
-  if (s2 >= 1.0) {
+  if (s2 >= 1.0 && kInflow != 2u) {
     return false;  // outside the lumen (escaped blood is never driven)
   }
-  const float profile = inflow.profile == 1u ? 1.0 : 2.0 * (1.0 - s2);
+  // (open ends: every particle in a buffer is driven, at rest beyond the radius, so none drifts
+  // out through the tube's start or back into the lumen along the wall)
+  const float profile = inflow.profile == 1u ? (s2 < 1.0 ? 1.0 : 0.0) : 2.0 * max(1.0 - s2, 0.0);
   u = vec3(hemo_inflow_mean_speed(time) * profile, 0.0, 0.0);
   return true;
+}
+
+// Open ends (kInflow 2), after the update of fluid slot i from `start` to x: the plane
+// crossings, and parking past either end.
+void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
+  // The buffer holds the same particles whatever crosses the plane: a particle that comes back
+  // into the buffer cancels the image it still owes, or else earns a credit (normals.w = 1:
+  // fluid particles carry no normal, and open ends use summation density) that its next
+  // crossing into the lumen spends instead of asking for an image. (Near the wall, where the
+  // flow is slow, particles cross back and forth; each forward crossing made an image, and the
+  // buffer filled up.)
+  if (start.x < inflow.inletPlane && x.x >= inflow.inletPlane) {
+    atomicAdd(openCounters[HEMO_OPEN_COUNTER_IN], 1u);
+    if (normals[i].w != 0.0) {
+      normals[i].w = 0.0;
+    } else {
+      pending[i] = 1u;
+    }
+  } else if (start.x >= inflow.inletPlane && x.x < inflow.inletPlane) {
+    atomicAdd(openCounters[HEMO_OPEN_COUNTER_IN_BACK], 1u);
+    if (pending[i] != 0u) {
+      pending[i] = 0u;
+    } else {
+      normals[i].w = 1.0;
+    }
+  }
+  if (start.x < inflow.outletPlane && x.x >= inflow.outletPlane) {
+    atomicAdd(openCounters[HEMO_OPEN_COUNTER_OUT], 1u);
+  } else if (start.x >= inflow.outletPlane && x.x < inflow.outletPlane) {
+    atomicAdd(openCounters[HEMO_OPEN_COUNTER_OUT_BACK], 1u);
+  }
+  const bool pastEnd = x.x >= inflow.endX;
+  if (pastEnd || x.x < inflow.startX) {
+    atomicAdd(openCounters[pastEnd ? HEMO_OPEN_COUNTER_PARKED_END : HEMO_OPEN_COUNTER_PARKED_START], 1u);
+    pending[i] = 0u;  // (the image would be taken from the parking point)
+    x.xyz = inflow.parking.xyz;
+    v = vec4(0.0, 0.0, 0.0, float(HEMO_KIND_PARKED));
+  }
 }
 
 // The full stages' update of slot i (< n); returns its rebuild test (d.x, reach).
@@ -318,6 +375,9 @@ vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running, out vec3 d,
     }
   } else if (kMode != HEMO_INTEGRATE_RK2_FULL) {
     x.xyz += v.xyz * dt;
+  }
+  if (kInflow == 2u && uint(v.w) == HEMO_KIND_FLUID) {
+    hemo_open_ends(i, start, x, v);
   }
   x.xyz = hemo_wrap_position(x.xyz);
   if (any(isnan(x.xyz)) || any(isinf(x.xyz)) || any(isnan(v.xyz)) || any(isinf(v.xyz))) {
@@ -386,11 +446,18 @@ void main() {
     clocks[1u - pc.clockIn] = next;
     stepLog[pc.logIndex] = vec2(next.time, running ? dt : 0.0);
   }
-  const bool valid = i < pc.n;
+  bool valid = i < pc.n;
   vec2 test = vec2(0.0);
   if (valid) {
     vec3 d, x0;
     test = hemo_advance(i, clock, dt, running, d, x0);
+    if (kInflow == 2u && uint(velocities[i].w) == HEMO_KIND_PARKED) {
+      // A parked slot needs no list: it is left out of the test (the jump to the parking
+      // point would rebuild the list for nothing).
+      valid = false;
+      d = vec3(0.0);
+      test = vec2(0.0);
+    }
     if (gCollectTiles) {
       hemo_tile_collect(x0, d);
     }

@@ -5,6 +5,8 @@
 #include "hemo/scene/mesh_vessel.hpp"
 #include "hemo/scene/statics.hpp"
 
+#include "interface/sph.h"
+
 #include <cmath>
 #include <stdexcept>
 
@@ -103,6 +105,21 @@ SceneBuild buildScene(const Scene& s) {
   }
   set.fluid += rest.fluid;
   set.boundary += rest.boundary;
+  if (s.vessel && s.vessel->inflow && s.vessel->inflow->open) {
+    // Open ends: the free fluid slots, parked (interface/sph.h, HEMO_KIND_PARKED), after all else.
+    const sim::Inflow& in = *s.vessel->inflow;
+    std::uint32_t reserve = s.vessel->reserveParticles;
+    if (reserve == 0) {
+      std::uint32_t buffer = 0;
+      for (std::size_t i = 0; i < set.positions.size(); ++i) {
+        const bool fluid = set.velocities[i].w == float(sim::ParticleKind::Fluid);
+        buffer += fluid && set.positions[i].x >= in.zoneStart && set.positions[i].x < in.zoneEnd ? 1u : 0u;
+      }
+      reserve = 2 * buffer + set.fluid / 10;
+    }
+    for (std::uint32_t k = 0; k < reserve; ++k) set.add(in.open->parking, s.sph.particleMass(), float(HEMO_KIND_PARKED));
+    set.parked = reserve;
+  }
   set.numberIds();
   return out;
 }

@@ -157,6 +157,12 @@ const std::vector<Field>& schema() {
                 {"hold_lumen_pressure", Kind::Bool, "", 0, 0, false, false, "The zone is also the blood supply: each step a zone particle's mass becomes m rho0 / rho (between its initial mass and max_mass_ratio times it), so the zone holds the lumen at fluid.background_pressure_Pa while the wall stretches and blood leaves through a rupture."},
                 {"max_mass_ratio", Kind::Number, "1", 1, 1e3, false, 4.0, "Cap of a particle's mass over its initial mass under hold_lumen_pressure."},
             }},
+           {"outlet", Kind::Section, "", 0, 0, false, Json::object(), "Open ends (tubes and aneurysms along x, with vessel.inflow, on a domain whose x axis is not periodic): the inflow zone is the inlet buffer, fed by an image of each particle that leaves it into the lumen; the outlet buffer at the tube's end moves with the inflow's velocity profile and speed, and fluid past either end of the tube leaves the simulation (its slot parked for the inlet to reuse). The lumen's mass balance is counted exactly (hemo-run's summary, open_*).", {},
+            {
+                {"condition", Kind::Choice, "", 0, 0, false, "none", "none: the vessel is periodic and recycles its outflow (vessel.inflow); flow: open ends, the outlet buffer drawing the inlet's flow rate.", {"none", "flow"}},
+                {"buffer_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the outlet buffer at the tube's end (0: the inflow zone's length); at least the kernel support 2h."},
+                {"reserve_particles", Kind::Integer, "1", 0, 1e9, false, 0, "Free fluid slots for the inlet's images beyond those the outlet frees (0: automatic, twice the inlet buffer's particles and a tenth of the fluid). A run that runs out stops and says so."},
+            }},
        }},
       {"forces", Kind::Section, "", 0, 0, false, Json::object(), "Body forces.", {},
        {
@@ -371,7 +377,8 @@ bool inside(const Box& inner, const Box& outer, float slack) {
 }
 
 // `v`: the checked section (defaults filled in); `raw`: what the file gave.
-void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene& s, Vessel& w) {
+// `open`: vessel.outlet gives the vessel open ends (parseOutlet).
+void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene& s, Vessel& w, bool open) {
   const std::string profile = in["profile"].get<std::string>();
   if (profile == "none") {
     for (auto it = raw.begin(); it != raw.end(); ++it) {
@@ -382,8 +389,8 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
   if (s.sph.densityMethod == sim::DensityMethod::Continuity) {
     c.fail("vessel.inflow", "cannot be used with fluid.density \"continuity\" (the inflow zone's mass supply acts on the summed density)");
   }
-  if (!s.sph.periodic[0]) {
-    c.fail("vessel.inflow", "needs a periodic x axis (domain.periodic [\"x\"]): the outflow is recycled to the inlet through the periodic seam");
+  if (!s.sph.periodic[0] && !open) {
+    c.fail("vessel.inflow", "needs a periodic x axis (domain.periodic [\"x\"]): the outflow is recycled to the inlet through the periodic seam (or give the vessel open ends: vessel.outlet.condition \"flow\")");
   }
   sim::Inflow f;
   f.profile = profile == "plug" ? sim::Inflow::Profile::Plug : sim::Inflow::Profile::Parabolic;
@@ -412,10 +419,74 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
     c.fail("vessel.inflow.waveform", "is required when vessel.inflow.pulse_period_s is set (the samples of one period)");
   }
   if (f.meanSpeed == 0.0f) c.fail("vessel.inflow.mean_speed_m_s", "must be non-zero when an inflow profile is chosen");
-  if (!(s.sph.backgroundPressure > 0.0f)) {
+  if (!(s.sph.backgroundPressure > 0.0f) && !open) {
     c.fail("fluid.background_pressure_Pa", "must be positive with a vessel.inflow: the lumen pressure is what pushes the fluid into the zone behind the pump (without it the zone runs empty); a few times rho U^2 is enough");
   }
   w.inflow = f;
+}
+
+// vessel.outlet (after parseInflow): open ends. `out`: the checked section.
+void parseOutlet(const Checker& c, const Json& out, Scene& s, Vessel& w) {
+  if (out["condition"].get<std::string>() == "none") {
+    for (const char* key : {"buffer_length_m", "reserve_particles"}) {
+      if (out.contains(key) && out[key] != Json(0) && out[key] != Json(0.0)) {
+        c.fail(std::string("vessel.outlet.") + key, "is set but vessel.outlet.condition is \"none\" (choose \"flow\")");
+      }
+    }
+    return;
+  }
+  if (!w.inflow) c.fail("vessel.outlet", "open ends need a vessel.inflow (the inlet): give vessel.inflow.profile");
+  if (s.sph.periodic[0]) c.fail("domain.periodic", "a vessel with open ends (vessel.outlet) must not be periodic along x");
+  if (w.shape != Vessel::Shape::Tube && w.shape != Vessel::Shape::SaccularAneurysm && w.shape != Vessel::Shape::FusiformAneurysm) {
+    c.fail("vessel.outlet", "open ends apply to a tube or an aneurysm along x (not to a bifurcation or a mesh vessel yet)");
+  }
+  if (w.inflow->holdPressure) {
+    c.fail("vessel.inflow.hold_lumen_pressure", "cannot be used with open ends (the zone's mass supply is for a closed, recycled loop)");
+  }
+  if (!(w.inflow->meanSpeed > 0.0f)) c.fail("vessel.inflow.mean_speed_m_s", "must be positive with open ends (the inlet is at the tube's start)");
+  if (!w.inflow->waveform.empty()) {
+    for (float v : w.inflow->waveform) {
+      if (v < 0.0f) c.fail("vessel.inflow.waveform", "must not reverse the flow with open ends (negative sample " + fmt(v) + ")");
+    }
+  }
+  if (s.sph.densityMethod != sim::DensityMethod::Summation) c.fail("fluid.density", "open ends need summation density");
+  if (s.sph.pressureSolver != sim::PressureSolver::Wcsph) c.fail("fluid.pressure_solver", "open ends need the wcsph pressure solver");
+  if (s.sph.neighbourSearch == sim::NeighbourSearch::Cells) c.fail("particles.neighbour_search", "open ends need the neighbour list (\"list\" or \"auto\")");
+  if (s.sph.listLayout == sim::ListLayout::Clusters) c.fail("particles.list_layout", "open ends do not walk clusters");
+  const float slack = 1e-4f * s.sph.spacing;
+  if (std::abs(w.start.x - s.domain.min.x) > slack || std::abs(w.start.x + w.length - s.domain.max.x) > slack) {
+    c.fail("vessel.length_m", "a vessel with open ends must span the domain along x (start_m x = domain min x, length_m = " +
+                                  fmt(double(s.domain.max.x) - s.domain.min.x) + " m): fluid leaves at the domain's ends");
+  }
+  const float h2 = s.sph.supportRadius();
+  const float zone = w.inflow->zoneEnd - w.inflow->zoneStart;
+  if (!(zone >= h2 + s.sph.spacing * (1.0f - 1e-4f))) {
+    c.fail("vessel.inflow.zone_length_m", "must be at least the kernel support and a spacing (" + fmt(h2 + s.sph.spacing) +
+                                              " m) with open ends: the buffer's far end waits for its refill");
+  }
+  float buffer = out["buffer_length_m"].get<float>();
+  if (buffer == 0.0f) buffer = zone;
+  if (!(buffer >= h2 * (1.0f - 1e-5f))) {
+    c.fail("vessel.outlet.buffer_length_m", "must be at least the kernel support 2h = " + fmt(h2) + " m, got " + fmt(buffer));
+  }
+  if (!(w.length - zone - buffer >= 2.0f * h2)) {
+    c.fail("vessel.outlet.buffer_length_m", "the inlet and outlet buffers (" + fmt(zone) + " and " + fmt(buffer) +
+                                                " m) leave less than two kernel supports of lumen in the " + fmt(w.length) + " m tube");
+  }
+  sim::OpenEnds o;
+  o.startX = w.start.x;
+  o.endX = w.start.x + w.length;
+  o.outletLength = buffer;
+  // The gap the refill leaves at the buffer's far end stays beyond the support of the buffer
+  // particles within the support of the inlet plane (two supports upstream of it), or at least
+  // half a spacing (hemo/sim/inflow.hpp).
+  o.pendingMargin = std::max(zone - 2.0f * h2, 0.5f * s.sph.spacing);
+  // One metre past the domain's end, at its lowest corner: beyond every support, in the grid's
+  // corner cell (interface/sph.h, HEMO_KIND_PARKED).
+  o.parking = glm::vec3(s.domain.max.x + 1.0f, s.domain.min.y, s.domain.min.z);
+  w.inflow->open = o;
+  w.reserveParticles = out["reserve_particles"].get<std::uint32_t>();
+  s.sph.parkedSlots = true;
 }
 
 // shape "mesh": reads and checks the surface, names its ends, and sets the vessel's start,
@@ -612,7 +683,9 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s, con
       if (!given(key) || !(v[key].get<double>() > 0.0)) c.fail(std::string("vessel.") + key, "is required (and positive) for a " + shape);
     }
   }
-  parseInflow(c, v["inflow"], raw.contains("inflow") ? raw["inflow"] : Json::object(), s, w);
+  parseInflow(c, v["inflow"], raw.contains("inflow") ? raw["inflow"] : Json::object(), s, w,
+              v["outlet"]["condition"].get<std::string>() != "none");
+  parseOutlet(c, v["outlet"], s, w);
   if (w.radius < 2.0f * s.sph.spacing) c.fail("vessel.radius_m", "must be at least two particle spacings (" + fmt(2.0 * s.sph.spacing) + " m)");
   w.periodic = s.sph.periodic[0];
   if (s.sph.periodic[1] || s.sph.periodic[2]) c.fail("domain.periodic", "a vessel allows only x to be periodic (its axis)");

@@ -40,6 +40,17 @@ void Inflow::validate() const {
   require(waveform.empty() || (period > 0.0f && waveform.size() >= 2), "a waveform needs a positive period and at least 2 samples");
   for (float w : waveform) require(std::isfinite(w), "waveform samples must be finite");
   require(std::isfinite(maxMassRatio) && maxMassRatio >= 1.0f, "the mass cap must be at least 1 (x the initial mass)");
+  if (open) {
+    const OpenEnds& o = *open;
+    require(std::isfinite(o.startX) && std::isfinite(o.endX) && o.endX > o.startX, "open ends: the tube's end must lie past its start");
+    require(zoneStart == o.startX, "open ends: the inlet buffer must start at the tube's start");
+    require(std::isfinite(o.outletLength) && o.outletLength > 0.0f && o.endX - o.outletLength > zoneEnd,
+            "open ends: the outlet buffer must have a positive length and leave a lumen after the inlet buffer");
+    require(std::isfinite(o.pendingMargin) && o.pendingMargin > 0.0f && o.pendingMargin < zoneEnd - zoneStart,
+            "open ends: the refill margin must be positive and shorter than the inlet buffer");
+    require(!holdPressure, "open ends: the zone cannot hold the lumen pressure (its mass supply is for closed loops)");
+    for (int a = 0; a < 3; ++a) require(std::isfinite(o.parking[a]), "open ends: the parking point must be finite");
+  }
 }
 
 InflowParams makeInflowParams(const Inflow& in, float restDensity, float particleMass) {
@@ -62,6 +73,21 @@ InflowParams makeInflowParams(const Inflow& in, float restDensity, float particl
   p.maxMass = in.maxMassRatio * particleMass;
   p.baseMass = particleMass;
   std::copy(in.waveform.begin(), in.waveform.end(), p.waveform);
+  p.inletPlane = in.zoneEnd;
+  p.outletPlane = 3.0e38f;
+  p.startX = -3.0e38f;
+  p.endX = 3.0e38f;
+  if (in.open) {
+    p.open = 1u;
+    p.outletPlane = in.open->endX - in.open->outletLength;
+    p.startX = in.open->startX;
+    p.endX = in.open->endX;
+    p.parking[0] = in.open->parking.x;
+    p.parking[1] = in.open->parking.y;
+    p.parking[2] = in.open->parking.z;
+    p.parking[3] = in.zoneEnd - in.zoneStart;
+    p.pendingMargin = in.open->pendingMargin;
+  }
   return p;
 }
 

@@ -44,7 +44,8 @@ void ParticleStore::upload(const std::vector<glm::vec4>& positions, const std::v
   fluid_ = 0;
   wall_ = 0;
   for (const glm::vec4& v : velocities) {
-    fluid_ += std::uint32_t(v.w) == HEMO_KIND_FLUID ? 1u : 0u;
+    // (parked fluid slots, of open vessel ends, belong to the fluid's part)
+    fluid_ += std::uint32_t(v.w) == HEMO_KIND_FLUID || std::uint32_t(v.w) == HEMO_KIND_PARKED ? 1u : 0u;
     wall_ += std::uint32_t(v.w) == HEMO_KIND_WALL ? 1u : 0u;
   }
   ++uploads_;

@@ -509,6 +509,13 @@ void Simulation::checkStatus(std::uint64_t batchFirstStep, const SphStatus& stat
         << " s): the fluid is compressed far beyond its rest density, or the capacity is too small";
     throw SimulationError(msg.str());
   }
+  if (status.openShortfall > 0) {
+    std::ostringstream msg;
+    msg << "the open inlet ran out of free fluid slots (in the batch from step " << batchFirstStep << ", t = " << time()
+        << " s): " << status.openShortfall << " particles that entered the lumen found no slot for their image in the "
+        << "inlet buffer; raise vessel.outlet.reserve_particles";
+    throw SimulationError(msg.str());
+  }
   if (status.nonFinite == 0) return;
   // Find where: the step from the status, its time from the step log, the particle from the state.
   const auto log = solver_->stepLog().readback<glm::vec2>(scene_.stepsPerBatch);
@@ -664,6 +671,24 @@ Snapshot Simulation::snapshot() const {
       if (id < n && vel[slot].w == float(ParticleKind::Fluid)) s.viscosity[id] = float(mu[slot] * factor);
     }
   }
+  if (solver_->openEnds()) {
+    // Open ends: the parked slots hold no particle (interface/sph.h, HEMO_KIND_PARKED).
+    std::size_t k = 0;
+    for (std::size_t r = 0; r < s.positions.size(); ++r) {
+      if (std::uint32_t(s.velocities[r].w) == HEMO_KIND_PARKED) continue;
+      s.positions[k] = s.positions[r];
+      s.velocities[k] = s.velocities[r];
+      s.densityPressure[k] = s.densityPressure[r];
+      s.ids[k] = s.ids[r];
+      if (!s.viscosity.empty()) s.viscosity[k] = s.viscosity[r];
+      ++k;
+    }
+    s.positions.resize(k);
+    s.velocities.resize(k);
+    s.densityPressure.resize(k);
+    s.ids.resize(k);
+    if (!s.viscosity.empty()) s.viscosity.resize(k);
+  }
   return s;
 }
 
@@ -726,6 +751,12 @@ void Simulation::resume(const std::filesystem::path& path) {
 
 std::uint32_t Simulation::escapedParticles() const {
   return scene::countEscaped(scene_, store_->readPositions(), store_->readVelocities());
+}
+
+std::uint32_t Simulation::activeFluidParticles() const {
+  std::uint32_t n = 0;
+  for (const glm::vec4& v : store_->readVelocities()) n += std::uint32_t(v.w) == HEMO_KIND_FLUID ? 1u : 0u;
+  return n;
 }
 
 std::uint32_t Simulation::lostParticles() const {

@@ -182,7 +182,7 @@ constexpr std::uint64_t kSolverBytesPerSlot = 256;
 // it with the solver's other buffers (and its pages would not be absurdly small), else cells.
 SphSettings resolveNeighbourSearch(const gpu::Context& context, const ParticleStore& particles, SphSettings s) {
   if (s.neighbourSearch != NeighbourSearch::Auto) return s;
-  if (s.pressureSolver == PressureSolver::Dfsph) {  // (the solve's passes read the list)
+  if (s.pressureSolver == PressureSolver::Dfsph || s.parkedSlots) {  // (the solve's passes read the list)
     s.neighbourSearch = NeighbourSearch::List;
     return s;
   }
@@ -209,7 +209,8 @@ std::uint64_t activeArgsBytes(const gpu::Context& context, const SphSettings& s,
 // boundary sort once per page (SphSolver::recordNeighbours).
 std::uint32_t rebuildGateSlots(const gpu::Context& context, const SphSettings& s, const ParticleStore& particles) {
   const std::uint32_t pages = listPagesFor(context, s, particles);
-  return 2 * std::max(32u, 8u + 2u * pages);
+  // (+ 8: open ends' refill, three passes and the scan's levels)
+  return 2 * std::max(32u, 16u + 2u * pages);
 }
 
 // Whether the fluid walks clusters (ListLayout): on CPU devices, where a fetch costs per lane,
@@ -219,7 +220,7 @@ bool clusterLayout(const gpu::Context& context, const SphSettings& s, const Part
   const bool cpu = context.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
   const bool clusterable = s.neighbourSearch != NeighbourSearch::Cells && !s.sps && !s.nonNewtonian() &&
                            s.densityMethod == DensityMethod::Summation &&
-                           s.pressureSolver == PressureSolver::Wcsph &&
+                           s.pressureSolver == PressureSolver::Wcsph && !s.parkedSlots &&
                            particles.capacity() <= HEMO_CLUSTER_MAX_SLOTS && listPagesFor(context, s, particles) == 1;
   return clusterable && (s.listLayout == ListLayout::Clusters || (s.listLayout == ListLayout::Auto && cpu));
 }
@@ -280,6 +281,11 @@ void SphSettings::validate() const {
     require(integrator == Integrator::SymplecticEuler, "the DFSPH pressure solver steps with symplectic Euler");
     require(neighbourSearch != NeighbourSearch::Cells, "the DFSPH pressure solver needs the neighbour list");
     require(listLayout != ListLayout::Clusters, "the DFSPH pressure solver does not walk clusters");
+  }
+  if (parkedSlots) {
+    require(pressureSolver == PressureSolver::Wcsph, "open vessel ends need the WCSPH pressure solver");
+    require(neighbourSearch != NeighbourSearch::Cells, "open vessel ends need the neighbour list");
+    require(listLayout != ListLayout::Clusters, "open vessel ends do not walk clusters");
   }
 }
 
@@ -543,7 +549,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       // (a correction and a prediction per region; the density solve's regions, the divergence solve's)
       pressureGate_(context, solveStats_, 4, "pressure solve", 2),
       solveDepth_(context, HEMO_DFSPH_DEPTH_COUNT * 4, gpu::MemoryUse::Device, "dfsph recorded depth"),
-      recordedIterations_(settings_.solverMaxIterations) {
+      recordedIterations_(settings_.solverMaxIterations),
+      openCounters_(context, HEMO_OPEN_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "open ends' counters"),
+      pending_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "open inlet's crossers owed an image") {
   const SphSettings& settings = settings_;  // (Auto resolved)
   cellWalk_ = settings.neighbourSearch == NeighbourSearch::Cells;
   const bool contiguous = contiguousList(context, settings);
@@ -665,8 +673,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
   // sixth on lavapipe). All their sets' layouts are identical, so one
   // descriptor set serves them all.
   continuity_ = continuity;
-  for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, false);
-  integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, false, true);
+  for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, 0u);
+  integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, 0u, true);
   tileStatic_ = &cache.get({"sph/tile_static", HEMO_TILE_STATIC_BINDING_COUNT, sizeof(CountPush), kWorkgroup, {},
                             1u << HEMO_TILE_STATIC_BINDING_TILE_GRID,
                             1u << HEMO_TILE_STATIC_BINDING_POSITIONS | 1u << HEMO_TILE_STATIC_BINDING_VELOCITIES});
@@ -865,7 +873,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_NORMALS, &a.normals},
                                        {HEMO_INTEGRATE_BINDING_TILE_GRID, &tileGrid_},
                                        {HEMO_INTEGRATE_BINDING_TILE_BOXES, &tileBoxes_},
-                                       {HEMO_INTEGRATE_BINDING_TILE_OCCUPIED, &tileOccupied_}});
+                                       {HEMO_INTEGRATE_BINDING_TILE_OCCUPIED, &tileOccupied_},
+                                       {HEMO_INTEGRATE_BINDING_OPEN_COUNTERS, &openCounters_},
+                                       {HEMO_INTEGRATE_BINDING_PENDING, &pending_}});
   // (both variants' layouts are the same: one set serves them)
   rebuildDecideSet_ = rebuildDecide_[1]->makeSet({{HEMO_DECIDE_BINDING_TILE_GRID, &tileGrid_},
                                                   {HEMO_DECIDE_BINDING_TILE_BOXES, &tileBoxes_},
@@ -1008,12 +1018,12 @@ void SphSolver::makeDtReduceSet() {
        {HEMO_DTREDUCE_BINDING_TOOL_LOG, tools_ ? &tools_->log() : data}});
 }
 
-const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, bool inflow, bool collect) {
-  const gpu::ComputePipeline*& pipeline = integrate_[inflow ? 1 : 0][collect ? 3 : mode];
+const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, std::uint32_t inflow, bool collect) {
+  const gpu::ComputePipeline*& pipeline = integrate_[inflow][collect ? 3 : mode];
   if (!pipeline) {
     pipeline = &context_->pipelines().get(
         {"sph/integrate", HEMO_INTEGRATE_BINDING_COUNT, sizeof(IntegratePush), kWorkgroup,
-         {continuity_, mode, inflow ? 1u : 0u, collect ? 1u : 0u},
+         {continuity_, mode, inflow, collect ? 1u : 0u},
          1u << HEMO_INTEGRATE_BINDING_PARAMS | 1u << HEMO_INTEGRATE_BINDING_INFLOW | 1u << HEMO_INTEGRATE_BINDING_DT |
              1u << HEMO_INTEGRATE_BINDING_DRIFT_RANGE | 1u << HEMO_INTEGRATE_BINDING_TILE_GRID,
          1u << HEMO_INTEGRATE_BINDING_ACCEL | 1u << HEMO_INTEGRATE_BINDING_POS_AT_BUILD | 1u << HEMO_INTEGRATE_BINDING_STATE |
@@ -1024,12 +1034,58 @@ const gpu::ComputePipeline& SphSolver::integratePipeline(std::uint32_t mode, boo
 
 void SphSolver::setInflow(const Inflow& inflow) {
   const InflowParams p = makeInflowParams(inflow, settings_.restDensity, settings_.particleMass());
+  if (inflow.open && !settings_.parkedSlots) {
+    throw std::invalid_argument("open ends need the solver's settings to say the fluid has parked slots (SphSettings::parkedSlots)");
+  }
+  if (openOn_ && !inflow.open) throw std::invalid_argument("a vessel's open ends cannot be closed while it runs");
   inflow_.upload(std::vector<InflowParams>{p});
   inflowOn_ = p.enabled != 0u;
+  openOn_ = p.open != 0u;
   if (inflowOn_) {
-    for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, true);
-    integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, true, true);
+    for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, inflowVariant());
+    integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, inflowVariant(), true);
   }
+  if (openOn_ && !spawn_) {
+    const std::uint64_t n = std::max(particles_->fluidCount(), 1u);
+    spawnScan_ = gpu::Buffer(*context_, (2 * n + 1) * 4, gpu::MemoryUse::Device, "open inlet's refill scan");
+    crossers_ = gpu::Buffer(*context_, n * 4, gpu::MemoryUse::Device, "open inlet's crossers by rank");
+    spawnScanner_ = std::make_unique<gpu::PrefixScan>(*context_, spawnScan_, 2 * n + 1);
+    spawn_ = &context_->pipelines().get({"sph/open_spawn", HEMO_SPAWN_BINDING_COUNT, 8, kWorkgroup, {},
+                                         1u << HEMO_SPAWN_BINDING_INFLOW, 0u});
+    const ParticleArrays& a = particles_->live();
+    spawnSet_ = spawn_->makeSet({{HEMO_SPAWN_BINDING_POSITIONS, &a.positions},
+                                 {HEMO_SPAWN_BINDING_VELOCITIES, &a.velocities},
+                                 {HEMO_SPAWN_BINDING_NORMALS, &a.normals},
+                                 {HEMO_SPAWN_BINDING_PENDING, &pending_},
+                                 {HEMO_SPAWN_BINDING_SCAN, &spawnScan_},
+                                 {HEMO_SPAWN_BINDING_CROSSERS, &crossers_},
+                                 {HEMO_SPAWN_BINDING_INFLOW, &inflow_},
+                                 {HEMO_SPAWN_BINDING_COUNTERS, &openCounters_},
+                                 {HEMO_SPAWN_BINDING_STATUS, &status_}});
+  }
+}
+
+void SphSolver::recordOpenRefill(gpu::CommandRecorder& rec) {
+  if (!openOn_) return;
+  struct SpawnPush {
+    std::uint32_t n, mode;
+  };
+  const std::uint32_t n = particles_->fluidCount();
+  rec.dispatch(*spawn_, spawnSet_, SpawnPush{n, HEMO_SPAWN_FLAGS}, spawn_->groupsFor(std::max(n, 1u)));
+  rec.computeToCompute();
+  spawnScanner_->record(rec, 2 * std::uint64_t(n) + 1);
+  rec.computeToCompute();
+  rec.dispatch(*spawn_, spawnSet_, SpawnPush{n, HEMO_SPAWN_SCATTER}, spawn_->groupsFor(std::max(n, 1u)));
+  rec.computeToCompute();
+  rec.dispatch(*spawn_, spawnSet_, SpawnPush{n, HEMO_SPAWN_COPY}, spawn_->groupsFor(std::max(n, 1u)));
+  rec.computeToCompute();
+}
+
+SphSolver::OpenCounts SphSolver::readOpenCounts() const {
+  const std::vector<std::uint32_t> c = openCounters_.readback<std::uint32_t>(HEMO_OPEN_COUNTER_COUNT);
+  return OpenCounts{c[HEMO_OPEN_COUNTER_IN], c[HEMO_OPEN_COUNTER_IN_BACK], c[HEMO_OPEN_COUNTER_OUT],
+                    c[HEMO_OPEN_COUNTER_OUT_BACK], c[HEMO_OPEN_COUNTER_PARKED_END], c[HEMO_OPEN_COUNTER_PARKED_START],
+                    c[HEMO_OPEN_COUNTER_SPAWNED]};
 }
 
 void SphSolver::setBackgroundPressure(float pascals) {
@@ -1047,6 +1103,8 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   // No list yet: the active list is empty until the first build.
   rec.fill(activeArgs_, 0u);
   rec.fill(status_, 0);
+  rec.fill(openCounters_, 0u);
+  rec.fill(pending_, 0u);
   rec.transferToTransfer();  // the fills below overwrite some of these words
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_BAD_INPUT_ID * 4, 8);  // and BAD_FORCE_ID
@@ -1272,7 +1330,7 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
     mark("wall substeps");
   }
   const IntegratePush push{moving, step, logIndex, endTime, clockParity_, rebuildThreshold(), wallAdvanced ? 1u : 0u};
-  const std::uint32_t inflow = inflowOn_ ? 1 : 0;
+  const std::uint32_t inflow = inflowVariant();
   const gpu::ComputePipeline& integrate = *integrate_[inflow][mode];
   const gpu::Groups groups = integrate.groupsFor(std::max(moving, 1u));
   if (mode != HEMO_INTEGRATE_SYMPLECTIC_EULER) {
@@ -1450,6 +1508,7 @@ void SphSolver::recordStep(gpu::CommandRecorder& rec, std::uint32_t step, std::u
   }
   // (two shapes of the region: every slot sorted, or the moving ones only)
   rec.beginGate(rebuildGate_, sorted == particles_->count() ? 0u : 1u);
+  recordOpenRefill(rec);  // (open ends: the crossers' images join the grid's build)
   recordNeighbours(rec, sorted, timestamps);
   rec.endGate();
   // Past movingSlots() only rigid boundary particles, for which the density and force passes
@@ -1478,8 +1537,9 @@ std::uint32_t SphSolver::readRebuilds() const {
 }
 
 SphStatus SphSolver::statusFrom(const std::uint32_t* s) {
-  return SphStatus{s[HEMO_STATUS_FIRST_BAD_STEP], s[HEMO_STATUS_NONFINITE], s[HEMO_STATUS_NEIGHBOUR_OVERFLOW],
-                   s[HEMO_STATUS_MAX_NEIGHBOURS], s[HEMO_STATUS_BAD_INPUT_ID], s[HEMO_STATUS_BAD_FORCE_ID]};
+  return SphStatus{s[HEMO_STATUS_FIRST_BAD_STEP], s[HEMO_STATUS_NONFINITE],   s[HEMO_STATUS_NEIGHBOUR_OVERFLOW],
+                   s[HEMO_STATUS_MAX_NEIGHBOURS],  s[HEMO_STATUS_BAD_INPUT_ID], s[HEMO_STATUS_BAD_FORCE_ID],
+                   s[HEMO_STATUS_OPEN_SHORTFALL]};
 }
 
 SphStatus SphSolver::readStatus() const { return statusFrom(status_.readback<std::uint32_t>(HEMO_STATUS_COUNT).data()); }
@@ -1511,7 +1571,8 @@ void SphSolver::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
   out.insert(out.end(), {&ccount_, &clist_, &corder_, &pairPosition_, &activeSlots_, &activeArgs_, &activeAppended_,
                          &integrateArgs_, &clock_, &status_, &log_, &inflow_, &savedPos_, &savedVel_, &stepDt_, &tauA_,
                          &tauB_, &viscosity_, &dtPartials_, &dtCounts_, &dtResult_, &checkPartials_, &checkCount_, &checkResult_,
-                         &tileGrid_, &tileBoxes_, &tileResult_, &tileOccupied_, &kappa_, &solvePartials_, &solveStats_});
+                         &tileGrid_, &tileBoxes_, &tileResult_, &tileOccupied_, &kappa_, &solvePartials_, &solveStats_,
+                         &openCounters_, &pending_});
   pressureGate_.checkpointBuffers(out);
   if (wall_) wall_->checkpointBuffers(out);
   if (tools_) tools_->checkpointBuffers(out);

@@ -18,6 +18,7 @@ struct ParticleSet {
   std::vector<std::uint32_t> ids;
   std::uint32_t fluid = 0;
   std::uint32_t boundary = 0;
+  std::uint32_t parked = 0;  // free fluid slots of open vessel ends (HEMO_KIND_PARKED), last
   std::uint32_t size() const { return static_cast<std::uint32_t>(positions.size()); }
   // Appends a particle at rest.
   void add(glm::vec3 position, float mass, float kind, glm::vec3 normal = glm::vec3(0.0f)) {

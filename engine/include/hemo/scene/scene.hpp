@@ -99,6 +99,9 @@ struct Vessel {
   // Driven inflow at the start of a periodic tube (the outflow comes back through the seam);
   // none when the scene's vessel.inflow.profile is "none".
   std::optional<sim::Inflow> inflow;
+  // Open ends (inflow->open, vessel.outlet): the free fluid slots beyond those the outlet frees
+  // (0: automatic, scene::reserveParticles).
+  std::uint32_t reserveParticles = 0;
   // Shape::Mesh: the checked surface in metres, and the role the scene gave each of its ends
   // (VesselMesh::ends order): "inlet" or "outlet".
   std::shared_ptr<const VesselMesh> mesh;

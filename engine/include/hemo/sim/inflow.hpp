@@ -25,10 +25,35 @@
 // downstream; particles that took it up
 // stand for proportionally more volume (their spacing grows as (m / m0)^(1/3) at rest
 // density), and the cap bounds how long a bleed can be fed.
+//
+// Open ends (Inflow::open): the vessel is not periodic. The zone is then the inlet buffer, at
+// the tube's start, and a second driven zone of the outlet's length at the tube's end is the
+// outlet buffer (both with the same prescribed axial velocity: the outlet draws the inlet's
+// flow rate, a flow-controlled outlet). Between the inlet plane (the zone's end) and the outlet
+// plane lies the lumen. Fluid past either end of the tube is parked (HEMO_KIND_PARKED of
+// interface/sph.h: a free fluid slot far outside the domain, which no pass sees), and every
+// particle that crosses the inlet plane gets its image a zone length upstream, at the
+// buffer's far end, in a parked slot (sph/open_spawn.comp), so the buffer always holds the
+// same particles, as if it were fed through a periodic seam. The refill runs on the GPU at the
+// start of every step that rebuilds the neighbour list; a crosser still owed its image forces
+// a rebuild once it is `pendingMargin` past the inlet plane, so the gap at the buffer's far
+// end never reaches within the support of the buffer particles the lumen sees. The crossings
+// of both planes are counted (integers), so the lumen's mass balance is known exactly.
+#include <glm/vec3.hpp>
+
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace hemo::sim {
+
+struct OpenEnds {
+  float startX = 0.0f;        // m, the tube's start (fluid before it is parked)
+  float endX = 0.0f;          // m, the tube's end (fluid at or past it is parked)
+  float outletLength = 0.0f;  // m, the outlet buffer [endX - outletLength, endX)
+  float pendingMargin = 0.0f; // m (see above)
+  glm::vec3 parking{0.0f};    // m, where parked slots lie (outside the domain, beyond every support)
+};
 
 struct Inflow {
   enum class Profile { Parabolic, Plug };
@@ -44,6 +69,7 @@ struct Inflow {
   float ramp = 0.0f;       // s: u rises linearly from 0 over this time (0: at once)
   bool holdPressure = false;   // the zone supplies mass to hold the lumen at rho0 (see above)
   float maxMassRatio = 4.0f;   // cap of a particle's mass / the initial mass
+  std::optional<OpenEnds> open;  // open ends (see above); none: a periodic vessel
 
   static constexpr std::uint32_t kMaxSamples = 64;
 
@@ -62,8 +88,12 @@ struct InflowParams {
   std::uint32_t profile, samples, enabled, holdPressure;
   float restDensity, maxMass, baseMass, reserved;
   float waveform[Inflow::kMaxSamples];
+  float inletPlane, outletPlane, startX, endX;
+  float parking[4];  // xyz m; w: the spawn's shift upstream (the zone's length)
+  float pendingMargin;
+  std::uint32_t open, reserved2, reserved3;
 };
-static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples);
+static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + 48);
 
 // `restDensity` rho0 (kg/m^3) and `particleMass` m0 (kg) of the fluid.
 InflowParams makeInflowParams(const Inflow& inflow, float restDensity, float particleMass);

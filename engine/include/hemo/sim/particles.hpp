@@ -29,7 +29,8 @@ class ParticleStore {
   std::uint32_t capacity() const { return capacity_; }
   std::uint32_t count() const { return count_; }
   // Particles of each kind at the last upload (velocities.w: HEMO_KIND_FLUID, _BOUNDARY,
-  // _WALL of interface/sph.h; kinds never change during a run), and how many uploads there
+  // _WALL of interface/sph.h; the fluid's count includes its parked slots, HEMO_KIND_PARKED, the
+  // only kind that changes during a run: to and from fluid), and how many uploads there
   // have been (a solver that relies on the grid's order checks it has sorted this upload).
   std::uint32_t fluidCount() const { return fluid_; }
   std::uint32_t wallCount() const { return wall_; }

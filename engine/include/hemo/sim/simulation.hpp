@@ -86,7 +86,8 @@ struct RunResult {
   double wallSeconds = 0.0;
 };
 
-// Fluid state in input (id) order, for output and tests.
+// Fluid state in input (id) order, for output and tests: row k is particle ids[k], which is k
+// except with open vessel ends, whose parked slots (no particle) are left out.
 struct Snapshot {
   std::vector<glm::vec4> positions;   // xyz m, w mass
   std::vector<glm::vec4> velocities;  // xyz m/s, w kind
@@ -193,6 +194,13 @@ class Simulation {
   std::uint32_t escapedParticles() const;
   // Particles whose state is no longer finite (0 unless the run stopped with a SimulationError).
   std::uint32_t lostParticles() const;
+  // Open vessel ends (hemo/sim/inflow.hpp): what has crossed the inlet and outlet planes since
+  // the start (counts of particles of the fluid's mass; a readback). Zeros without open ends.
+  bool openEnds() const { return solver_->openEnds(); }
+  SphSolver::OpenCounts openCounts() const { return solver_->readOpenCounts(); }
+  // The fluid particles now: fluidParticles() less those that left through open ends plus those
+  // the inlet made (a readback).
+  std::uint32_t activeFluidParticles() const;
   // Springs broken and wall particles detached so far (0 without a wall).
   std::uint32_t brokenSprings() const;
   std::uint32_t detachedParticles() const;

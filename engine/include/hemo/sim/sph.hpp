@@ -121,6 +121,10 @@ struct SphSettings {
   PressureSolver pressureSolver = PressureSolver::Wcsph;
   float solverTolerance = 1.0e-3f;  // DFSPH: the mean compression (rho* - rho0)+ / rho0 it iterates to
   std::uint32_t solverMaxIterations = 50;  // DFSPH: the cap on each solve's corrections per step
+  // The fluid has parked slots (open vessel ends, hemo/sim/inflow.hpp): the solver then walks
+  // a per-particle list (the cluster and cell-walk passes would meet the parked slots, which
+  // all lie at one point) under WCSPH.
+  bool parkedSlots = false;
 
   float h() const { return smoothingRatio * spacing; }
   bool nonNewtonian() const { return rheology != Rheology::Newtonian; }
@@ -205,6 +209,7 @@ struct SphStatus {
   std::uint32_t maxNeighbours = 0;
   std::uint32_t badInputId = 0xffffffffu;  // lowest id already non-finite entering a force pass
   std::uint32_t badForceId = 0xffffffffu;  // lowest id whose forces turned non-finite
+  std::uint32_t openShortfall = 0;         // open inlet: images that found no free slot
 };
 
 // What DFSPH's solves did since the last reset (sph/dfsph_reduce.comp's stats).
@@ -296,6 +301,17 @@ class SphSolver {
   void attachTools(const std::vector<ToolSpec>& tools);
   const ToolContact* tools() const { return tools_.get(); }
   ToolContact* tools() { return tools_.get(); }
+  // The open ends' refill of the inlet buffer (hemo/sim/inflow.hpp, sph/open_spawn.comp), on
+  // its own, for tests (recordStep records it inside the rebuild gate, before the grid).
+  void recordOpenRefill(gpu::CommandRecorder& rec);
+  bool openEnds() const { return openOn_; }
+  // Open ends: the crossing counters (HEMO_OPEN_COUNTER_* of interface/sph.h), a readback.
+  struct OpenCounts {
+    std::uint32_t in = 0, inBack = 0, out = 0, outBack = 0, parkedEnd = 0, parkedStart = 0, spawned = 0;
+  };
+  OpenCounts readOpenCounts() const;
+  const gpu::Buffer& pending() const { return pending_; }
+  gpu::Buffer& pending() { return pending_; }  // (for tests)
   // Drives the fluid in a vessel's inflow zone (hemo/sim/inflow.hpp). Set-up only (an upload);
   // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
   void setInflow(const Inflow& inflow);
@@ -539,10 +555,20 @@ class SphSolver {
   // by stage (HEMO_INTEGRATE_*; index 3: symplectic Euler collecting the tile boxes), without
   // and with the inflow zone's code (made on the first setInflow: scenes without one never
   // compile it)
-  const gpu::ComputePipeline* integrate_[2][4] = {};
+  const gpu::ComputePipeline* integrate_[3][4] = {};
   std::uint32_t continuity_ = 0;  // the integrator's constant 1
   bool inflowOn_ = false;        // setInflow has given a zone: the integrator with its code
-  const gpu::ComputePipeline& integratePipeline(std::uint32_t mode, bool inflow, bool collect = false);
+  bool openOn_ = false;          // ... with open ends (the integrator's constant 3 = 2, the refill)
+  // inflow: 0 none, 1 the zone, 2 the zone with open ends (the integrator's constant 3)
+  const gpu::ComputePipeline& integratePipeline(std::uint32_t mode, std::uint32_t inflow, bool collect = false);
+  std::uint32_t inflowVariant() const { return openOn_ ? 2u : inflowOn_ ? 1u : 0u; }
+  // Open ends (hemo/sim/inflow.hpp): the crossing counters (HEMO_OPEN_COUNTER_*) and the
+  // crossers' flags (uint per slot), bound to the integrator in every scene (4 bytes per slot);
+  // the refill's scan of the flags, the crossers by rank, its scan and pass (made by setInflow).
+  gpu::Buffer openCounters_, pending_, spawnScan_, crossers_;
+  std::unique_ptr<gpu::PrefixScan> spawnScanner_;
+  const gpu::ComputePipeline* spawn_ = nullptr;
+  gpu::DescriptorSet spawnSet_;
   // The symplectic-Euler integrator's two variants run by indirect arguments (integrateArgs_)
   // that the rebuild decision writes for the next step (sph/rebuild_decide.comp): valid once a
   // decision has been recorded for these workgroups since the host last reset the test.
