@@ -30,9 +30,33 @@ struct InflowParams {
   vec4 parking;       // xyz: where parked slots lie (m); w: the spawn's shift upstream (m, the buffer's length)
   float pendingMargin; // m past the inlet plane at which a crosser still owed its image forces the refill (sph/integrate.comp)
   uint open;          // 1: open ends
-  uint reserved2;
-  uint reserved3;
+  uint inletPressure;   // 1: the inlet buffer holds a pressure and takes the lumen's velocity profile (zero gradient)
+  uint outletPressure;  // 1: the outlet buffer likewise
+  // (pressure ends) xy: the inlet's and the outlet's pressure over the background pressure
+  // (Pa; the inlet's rises over `ramp`); z: the width of the lumen's slab next to each plane
+  // whose axial velocity profile the buffer takes (m); w: 1 / (rho0 c0) (m/s per Pa)
+  vec4 pressures;
+  vec4 box;  // the domain across the axis: (min y, min z, max y, max z) (m); fluid beyond it is parked
 };
+
+// The open ends' velocity profiles (pressure ends): HEMO_OPEN_BINS bins of equal area over the
+// lumen's cross-section (bin = floor(bins r^2 / R^2)), the inlet's then the outlet's, then one
+// bin of pressure per plane. The integrator sums each bin's axial velocities (pressures) of
+// the lumen's particles in the slab next to the plane, in fixed point (HEMO_OPEN_SUM_WORDS
+// words per bin: the low and high words of sum((v_x + offset) scale) and the count; integer
+// sums, the same in any order); sph/open_profile.comp turns them into the mean speeds the next
+// step's buffers move at, and the planes' pressures into the speed each buffer adds.
+#define HEMO_OPEN_BINS 16u
+#define HEMO_OPEN_SUM_WORDS 3u
+#define HEMO_OPEN_SPEED_OFFSET 64.0
+#define HEMO_OPEN_FIXED_SCALE 16777216.0
+#define HEMO_OPEN_PRESSURE_OFFSET 1.0e6
+#define HEMO_OPEN_PRESSURE_SCALE 2048.0
+#define HEMO_OPEN_NO_PRESSURE -1.0e30  // a plane's pressure before any particle was measured
+
+uint hemo_open_bin(float s2) {
+  return min(uint(max(s2, 0.0) * float(HEMO_OPEN_BINS)), HEMO_OPEN_BINS - 1u);
+}
 
 // Sample k of the waveform of the block `block` (a macro: a function taking the struct by
 // value copies all of it, waveform included, into per-invocation memory; the integrator's stage

@@ -249,7 +249,10 @@
 // (common/repulsion.glsl). Entries of other particles are not written.
 #define HEMO_DENSITY_BINDING_PAIR_COUNT 10
 #define HEMO_DENSITY_BINDING_PAIR_LIST 11
-#define HEMO_DENSITY_BINDING_COUNT 12
+// InflowParams (common/inflow.glsl): the pressure an open end's buffer holds (inletPressure,
+// outletPressure) replaces the Tait pressure of the fluid in it
+#define HEMO_DENSITY_BINDING_INFLOW 12
+#define HEMO_DENSITY_BINDING_COUNT 13
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).
@@ -376,7 +379,8 @@
 
 // Open vessel ends' counters (uint each): fluid particles that crossed the inlet plane
 // downstream and back upstream, the outlet plane downstream and back, were parked past the
-// tube's end and before its start, and spawned into the inlet buffer.
+// tube's end and before its start, were spawned into a buffer, and were parked outside the
+// domain.
 #define HEMO_OPEN_COUNTER_IN 0
 #define HEMO_OPEN_COUNTER_IN_BACK 1
 #define HEMO_OPEN_COUNTER_OUT 2
@@ -384,17 +388,19 @@
 #define HEMO_OPEN_COUNTER_PARKED_END 4
 #define HEMO_OPEN_COUNTER_PARKED_START 5
 #define HEMO_OPEN_COUNTER_SPAWNED 6
+#define HEMO_OPEN_COUNTER_PARKED_OUTSIDE 7  // fluid that left the domain across the axis (through a tear)
 #define HEMO_OPEN_COUNTER_COUNT 8
 
-// sph/open_spawn.comp: the inlet buffer's refill, at the start of every step that rebuilds
-// the neighbour list (inside the rebuild gate, before the grid), over the fluid's slots
-// [0, N): every particle that crossed the inlet plane since the last refill gets its image a
-// buffer length upstream, in a parked slot: the k-th such particle in slot order takes the
-// k-th parked slot in slot order (a prefix scan of both flags, no float atomics).
+// sph/open_spawn.comp: the buffers' refill, at the start of every step that rebuilds the
+// neighbour list (inside the rebuild gate, before the grid), over the fluid's slots [0, N):
+// every particle that left a buffer into the lumen since the last refill gets its image at the
+// buffer's far end, a buffer length away, in a parked slot: the k-th such particle in slot
+// order takes the k-th parked slot in slot order (a prefix scan of both flags, no float
+// atomics).
 #define HEMO_SPAWN_BINDING_POSITIONS 0
 #define HEMO_SPAWN_BINDING_VELOCITIES 1
 #define HEMO_SPAWN_BINDING_NORMALS 2
-#define HEMO_SPAWN_BINDING_PENDING 3   // uint per fluid slot (HEMO_INTEGRATE_BINDING_PENDING)
+#define HEMO_SPAWN_BINDING_PENDING 3   // uint per fluid slot (HEMO_INTEGRATE_BINDING_PENDING): 0, or the buffer owed (1 inlet, 2 outlet)
 #define HEMO_SPAWN_BINDING_SCAN 4      // uint[2N + 1]: pending flags, then parked flags, then 0; scanned
 #define HEMO_SPAWN_BINDING_CROSSERS 5  // uint per fluid slot: the slot of the k-th pending particle
 #define HEMO_SPAWN_BINDING_INFLOW 6    // InflowParams
@@ -439,7 +445,18 @@
 // the last spawn pass and still owes the inlet buffer its image (sph/open_spawn.comp).
 #define HEMO_INTEGRATE_BINDING_OPEN_COUNTERS 23
 #define HEMO_INTEGRATE_BINDING_PENDING 24
-#define HEMO_INTEGRATE_BINDING_COUNT 25
+// Pressure ends (common/inflow.glsl, HEMO_OPEN_BINS): the sums of the axial velocities next
+// to each plane, and the profiles the buffers move at (float per bin, the inlet's then the
+// outlet's; sph/open_profile.comp).
+#define HEMO_INTEGRATE_BINDING_OPEN_SUMS 25
+#define HEMO_INTEGRATE_BINDING_OPEN_PROFILE 26
+#define HEMO_INTEGRATE_BINDING_COUNT 27
+
+// sph/open_profile.comp: one workgroup; each bin's mean axial speed from the integrator's sums
+// (a bin nobody crossed keeps its last speed), then the sums back to zero.
+#define HEMO_OPROFILE_BINDING_SUMS 0
+#define HEMO_OPROFILE_BINDING_PROFILE 1
+#define HEMO_OPROFILE_BINDING_COUNT 2
 
 // The rebuild test (docs/architecture.md, "the rebuild test"), in the integrator's full
 // stages (symplectic Euler, RK2's second): each slot's x displacement d.x since the list

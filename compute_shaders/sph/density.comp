@@ -34,6 +34,7 @@
 #include "common/sph_params.glsl"
 #include "common/clock.glsl"
 #include "common/tait.glsl"
+#include "common/inflow.glsl"
 
 // Read at neighbour indices: uniform texel buffers (interface/sph.h, "texel slots").
 layout(binding = HEMO_DENSITY_BINDING_POSITIONS) uniform samplerBuffer positions;
@@ -48,6 +49,7 @@ layout(binding = HEMO_DENSITY_BINDING_NORMALS) uniform samplerBuffer normals;
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_POSITION) writeonly buffer PairPosition { vec4 pairPosition[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_COUNT) writeonly buffer PairCount { uint pairCount[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_LIST) writeonly buffer PairList { uint pairList[]; };
+layout(std140, binding = HEMO_DENSITY_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 2) const uint kListWidth = 1u;
@@ -185,8 +187,19 @@ void main() {
       rate = 0.0;
     }
   }
-  const float background = hemo_background_pressure(clocks[pc.clockIn].time, params);
-  const float p = hemo_state_pressure(rho, background, params);
+  const float time = clocks[pc.clockIn].time;
+  const float background = hemo_background_pressure(time, params);
+  float p = hemo_state_pressure(rho, background, params);
+  if (inflow.open != 0u) {
+    // Open ends (hemo/sim/inflow.hpp): a pressure end's buffer holds its pressure (the inlet's
+    // rising over the inflow's ramp), whatever its particles' density.
+    if (inflow.inletPressure != 0u && gPi.x < inflow.inletPlane) {
+      const float ramp = inflow.ramp > 0.0 ? clamp(time / inflow.ramp, 0.0, 1.0) : 1.0;
+      p = background + inflow.pressures.x * ramp;
+    } else if (inflow.outletPressure != 0u && gPi.x >= inflow.outletPlane) {
+      p = background + inflow.pressures.y;
+    }
+  }
 #if !HEMO_CELL_WALK
   pairCount[i] = gMf | gMb << 16u;  // hemo_pair_counts
 #endif

@@ -26,6 +26,7 @@
 #include "common/clock.glsl"
 #include "common/step_dt.glsl"
 #include "common/inflow.glsl"
+#include "common/tait.glsl"
 #include "common/tiles.glsl"
 #include "common/rebuild_test.glsl"
 
@@ -93,6 +94,10 @@ layout(constant_id = 3) const uint kInflow = 1u;
 // parked.
 layout(std430, binding = HEMO_INTEGRATE_BINDING_OPEN_COUNTERS) buffer OpenCounters { uint openCounters[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_PENDING) buffer Pending { uint pending[]; };
+// Pressure ends (common/inflow.glsl, HEMO_OPEN_BINS): this step's sums of the axial velocities
+// next to each plane, and the profiles the last step's sums gave, which the buffers move at.
+layout(std430, binding = HEMO_INTEGRATE_BINDING_OPEN_SUMS) buffer OpenSums { uint openSums[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_OPEN_PROFILE) readonly buffer OpenProfile { float openProfile[]; };
 // 1: this symplectic-Euler integrator collects the tile boxes (see gCollectTiles).
 layout(constant_id = 4) const uint kCollect = 0u;
 layout(push_constant) uniform Push {
@@ -148,7 +153,9 @@ vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v, out vec3 d, out vec3 x0) {
     // rebuild, sph/open_spawn.comp) fails both tests once it is `pendingMargin` past the plane:
     // the refill comes before the buffer's gap nears the lumen, in any flow (a plug flow alone
     // would never rebuild the list).
-    if (pending[i] != 0u && x.x - inflow.inletPlane >= inflow.pendingMargin) {
+    // (the outlet's images, of reverse flow, likewise before the outlet plane)
+    const float past = pending[i] == 1u ? x.x - inflow.inletPlane : pending[i] == 2u ? inflow.outletPlane - x.x : -1.0;
+    if (past >= inflow.pendingMargin) {
       r = 3.0e38;
     }
   }
@@ -253,14 +260,20 @@ float hemo_inflow_mean_speed(float time) {
   return inflow.meanSpeed * w * ramp;
 }
 
+// Set by hemo_inflow_driven: the velocity it gives is the particle's whole velocity (a
+// pressure end's buffer, which moves as a whole: across the section too, so its particles,
+// held at one pressure, cannot crowd), not only its axial one.
+bool gWholeVelocity = false;
+
 // True when a fluid particle at x (start of the step) is in the inflow zone; u: its velocity,
 // s2: its (r / R)^2.
 bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2) {
   u = vec3(0.0);
   s2 = 0.0;
   // (open ends: the outlet buffer [outletPlane, endX) is driven as the inlet's, hemo/sim/inflow.hpp)
-  const bool zone = (x.x >= inflow.zoneStart && x.x < inflow.zoneEnd) || (kInflow == 2u && x.x >= inflow.outletPlane);
-  if (kInflow == 0u || inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || !zone) {
+  const bool inlet = x.x >= inflow.zoneStart && x.x < inflow.zoneEnd;
+  const bool outlet = kInflow == 2u && x.x >= inflow.outletPlane;
+  if (kInflow == 0u || inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || !(inlet || outlet)) {
     return false;
   }
   const vec2 d = x.yz - vec2(inflow.centreY, inflow.centreZ);
@@ -270,43 +283,104 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
   }
   // (open ends: every particle in a buffer is driven, at rest beyond the radius, so none drifts
   // out through the tube's start or back into the lumen along the wall)
+  if (kInflow == 2u && ((inlet && inflow.inletPressure != 0u) || (outlet && inflow.outletPressure != 0u))) {
+    // A pressure end: the lumen's axial speed next to the plane at this radius (a zero
+    // gradient), plus what the lumen's pressure there lacks of the end's, or exceeds it by, over
+    // rho0 c0 (sph/open_profile.comp: the outgoing characteristic; without it a lumen at rest
+    // between two buffers at rest never starts to flow).
+    gWholeVelocity = true;
+    const uint plane = outlet ? 1u : 0u;
+    const float lumen = openProfile[2u * HEMO_OPEN_BINS + plane];
+    float excess = 0.0;  // Pa: the lumen's pressure over the end's (inlet: the end's over the lumen's)
+    if (lumen > 0.5 * HEMO_OPEN_NO_PRESSURE) {
+      const float ramp = inflow.ramp > 0.0 ? clamp(time / inflow.ramp, 0.0, 1.0) : 1.0;
+      const float end = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : inflow.pressures.x * ramp);
+      excess = outlet ? lumen - end : end - lumen;
+    }
+    u = vec3(s2 < 1.0 ? openProfile[plane * HEMO_OPEN_BINS + hemo_open_bin(s2)] + excess * inflow.pressures.w : 0.0, 0.0, 0.0);
+    return true;
+  }
   const float profile = inflow.profile == 1u ? (s2 < 1.0 ? 1.0 : 0.0) : 2.0 * max(1.0 - s2, 0.0);
   u = vec3(hemo_inflow_mean_speed(time) * profile, 0.0, 0.0);
   return true;
 }
 
+// Adds a value to bin `bin` of the open ends' sums in fixed point (value + offset) scale
+// (common/inflow.glsl): the low word, a carry into the high word where it wrapped, the count.
+void hemo_open_sum(uint bin, float value, float offset, float scale) {
+  const uint word = bin * HEMO_OPEN_SUM_WORDS;
+  const uint add = uint(clamp((value + offset) * scale, 0.0, 4294967040.0));
+  const uint before = atomicAdd(openSums[word], add);
+  if (before + add < before) {
+    atomicAdd(openSums[word + 1u], 1u);
+  }
+  atomicAdd(openSums[word + 2u], 1u);
+}
+
+// Slot i has left buffer b (1 inlet, 2 outlet) into the lumen: it spends its credit for b, or
+// owes b its image.
+void hemo_open_leave_buffer(uint i, uint b) {
+  if (normals[i].w == float(b)) {
+    normals[i].w = 0.0;
+  } else {
+    pending[i] = b;
+  }
+}
+
+// Slot i has come back from the lumen into buffer b: it cancels the image it owes b, or earns
+// a credit for b.
+void hemo_open_enter_buffer(uint i, uint b) {
+  if (pending[i] == b) {
+    pending[i] = 0u;
+  } else {
+    normals[i].w = float(b);
+  }
+}
+
 // Open ends (kInflow 2), after the update of fluid slot i from `start` to x: the plane
-// crossings, and parking past either end.
+// crossings, and parking past either end or outside the domain.
 void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
-  // The buffer holds the same particles whatever crosses the plane: a particle that comes back
-  // into the buffer cancels the image it still owes, or else earns a credit (normals.w = 1:
-  // fluid particles carry no normal, and open ends use summation density) that its next
-  // crossing into the lumen spends instead of asking for an image. (Near the wall, where the
-  // flow is slow, particles cross back and forth; each forward crossing made an image, and the
-  // buffer filled up.)
+  if ((inflow.inletPressure | inflow.outletPressure) != 0u) {
+    // The lumen's axial speeds in the slabs next to the planes, by radius, for the pressure
+    // ends' buffers (their zero gradient along the axis).
+    const vec2 d = x.yz - vec2(inflow.centreY, inflow.centreZ);
+    const float s2 = dot(d, d) / (inflow.radius * inflow.radius);
+    const bool nearInlet = x.x >= inflow.inletPlane && x.x < inflow.inletPlane + inflow.pressures.z;
+    const bool nearOutlet = x.x < inflow.outletPlane && x.x >= inflow.outletPlane - inflow.pressures.z;
+    if (s2 < 1.0 && (nearInlet || nearOutlet)) {
+      hemo_open_sum((nearOutlet ? HEMO_OPEN_BINS : 0u) + hemo_open_bin(s2), v.x, HEMO_OPEN_SPEED_OFFSET, HEMO_OPEN_FIXED_SCALE);
+      hemo_open_sum(2u * HEMO_OPEN_BINS + (nearOutlet ? 1u : 0u), state(i).y, HEMO_OPEN_PRESSURE_OFFSET,
+                    HEMO_OPEN_PRESSURE_SCALE);
+    }
+  }
+  // Each buffer holds the same particles whatever crosses its plane. A particle that leaves a
+  // buffer into the lumen owes the buffer its image at the buffer's far end (pending 1: the
+  // inlet's, a buffer length upstream; 2: the outlet's, of reverse flow, a buffer length
+  // downstream); one that comes back into the buffer cancels the image it still owes, or else
+  // earns a credit (normals.w = 1 for the inlet, 2 for the outlet: fluid particles carry no
+  // normal, and open ends use summation density) that its next crossing into the lumen spends
+  // instead of asking for an image. (Near the wall, where the flow is slow, particles cross
+  // back and forth; each forward crossing made an image, and the buffer filled up.)
   if (start.x < inflow.inletPlane && x.x >= inflow.inletPlane) {
     atomicAdd(openCounters[HEMO_OPEN_COUNTER_IN], 1u);
-    if (normals[i].w != 0.0) {
-      normals[i].w = 0.0;
-    } else {
-      pending[i] = 1u;
-    }
+    hemo_open_leave_buffer(i, 1u);
   } else if (start.x >= inflow.inletPlane && x.x < inflow.inletPlane) {
     atomicAdd(openCounters[HEMO_OPEN_COUNTER_IN_BACK], 1u);
-    if (pending[i] != 0u) {
-      pending[i] = 0u;
-    } else {
-      normals[i].w = 1.0;
-    }
+    hemo_open_enter_buffer(i, 1u);
   }
   if (start.x < inflow.outletPlane && x.x >= inflow.outletPlane) {
     atomicAdd(openCounters[HEMO_OPEN_COUNTER_OUT], 1u);
+    hemo_open_enter_buffer(i, 2u);
   } else if (start.x >= inflow.outletPlane && x.x < inflow.outletPlane) {
     atomicAdd(openCounters[HEMO_OPEN_COUNTER_OUT_BACK], 1u);
+    hemo_open_leave_buffer(i, 2u);
   }
   const bool pastEnd = x.x >= inflow.endX;
-  if (pastEnd || x.x < inflow.startX) {
-    atomicAdd(openCounters[pastEnd ? HEMO_OPEN_COUNTER_PARKED_END : HEMO_OPEN_COUNTER_PARKED_START], 1u);
+  // Blood that has left the domain through a tear (across y or z) is parked too, and counted.
+  const bool outside = any(lessThan(x.yz, inflow.box.xy)) || any(greaterThan(x.yz, inflow.box.zw));
+  if (pastEnd || x.x < inflow.startX || outside) {
+    atomicAdd(openCounters[outside ? HEMO_OPEN_COUNTER_PARKED_OUTSIDE
+                           : pastEnd ? HEMO_OPEN_COUNTER_PARKED_END : HEMO_OPEN_COUNTER_PARKED_START], 1u);
     pending[i] = 0u;  // (the image would be taken from the parking point)
     x.xyz = inflow.parking.xyz;
     v = vec4(0.0, 0.0, 0.0, float(HEMO_KIND_PARKED));
@@ -349,7 +423,10 @@ vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running, out vec3 d,
     // particles that enter the zone too close can still part (a fully kinematic zone froze
     // such pairs together: 6-13 kPa at its far end and an emptied slice after it).
     v.x = u.x;
-    if (kMode == HEMO_INTEGRATE_RK2_FULL) {
+    if (gWholeVelocity) {
+      v.yz = vec2(0.0);
+      x.xyz = start + u * dt;
+    } else if (kMode == HEMO_INTEGRATE_RK2_FULL) {
       x.x = start.x + u.x * dt;  // across the section: the midpoint rule as everywhere
     } else {
       x.xyz += v.xyz * dt;
@@ -428,6 +505,10 @@ void main() {
       if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u, s2)) {
         vMid.x = u.x;
         drift.x = u.x;
+        if (gWholeVelocity) {
+          vMid = u;
+          drift = u;
+        }
       }
       velocities[i] = vec4(vMid, v.w);
       positions[i] = vec4(hemo_wrap_position(x.xyz + drift * (0.5 * dt)), hemo_sph_mass(x.w, a.w));

@@ -45,7 +45,7 @@ void main() {
   }
   if (pc.mode == HEMO_SPAWN_SCATTER) {
     if (pending[i] != 0u) {
-      crossers[scan[i]] = i;
+      crossers[scan[i]] = i | (pending[i] == 2u ? 0x80000000u : 0u);  // (bit 31: the outlet's)
     }
     return;
   }
@@ -68,9 +68,11 @@ void main() {
   if (k >= crossings) {
     return;
   }
-  const uint c = crossers[k];
+  const uint c = crossers[k] & 0x7fffffffu;
   const vec4 x = positions[c];
-  positions[i] = vec4(x.x - inflow.parking.w, x.yzw);
+  // (the inlet's image a buffer length upstream; the outlet's, of reverse flow, downstream)
+  const float shift = (crossers[k] & 0x80000000u) != 0u ? inflow.outletPlane - inflow.endX : inflow.parking.w;
+  positions[i] = vec4(x.x - shift, x.yzw);
   velocities[i] = velocities[c];
   normals[i] = normals[c];
   atomicAdd(counters[HEMO_OPEN_COUNTER_SPAWNED], 1u);

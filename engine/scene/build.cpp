@@ -54,7 +54,41 @@ AneurysmSpec vesselSpec(const Vessel& v, const sim::SphSettings& fluid) {
   return a;
 }
 
+namespace {
+// Open ends: the free fluid slots (vessel.outlet.reserve_particles, or twice the inlet buffer's
+// fluid particles and half the fluid) for the particles `set` holds; 0 without open ends.
+// `vessel`: the particles of the vessel alone (its wall and its fluid).
+std::uint32_t reserveFor(const Scene& s, const ParticleSet& set, std::uint32_t vessel) {
+  if (!s.vessel || !s.vessel->inflow || !s.vessel->inflow->open) return 0;
+  if (s.vessel->reserveParticles != 0) return s.vessel->reserveParticles;
+  const sim::Inflow& in = *s.vessel->inflow;
+  std::uint32_t buffer = 0, fluid = 0;
+  for (std::size_t i = 0; i < vessel && i < set.positions.size(); ++i) {
+    if (set.velocities[i].w != float(sim::ParticleKind::Fluid)) continue;
+    ++fluid;
+    buffer += set.positions[i].x >= in.zoneStart && set.positions[i].x < in.zoneEnd ? 1u : 0u;
+  }
+  return 2 * buffer + fluid / 2;
+}
+
+// The scene's particles without the free slots; `vessel`: how many come first from the vessel.
+SceneBuild buildWithoutReserve(const Scene& s, std::uint32_t& vessel);
+}  // namespace
+
 SceneBuild buildScene(const Scene& s) {
+  std::uint32_t vessel = 0;
+  SceneBuild out = buildWithoutReserve(s, vessel);
+  ParticleSet& set = out.particles;
+  // Open ends: the free fluid slots, parked (interface/sph.h, HEMO_KIND_PARKED), after all else.
+  const std::uint32_t reserve = reserveFor(s, set, vessel);
+  for (std::uint32_t k = 0; k < reserve; ++k) set.add(s.vessel->inflow->open->parking, s.sph.particleMass(), float(HEMO_KIND_PARKED));
+  set.parked = reserve;
+  set.numberIds();
+  return out;
+}
+
+namespace {
+SceneBuild buildWithoutReserve(const Scene& s, std::uint32_t& vessel) {
   SceneBuild out;
   ParticleSet& set = out.particles;
   if (s.vessel) {
@@ -96,6 +130,7 @@ SceneBuild buildScene(const Scene& s) {
       throw SceneError(s.name + ": vessel: " + e.what());
     }
   }
+  vessel = set.size();
   const ParticleSet rest = buildParticles(s);
   // buildParticles gives fluid then boundary; append both after the vessel.
   for (std::uint32_t i = 0; i < rest.size(); ++i) {
@@ -105,33 +140,20 @@ SceneBuild buildScene(const Scene& s) {
   }
   set.fluid += rest.fluid;
   set.boundary += rest.boundary;
-  if (s.vessel && s.vessel->inflow && s.vessel->inflow->open) {
-    // Open ends: the free fluid slots, parked (interface/sph.h, HEMO_KIND_PARKED), after all else.
-    const sim::Inflow& in = *s.vessel->inflow;
-    std::uint32_t reserve = s.vessel->reserveParticles;
-    if (reserve == 0) {
-      std::uint32_t buffer = 0;
-      for (std::size_t i = 0; i < set.positions.size(); ++i) {
-        const bool fluid = set.velocities[i].w == float(sim::ParticleKind::Fluid);
-        buffer += fluid && set.positions[i].x >= in.zoneStart && set.positions[i].x < in.zoneEnd ? 1u : 0u;
-      }
-      reserve = 2 * buffer + set.fluid / 10;
-    }
-    for (std::uint32_t k = 0; k < reserve; ++k) set.add(in.open->parking, s.sph.particleMass(), float(HEMO_KIND_PARKED));
-    set.parked = reserve;
-  }
-  set.numberIds();
   return out;
 }
+}  // namespace
 
 std::uint64_t countSceneParticles(const Scene& s) {
   if (!s.vessel) return countParticles(s);
   // A vessel has thousands to hundreds of thousands of particles: building it is the
-  // simplest exact count.
+  // simplest exact count (its free slots counted, not made).
   Scene vesselOnly = s;
   vesselOnly.blocks.clear();
   vesselOnly.tanks.clear();
-  return countParticles(s) + buildScene(vesselOnly).particles.size();
+  std::uint32_t vessel = 0;
+  const ParticleSet set = buildWithoutReserve(vesselOnly, vessel).particles;
+  return countParticles(s) + set.size() + reserveFor(s, set, vessel);
 }
 
 namespace {

@@ -148,7 +148,9 @@ const std::vector<Field>& schema() {
            {"substeps", Kind::Integer, "1", 1, 256, false, 1, "The wall's substeps per fluid step: with N > 1 the wall takes N substeps of dt / N (its springs and rupture evaluated at each, the fluid's force held over the step), so its springs limit the step to N time_step_factor sqrt(m / sum k) instead of time_step_factor sqrt(m / sum k). Pick N about the fluid's own step over the springs' limit (hemo-run prints both). Symplectic Euler only."},
            {"inflow", Kind::Section, "", 0, 0, false, Json::object(), "Driven inflow (periodic vessels): fluid in a zone at the start of the tube moves at a prescribed axial velocity, and what leaves the far end comes back through the periodic seam (recycled; the particle count never changes). A pump: it sets the flow rate whatever the pressure.", {},
             {
-                {"profile", Kind::Choice, "", 0, 0, false, "none", "Velocity profile over the cross-section: parabolic (Poiseuille, peak 2x the mean), plug (uniform), or none (no inflow).", {"none", "parabolic", "plug"}},
+                {"profile", Kind::Choice, "", 0, 0, false, "none", "Velocity profile over the cross-section: parabolic (Poiseuille, peak 2x the mean), plug (uniform), or none (no inflow). Open ends with driven_by pressure: the profile the inlet's speed is measured against is the lumen's own, and this only switches the inlet on (give parabolic).", {"none", "parabolic", "plug"}},
+                {"driven_by", Kind::Choice, "", 0, 0, false, "velocity", "velocity: the zone moves at the profile and mean speed; pressure (open ends with a pressure outlet only): the inlet buffer holds pressure_Pa and moves at the lumen's own axial velocity next to it, radius by radius, so the pressure difference drives the flow.", {"velocity", "pressure"}},
+                {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "driven_by pressure: the inlet buffer's pressure over fluid.background_pressure_Pa, rising over ramp_s."},
                 {"mean_speed_m_s", Kind::Number, "m/s", -1e3, 1e3, false, 0.0, "Mean speed U over the cross-section (negative: flow along -x)."},
                 {"zone_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the driven zone from the tube's start; at least the kernel support 2h, at most half the tube."},
                 {"pulse_period_s", Kind::Number, "s", 0, 1e6, false, 0.0, "Period of the waveform (0: constant speed)."},
@@ -159,9 +161,10 @@ const std::vector<Field>& schema() {
             }},
            {"outlet", Kind::Section, "", 0, 0, false, Json::object(), "Open ends (tubes and aneurysms along x, with vessel.inflow, on a domain whose x axis is not periodic): the inflow zone is the inlet buffer, fed by an image of each particle that leaves it into the lumen; the outlet buffer at the tube's end moves with the inflow's velocity profile and speed, and fluid past either end of the tube leaves the simulation (its slot parked for the inlet to reuse). The lumen's mass balance is counted exactly (hemo-run's summary, open_*).", {},
             {
-                {"condition", Kind::Choice, "", 0, 0, false, "none", "none: the vessel is periodic and recycles its outflow (vessel.inflow); flow: open ends, the outlet buffer drawing the inlet's flow rate.", {"none", "flow"}},
+                {"condition", Kind::Choice, "", 0, 0, false, "none", "none: the vessel is periodic and recycles its outflow (vessel.inflow); flow: open ends, the outlet buffer drawing the inlet's flow rate; pressure: open ends, the outlet buffer holding pressure_Pa and moving at the lumen's own axial velocity next to it, radius by radius (zero gradient).", {"none", "flow", "pressure"}},
+                {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "condition pressure: the outlet buffer's pressure over fluid.background_pressure_Pa."},
                 {"buffer_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the outlet buffer at the tube's end (0: the inflow zone's length); at least the kernel support 2h."},
-                {"reserve_particles", Kind::Integer, "1", 0, 1e9, false, 0, "Free fluid slots for the inlet's images beyond those the outlet frees (0: automatic, twice the inlet buffer's particles and a tenth of the fluid). A run that runs out stops and says so."},
+                {"reserve_particles", Kind::Integer, "1", 0, 1e8, false, 0, "Free fluid slots for the buffers' images beyond those the outlet frees (0: automatic, twice the inlet buffer's particles and half the vessel's fluid: a sac that swells draws blood in through both ends). A run that runs out stops and says so."},
             }},
        }},
       {"forces", Kind::Section, "", 0, 0, false, Json::object(), "Body forces.", {},
@@ -418,6 +421,12 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
   } else if (f.period > 0.0f) {
     c.fail("vessel.inflow.waveform", "is required when vessel.inflow.pulse_period_s is set (the samples of one period)");
   }
+  const bool byPressure = in["driven_by"].get<std::string>() == "pressure";
+  if (byPressure && !open) c.fail("vessel.inflow.driven_by", "\"pressure\" needs open ends with a pressure outlet (vessel.outlet.condition \"pressure\")");
+  if (!byPressure && raw.contains("pressure_Pa")) c.fail("vessel.inflow.pressure_Pa", "only applies with vessel.inflow.driven_by \"pressure\"");
+  if (byPressure && raw.contains("mean_speed_m_s")) c.fail("vessel.inflow.mean_speed_m_s", "does not apply to a pressure inlet (its speed is the lumen's)");
+  if (byPressure && !f.waveform.empty()) c.fail("vessel.inflow.waveform", "does not apply to a pressure inlet (yet)");
+  if (byPressure) f.meanSpeed = 1.0f;  // (unused: the pressure inlet moves at the lumen's measured speed)
   if (f.meanSpeed == 0.0f) c.fail("vessel.inflow.mean_speed_m_s", "must be non-zero when an inflow profile is chosen");
   if (!(s.sph.backgroundPressure > 0.0f) && !open) {
     c.fail("fluid.background_pressure_Pa", "must be positive with a vessel.inflow: the lumen pressure is what pushes the fluid into the zone behind the pump (without it the zone runs empty); a few times rho U^2 is enough");
@@ -426,9 +435,10 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
 }
 
 // vessel.outlet (after parseInflow): open ends. `out`: the checked section.
-void parseOutlet(const Checker& c, const Json& out, Scene& s, Vessel& w) {
-  if (out["condition"].get<std::string>() == "none") {
-    for (const char* key : {"buffer_length_m", "reserve_particles"}) {
+void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, Scene& s, Vessel& w) {
+  const std::string condition = out["condition"].get<std::string>();
+  if (condition == "none") {
+    for (const char* key : {"buffer_length_m", "reserve_particles", "pressure_Pa"}) {
       if (out.contains(key) && out[key] != Json(0) && out[key] != Json(0.0)) {
         c.fail(std::string("vessel.outlet.") + key, "is set but vessel.outlet.condition is \"none\" (choose \"flow\")");
       }
@@ -444,6 +454,13 @@ void parseOutlet(const Checker& c, const Json& out, Scene& s, Vessel& w) {
     c.fail("vessel.inflow.hold_lumen_pressure", "cannot be used with open ends (the zone's mass supply is for a closed, recycled loop)");
   }
   if (!(w.inflow->meanSpeed > 0.0f)) c.fail("vessel.inflow.mean_speed_m_s", "must be positive with open ends (the inlet is at the tube's start)");
+  const bool pressureInlet = inflowSection["driven_by"].get<std::string>() == "pressure";
+  if (pressureInlet && condition != "pressure") {
+    c.fail("vessel.outlet.condition", "must be \"pressure\" with a pressure inlet (vessel.inflow.driven_by \"pressure\")");
+  }
+  if (condition != "pressure" && out["pressure_Pa"].get<double>() != 0.0) {
+    c.fail("vessel.outlet.pressure_Pa", "only applies with vessel.outlet.condition \"pressure\"");
+  }
   if (!w.inflow->waveform.empty()) {
     for (float v : w.inflow->waveform) {
       if (v < 0.0f) c.fail("vessel.inflow.waveform", "must not reverse the flow with open ends (negative sample " + fmt(v) + ")");
@@ -484,6 +501,14 @@ void parseOutlet(const Checker& c, const Json& out, Scene& s, Vessel& w) {
   // One metre past the domain's end, at its lowest corner: beyond every support, in the grid's
   // corner cell (interface/sph.h, HEMO_KIND_PARKED).
   o.parking = glm::vec3(s.domain.max.x + 1.0f, s.domain.min.y, s.domain.min.z);
+  o.boxMin = glm::vec2(s.domain.min.y, s.domain.min.z);
+  o.boxMax = glm::vec2(s.domain.max.y, s.domain.max.z);
+  o.pressureInlet = pressureInlet;
+  o.inletPressure = inflowSection["pressure_Pa"].get<float>();
+  o.pressureOutlet = condition == "pressure";
+  o.outletPressure = out["pressure_Pa"].get<float>();
+  o.slab = h2;  // the lumen's slab next to each plane whose speeds a pressure end takes
+  o.characteristic = 1.0f / (s.sph.restDensity * s.sph.soundSpeed);
   w.inflow->open = o;
   w.reserveParticles = out["reserve_particles"].get<std::uint32_t>();
   s.sph.parkedSlots = true;
@@ -685,7 +710,7 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s, con
   }
   parseInflow(c, v["inflow"], raw.contains("inflow") ? raw["inflow"] : Json::object(), s, w,
               v["outlet"]["condition"].get<std::string>() != "none");
-  parseOutlet(c, v["outlet"], s, w);
+  parseOutlet(c, v["outlet"], v["inflow"], s, w);
   if (w.radius < 2.0f * s.sph.spacing) c.fail("vessel.radius_m", "must be at least two particle spacings (" + fmt(2.0 * s.sph.spacing) + " m)");
   w.periodic = s.sph.periodic[0];
   if (s.sph.periodic[1] || s.sph.periodic[2]) c.fail("domain.periodic", "a vessel allows only x to be periodic (its axis)");

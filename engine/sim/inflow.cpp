@@ -50,6 +50,10 @@ void Inflow::validate() const {
             "open ends: the refill margin must be positive and shorter than the inlet buffer");
     require(!holdPressure, "open ends: the zone cannot hold the lumen pressure (its mass supply is for closed loops)");
     for (int a = 0; a < 3; ++a) require(std::isfinite(o.parking[a]), "open ends: the parking point must be finite");
+    require(!o.pressureInlet || o.pressureOutlet, "open ends: a pressure inlet needs a pressure outlet");
+    require(std::isfinite(o.inletPressure) && std::isfinite(o.outletPressure), "open ends: the pressures must be finite (Pa)");
+    require(!(o.pressureInlet || o.pressureOutlet) || (std::isfinite(o.slab) && o.slab > 0.0f),
+            "open ends: a pressure end needs a slab of positive width");
   }
 }
 
@@ -87,6 +91,16 @@ InflowParams makeInflowParams(const Inflow& in, float restDensity, float particl
     p.parking[2] = in.open->parking.z;
     p.parking[3] = in.zoneEnd - in.zoneStart;
     p.pendingMargin = in.open->pendingMargin;
+    p.inletPressure = in.open->pressureInlet ? 1u : 0u;
+    p.outletPressure = in.open->pressureOutlet ? 1u : 0u;
+    p.pressures[0] = in.open->inletPressure;
+    p.pressures[1] = in.open->outletPressure;
+    p.pressures[2] = in.open->slab;
+    p.pressures[3] = in.open->characteristic;
+    p.box[0] = in.open->boxMin.x;
+    p.box[1] = in.open->boxMin.y;
+    p.box[2] = in.open->boxMax.x;
+    p.box[3] = in.open->boxMax.y;
   }
   return p;
 }

@@ -511,9 +511,10 @@ void Simulation::checkStatus(std::uint64_t batchFirstStep, const SphStatus& stat
   }
   if (status.openShortfall > 0) {
     std::ostringstream msg;
-    msg << "the open inlet ran out of free fluid slots (in the batch from step " << batchFirstStep << ", t = " << time()
-        << " s): " << status.openShortfall << " particles that entered the lumen found no slot for their image in the "
-        << "inlet buffer; raise vessel.outlet.reserve_particles";
+    msg << "the open ends ran out of free fluid slots (in the batch from step " << batchFirstStep << ", t = " << time()
+        << " s): particles that entered the lumen found no slot for their images in the buffers (" << status.openShortfall
+        << " times, counted at each refill); raise vessel.outlet.reserve_particles (blood that leaves the vessel frees "
+        << "its slot only when it leaves the domain)";
     throw SimulationError(msg.str());
   }
   if (status.nonFinite == 0) return;
@@ -750,7 +751,9 @@ void Simulation::resume(const std::filesystem::path& path) {
 }
 
 std::uint32_t Simulation::escapedParticles() const {
-  return scene::countEscaped(scene_, store_->readPositions(), store_->readVelocities());
+  // (with open ends, blood that left the domain was parked: counted on the GPU)
+  const std::uint32_t parked = solver_->openEnds() ? solver_->readOpenCounts().parkedOutside : 0u;
+  return scene::countEscaped(scene_, store_->readPositions(), store_->readVelocities()) + parked;
 }
 
 std::uint32_t Simulation::activeFluidParticles() const {

@@ -197,6 +197,9 @@ SphSettings resolveNeighbourSearch(const gpu::Context& context, const ParticleSt
   }
   return s;
 }
+// The open ends' profile bins (common/inflow.glsl), and its HEMO_OPEN_NO_PRESSURE.
+constexpr std::uint64_t kOpenBins = 16, kOpenSumWords = 3;
+constexpr float HEMO_OPEN_NO_PRESSURE_VALUE = -1.0e30f;
 // The boundary pass's indirect arguments of each page of the list, apart by the largest
 // storage-buffer offset alignment Vulkan allows.
 constexpr std::uint64_t kActiveArgsStride = 256;
@@ -551,7 +554,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       solveDepth_(context, HEMO_DFSPH_DEPTH_COUNT * 4, gpu::MemoryUse::Device, "dfsph recorded depth"),
       recordedIterations_(settings_.solverMaxIterations),
       openCounters_(context, HEMO_OPEN_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "open ends' counters"),
-      pending_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "open inlet's crossers owed an image") {
+      pending_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "open inlet's crossers owed an image"),
+      openSums_(context, (2 * kOpenBins + 2) * kOpenSumWords * 4, gpu::MemoryUse::Device, "open ends' speed sums"),
+      openProfile_(context, (2 * kOpenBins + 2) * 4, gpu::MemoryUse::Device, "open ends' speed profiles") {
   const SphSettings& settings = settings_;  // (Auto resolved)
   cellWalk_ = settings.neighbourSearch == NeighbourSearch::Cells;
   const bool contiguous = contiguousList(context, settings);
@@ -641,7 +646,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                    : settings.integrator == Integrator::Rk2Midpoint  ? 2u
                                                                                      : 1u;
   density_ = &cache.get({pairPass("sph/density"), HEMO_DENSITY_BINDING_COUNT, sizeof(DensityPush), kWorkgroup, pairSpecialization({continuity, listWidth_}),
-                         1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK,
+                         1u << HEMO_DENSITY_BINDING_PARAMS | 1u << HEMO_DENSITY_BINDING_CLOCK | 1u << HEMO_DENSITY_BINDING_INFLOW,
                          1u << HEMO_DENSITY_BINDING_POSITIONS | 1u << HEMO_DENSITY_BINDING_VELOCITIES |
                              1u << HEMO_DENSITY_BINDING_NCOUNT | 1u << HEMO_DENSITY_BINDING_NLIST |
                              1u << HEMO_DENSITY_BINDING_NORMALS});
@@ -789,7 +794,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                               gpu::texelBinding(HEMO_DENSITY_BINDING_NORMALS, &a.normals, gpu::texel::kVec4),
                                               {HEMO_DENSITY_BINDING_PAIR_POSITION, &pairPosition_},
                                               {HEMO_DENSITY_BINDING_PAIR_COUNT, &pairCount_},
-                                              {HEMO_DENSITY_BINDING_PAIR_LIST, &pairList_[p]}}));
+                                              {HEMO_DENSITY_BINDING_PAIR_LIST, &pairList_[p]},
+                                              {HEMO_DENSITY_BINDING_INFLOW, &inflow_}}));
   }
   // The boundary-pressure pass and its cluster form share their bindings but for the lists.
   auto boundarySetFor = [&](const gpu::ComputePipeline& pipeline, gpu::Binding counts, gpu::Binding list,
@@ -875,7 +881,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_TILE_BOXES, &tileBoxes_},
                                        {HEMO_INTEGRATE_BINDING_TILE_OCCUPIED, &tileOccupied_},
                                        {HEMO_INTEGRATE_BINDING_OPEN_COUNTERS, &openCounters_},
-                                       {HEMO_INTEGRATE_BINDING_PENDING, &pending_}});
+                                       {HEMO_INTEGRATE_BINDING_PENDING, &pending_},
+                                       {HEMO_INTEGRATE_BINDING_OPEN_SUMS, &openSums_},
+                                       {HEMO_INTEGRATE_BINDING_OPEN_PROFILE, &openProfile_}});
   // (both variants' layouts are the same: one set serves them)
   rebuildDecideSet_ = rebuildDecide_[1]->makeSet({{HEMO_DECIDE_BINDING_TILE_GRID, &tileGrid_},
                                                   {HEMO_DECIDE_BINDING_TILE_BOXES, &tileBoxes_},
@@ -1045,6 +1053,12 @@ void SphSolver::setInflow(const Inflow& inflow) {
     for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, inflowVariant());
     integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, inflowVariant(), true);
   }
+  pressureEnds_ = p.inletPressure != 0u || p.outletPressure != 0u;
+  if (pressureEnds_ && !openProfilePass_) {
+    openProfilePass_ = &context_->pipelines().get({"sph/open_profile", HEMO_OPROFILE_BINDING_COUNT, 0, kWorkgroup, {}, 0u, 0u});
+    openProfileSet_ = openProfilePass_->makeSet({{HEMO_OPROFILE_BINDING_SUMS, &openSums_},
+                                                 {HEMO_OPROFILE_BINDING_PROFILE, &openProfile_}});
+  }
   if (openOn_ && !spawn_) {
     const std::uint64_t n = std::max(particles_->fluidCount(), 1u);
     spawnScan_ = gpu::Buffer(*context_, (2 * n + 1) * 4, gpu::MemoryUse::Device, "open inlet's refill scan");
@@ -1085,7 +1099,7 @@ SphSolver::OpenCounts SphSolver::readOpenCounts() const {
   const std::vector<std::uint32_t> c = openCounters_.readback<std::uint32_t>(HEMO_OPEN_COUNTER_COUNT);
   return OpenCounts{c[HEMO_OPEN_COUNTER_IN], c[HEMO_OPEN_COUNTER_IN_BACK], c[HEMO_OPEN_COUNTER_OUT],
                     c[HEMO_OPEN_COUNTER_OUT_BACK], c[HEMO_OPEN_COUNTER_PARKED_END], c[HEMO_OPEN_COUNTER_PARKED_START],
-                    c[HEMO_OPEN_COUNTER_SPAWNED]};
+                    c[HEMO_OPEN_COUNTER_SPAWNED], c[HEMO_OPEN_COUNTER_PARKED_OUTSIDE]};
 }
 
 void SphSolver::setBackgroundPressure(float pascals) {
@@ -1105,6 +1119,12 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rec.fill(status_, 0);
   rec.fill(openCounters_, 0u);
   rec.fill(pending_, 0u);
+  rec.fill(openSums_, 0u);
+  rec.fill(openProfile_, 0u, 0, 2 * kOpenBins * 4);  // (the buffers start at rest)
+  float none = HEMO_OPEN_NO_PRESSURE_VALUE;
+  std::uint32_t noneBits;
+  std::memcpy(&noneBits, &none, 4);
+  rec.fill(openProfile_, noneBits, 2 * kOpenBins * 4, 8);  // (no pressure measured yet)
   rec.transferToTransfer();  // the fills below overwrite some of these words
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_BAD_INPUT_ID * 4, 8);  // and BAD_FORCE_ID
@@ -1356,6 +1376,9 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
     rec.dispatch(*rebuildDecide_[tiles], rebuildDecideSet_,
                  DecidePush{rebuildThreshold(), rebuildGate_.slots(), moving < n ? 1u : 0u, groups.x, groups.y},
                  rebuildDecide_[tiles]->groupsFor(1u));
+    if (pressureEnds_) {  // (the pressure ends' profiles for the next step, beside the decision)
+      rec.dispatch(*openProfilePass_, openProfileSet_, nullptr, 0, openProfilePass_->groupsFor(2 * kOpenBins + 2));
+    }
     if (tiles != 0u) {
       integrateArgsValid_ = true;
       integrateArgsGroups_ = groups;
@@ -1572,7 +1595,7 @@ void SphSolver::checkpointBuffers(std::vector<gpu::Buffer*>& out) {
                          &integrateArgs_, &clock_, &status_, &log_, &inflow_, &savedPos_, &savedVel_, &stepDt_, &tauA_,
                          &tauB_, &viscosity_, &dtPartials_, &dtCounts_, &dtResult_, &checkPartials_, &checkCount_, &checkResult_,
                          &tileGrid_, &tileBoxes_, &tileResult_, &tileOccupied_, &kappa_, &solvePartials_, &solveStats_,
-                         &openCounters_, &pending_});
+                         &openCounters_, &pending_, &openSums_, &openProfile_});
   pressureGate_.checkpointBuffers(out);
   if (wall_) wall_->checkpointBuffers(out);
   if (tools_) tools_->checkpointBuffers(out);

@@ -27,18 +27,21 @@
 // density), and the cap bounds how long a bleed can be fed.
 //
 // Open ends (Inflow::open): the vessel is not periodic. The zone is then the inlet buffer, at
-// the tube's start, and a second driven zone of the outlet's length at the tube's end is the
-// outlet buffer (both with the same prescribed axial velocity: the outlet draws the inlet's
-// flow rate, a flow-controlled outlet). Between the inlet plane (the zone's end) and the outlet
-// plane lies the lumen. Fluid past either end of the tube is parked (HEMO_KIND_PARKED of
-// interface/sph.h: a free fluid slot far outside the domain, which no pass sees), and every
-// particle that crosses the inlet plane gets its image a zone length upstream, at the
-// buffer's far end, in a parked slot (sph/open_spawn.comp), so the buffer always holds the
-// same particles, as if it were fed through a periodic seam. The refill runs on the GPU at the
-// start of every step that rebuilds the neighbour list; a crosser still owed its image forces
-// a rebuild once it is `pendingMargin` past the inlet plane, so the gap at the buffer's far
-// end never reaches within the support of the buffer particles the lumen sees. The crossings
-// of both planes are counted (integers), so the lumen's mass balance is known exactly.
+// the tube's start, and a second zone of the outlet's length at the tube's end is the outlet
+// buffer; between the inlet plane (the zone's end) and the outlet plane lies the lumen. The
+// outlet buffer moves at the inflow's profile and speed (a flow-controlled outlet) or, as a
+// pressure end (below), holds a pressure. Fluid past either end of the tube, or out of the
+// domain through a tear, is parked (HEMO_KIND_PARKED of interface/sph.h: a free fluid slot far
+// outside the domain, which no pass sees), and every particle that leaves a buffer into the
+// lumen gets its image at the buffer's far end, a buffer length away, in a parked slot
+// (sph/open_spawn.comp), so each buffer always holds the same particles, as if it were fed
+// through a periodic seam (the outlet's only when the flow reverses). The refill runs on the
+// GPU at the start of every step that rebuilds the neighbour list; a crosser still owed its
+// image forces a rebuild once it is `pendingMargin` into the lumen, so the gap at the buffer's
+// far end never reaches within the support of the buffer particles the lumen sees. The
+// crossings of both planes are counted (integers), so the lumen's mass balance is known
+// exactly.
+#include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
 #include <cstdint>
@@ -53,6 +56,24 @@ struct OpenEnds {
   float outletLength = 0.0f;  // m, the outlet buffer [endX - outletLength, endX)
   float pendingMargin = 0.0f; // m (see above)
   glm::vec3 parking{0.0f};    // m, where parked slots lie (outside the domain, beyond every support)
+  glm::vec2 boxMin{-3.0e38f}, boxMax{3.0e38f};  // m, the domain across the axis (y, z): fluid beyond is parked
+  // Pressure ends: a buffer that holds a pressure (Pa over the background pressure; the
+  // inlet's rises over the inflow's ramp) instead of the Tait law's, and moves at the lumen's
+  // axial velocity next to its plane, radius by radius (a zero gradient along the axis), from
+  // a slab of `slab` m (Tafuni et al. 2018 prescribe the pressure and extrapolate the
+  // velocity likewise). Without: the inlet moves at the inflow's profile, and so does the
+  // outlet (a flow-controlled outlet). A pressure inlet needs a pressure outlet.
+  bool pressureInlet = false;
+  float inletPressure = 0.0f;   // Pa
+  bool pressureOutlet = false;
+  float outletPressure = 0.0f;  // Pa
+  float slab = 0.0f;            // m
+  // Each pressure end's buffer also moves faster by the pressure the lumen next to its plane
+  // has in excess of the outlet's (the inlet: lacks of the inlet's) times this, 1 / (rho0 c0)
+  // (m/s per Pa): the outgoing characteristic of the acoustic waves (u + p / (rho c) carried
+  // out), which sets a lumen at rest between buffers at rest in motion and lets the pressure
+  // waves leave instead of reflecting.
+  float characteristic = 0.0f;
 };
 
 struct Inflow {
@@ -91,9 +112,11 @@ struct InflowParams {
   float inletPlane, outletPlane, startX, endX;
   float parking[4];  // xyz m; w: the spawn's shift upstream (the zone's length)
   float pendingMargin;
-  std::uint32_t open, reserved2, reserved3;
+  std::uint32_t open, inletPressure, outletPressure;
+  float pressures[4];  // inlet's, outlet's (Pa over the background), slab (m), 1 / (rho0 c0)
+  float box[4];        // the domain across the axis: min y, min z, max y, max z (m)
 };
-static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + 48);
+static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + 80);
 
 // `restDensity` rho0 (kg/m^3) and `particleMass` m0 (kg) of the fluid.
 InflowParams makeInflowParams(const Inflow& inflow, float restDensity, float particleMass);

@@ -190,7 +190,8 @@ class Simulation {
   std::uint32_t wallParticles() const { return wall_; }
   std::uint32_t springs() const { return springs_; }
   // Fluid particles that have left the scene now: outside the domain, or outside the
-  // vessel's wall (through a rupture).
+  // vessel's wall (through a rupture); with open ends, also those parked once they had left
+  // the domain across the axis.
   std::uint32_t escapedParticles() const;
   // Particles whose state is no longer finite (0 unless the run stopped with a SimulationError).
   std::uint32_t lostParticles() const;

@@ -308,6 +308,7 @@ class SphSolver {
   // Open ends: the crossing counters (HEMO_OPEN_COUNTER_* of interface/sph.h), a readback.
   struct OpenCounts {
     std::uint32_t in = 0, inBack = 0, out = 0, outBack = 0, parkedEnd = 0, parkedStart = 0, spawned = 0;
+    std::uint32_t parkedOutside = 0;  // left the domain across the axis (through a tear)
   };
   OpenCounts readOpenCounts() const;
   const gpu::Buffer& pending() const { return pending_; }
@@ -566,6 +567,12 @@ class SphSolver {
   // crossers' flags (uint per slot), bound to the integrator in every scene (4 bytes per slot);
   // the refill's scan of the flags, the crossers by rank, its scan and pass (made by setInflow).
   gpu::Buffer openCounters_, pending_, spawnScan_, crossers_;
+  // Pressure ends: the integrator's sums of the axial speeds by bin next to each plane and the
+  // profiles sph/open_profile.comp makes of them (common/inflow.glsl, HEMO_OPEN_BINS).
+  gpu::Buffer openSums_, openProfile_;
+  const gpu::ComputePipeline* openProfilePass_ = nullptr;
+  gpu::DescriptorSet openProfileSet_;
+  bool pressureEnds_ = false;
   std::unique_ptr<gpu::PrefixScan> spawnScanner_;
   const gpu::ComputePipeline* spawn_ = nullptr;
   gpu::DescriptorSet spawnSet_;
