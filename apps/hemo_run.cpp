@@ -332,7 +332,8 @@ int main(int argc, char** argv) {
       if (!renderer) {
         renderer = std::make_unique<hemo::render::OffscreenRenderer>(ctx, pngWidth, pngHeight);
         frameRec = std::make_unique<hemo::gpu::CommandRecorder>(ctx);
-        camera = hemo::render::defaultCamera(sim.store().readPositions(), float(pngWidth) / float(pngHeight),
+        // (the snapshot's positions: without an open vessel's parked slots, far outside the domain)
+        camera = hemo::render::defaultCamera(sim.snapshot().positions, float(pngWidth) / float(pngHeight),
                                              sim.wallParticles() > 0);
         frame.fluid = false;  // the surface shows the blood
         frame.wall = true;

@@ -507,7 +507,8 @@ int main(int argc, char** argv) {
     attach();
 
     // Orbit camera around the particles' box, starting where hemo-run's frames look from.
-    const hemo::render::Camera framed = hemo::render::defaultCamera(sim->store().readPositions(), float(width) / float(height),
+    // (the snapshot's positions: without an open vessel's parked slots, far outside the domain)
+    const hemo::render::Camera framed = hemo::render::defaultCamera(sim->snapshot().positions, float(width) / float(height),
                                                                     sim->wallParticles() > 0);
     const glm::vec3 toEye = framed.eye - framed.target;
     state.distance = glm::length(toEye);

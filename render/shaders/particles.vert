@@ -46,7 +46,8 @@ void main() {
   const vec4 v = velocities[gl_InstanceIndex];
   const uint kind = uint(v.w);
   const bool cutAway = kind != HEMO_KIND_FLUID && dot(pc.cut.xyz, p.xyz) > pc.cut.w;
-  const bool shown = !cutAway && (kind == HEMO_KIND_FLUID ? pc.show.x != 0u
+  // (a parked slot of open vessel ends holds no particle: interface/sph.h)
+  const bool shown = !cutAway && kind != HEMO_KIND_PARKED && (kind == HEMO_KIND_FLUID ? pc.show.x != 0u
                                   : (kind == HEMO_KIND_WALL ? pc.show.y != 0u : pc.show.z != 0u));
   corner = kCorners[gl_VertexIndex];
   if (!shown || any(isnan(p.xyz)) || any(isinf(p.xyz))) {
