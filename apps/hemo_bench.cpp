@@ -559,6 +559,51 @@ Json accuracy(Context& ctx, const std::string& only, const std::string& solverOn
       row("carreau_tube", scene, std::sqrt(sq) / exact[0], "rms_over_peak_steady", sim, wall);
     }
   }
+  if (only.empty() || only == "open_tube") {
+    // Open ends (OpenEndsTest.PressureDropDrivesPoiseuilleFlow): a tube of R = 2 mm, 18 mm long
+    // with 3 mm buffers at both ends, its flow driven by a pressure inlet 300 Pa above a
+    // pressure outlet through blood of 0.1 Pa s, at 4 and 8 particles across the radius. The
+    // error is |mean speed / Poiseuille's - 1| in the lumen's middle (more than 4 dp from
+    // either plane), the mean speed over the particles against dp R^2 (1 - r^2 / R^2) / (4 mu L)
+    // at their radii, averaged over snapshots every 0.5 ms from 0.0305 to 0.035 s. WCSPH only.
+    const double R = 0.002, mu = 0.1, drop = 300.0;
+    for (int across : {4, 8}) {
+      if (skip(false)) continue;
+      const double dp = R / across;
+      const std::string text = R"({"scene": "open_tube_bench", "particles": {"spacing_m": )" + std::to_string(dp) +
+                               R"(, "list_skin": 0.25, "neighbour_capacity": 176},
+        "fluid": {"expected_max_speed_m_s": 0.5, "density_kg_m3": 1060.0, "viscosity_pa_s": 0.1, "background_pressure_Pa": 200.0},
+        "vessel": {"shape": "tube", "length_m": 0.018, "radius_m": 0.002, "point_mass_kg": 2e-4, "stiffness_N_m": 200.0,
+                   "damping_N_s_m": 0.01,
+                   "inflow": {"profile": "parabolic", "driven_by": "pressure", "pressure_Pa": 300.0, "zone_length_m": 0.003,
+                              "ramp_s": 0.005},
+                   "outlet": {"condition": "pressure"}},
+        "forces": {"gravity_m_s2": [0, 0, 0]},
+        "time": {"steps_per_batch": 64},
+        "domain": {"min_m": [0.0, -0.004, -0.004], "max_m": [0.018, 0.004, 0.004]}})";
+      const hemo::scene::Scene scene = hemo::scene::parseScene(text, "open_tube_bench");
+      const hemo::sim::Inflow& in = *scene.vessel->inflow;
+      const double outletPlane = double(in.open->endX) - in.open->outletLength;
+      const double lo = in.zoneEnd + 4.0 * dp, hi = outletPlane - 4.0 * dp;
+      const double G = drop / (outletPlane - in.zoneEnd);
+      hemo::sim::Simulation sim(ctx, scene);
+      double wall = runTo(sim, 0.03);
+      double speed = 0.0, want = 0.0;
+      for (int k = 1; k <= 10; ++k) {
+        wall += runTo(sim, 0.03 + 0.0005 * k);
+        const hemo::sim::Snapshot snap = sim.snapshot();
+        for (std::size_t i = 0; i < snap.positions.size(); ++i) {
+          const glm::vec4 p = snap.positions[i];
+          if (snap.velocities[i].w != 0.0f || p.x < lo || p.x >= hi) continue;
+          const double r2 = std::pow(p.y - in.centreY, 2.0) + std::pow(p.z - in.centreZ, 2.0);
+          if (r2 >= R * R) continue;
+          speed += snap.velocities[i].x;
+          want += G * (R * R - r2) / (4.0 * mu);
+        }
+      }
+      row("open_tube", scene, std::abs(speed / want - 1.0), "mean_speed_over_poiseuille", sim, wall);
+    }
+  }
   if (only.empty() || only == "dam_break") {
     // scenes/dam_break.json geometry; mean |dZ| against Martin & Moyce (1952) over T in
     // [0, 3] with the gate-release offset dT = 0.15 of docs/physics.md. Both integrators at
@@ -1227,7 +1272,7 @@ int main(int argc, char** argv) {
       "         (device: what hemo reads from the device: sizes, limits, timestamps, memory types)\n"
       "  --repeat N    timed repetitions (default 9; table1 takes N/3 windows either side of the median;\n"
       "                speed: whole runs, default 3)\n"
-      "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, carreau_tube, dam_break, laplace)\n"
+      "  --case NAME   accuracy: only this case (hydrostatic, poiseuille, carreau_tube, open_tube, dam_break, laplace)\n"
       "  --solver NAME accuracy: only the runs of this pressure solver (wcsph, dfsph)\n"
       "  --scene FILE  speed, soak: the scene to run (default scenes/dam_break.json; soak: scenes/aneurysm.json)\n"
       "  --until S     speed: simulated seconds per run (default: the scene's time.end_time_s)\n"
@@ -1263,9 +1308,10 @@ int main(int argc, char** argv) {
     if (args.has("--solver") && solverOnly != "wcsph" && solverOnly != "dfsph") {
       throw hemo::cli::UsageError("unknown --solver '" + solverOnly + "' (expected wcsph or dfsph)");
     }
-    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "carreau_tube" && only != "dam_break" &&
-        only != "laplace") {
-      throw hemo::cli::UsageError("unknown --case '" + only + "' (expected hydrostatic, poiseuille, carreau_tube, dam_break or laplace)");
+    if (!only.empty() && only != "hydrostatic" && only != "poiseuille" && only != "carreau_tube" && only != "open_tube" &&
+        only != "dam_break" && only != "laplace") {
+      throw hemo::cli::UsageError("unknown --case '" + only +
+                                  "' (expected hydrostatic, poiseuille, carreau_tube, open_tube, dam_break or laplace)");
     }
     if (args.has("--until") && suite != "speed") throw hemo::cli::UsageError("--until applies to the speed suite only");
     if (args.has("--scene") && suite != "speed" && suite != "soak") {
