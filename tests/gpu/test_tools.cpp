@@ -698,15 +698,9 @@ TEST_F(ToolTest, BladeDrawnAcrossATubeCutsItsPathAndTheBloodLeaves) {
   EXPECT_EQ(below, 0u) << "only through the cut";
 }
 
-// A clamp on a tube with flow: a periodic tube (32 mm, radius 1.5 mm) whose blood a body force
-// drives (a pressure gradient the clamp can hold, where the inflow's pump would set the flow
-// rate whatever the pressure). A grasper with flat jaws across it, open, lets the flow develop;
-// closed between 0.03 and 0.05 s, it squeezes the tube shut and grips its wall. The flux, the
-// blood's mean axial speed in the loop (the rate of its mean displacement, which on a closed
-// loop is every cross-section's flux averaged in time: a local rise or fall of the lumen's
-// volume near one section does not count), falls from its open value to under 5% of it.
-TEST_F(ToolTest, ClampClosedOnATubeStopsTheFlow) {
-  const nlohmann::json j = nlohmann::json::parse(R"({
+// The clamp tests' tube and grasper (the periodic, body-force-driven form).
+nlohmann::json clampTube() {
+  return nlohmann::json::parse(R"({
     "scene": "tube_clamp",
     "particles": { "spacing_m": 5e-4, "neighbour_capacity": 256 },
     "fluid": { "density_kg_m3": 1060.0, "viscosity_pa_s": 0.106, "expected_max_speed_m_s": 0.5,
@@ -725,6 +719,17 @@ TEST_F(ToolTest, ClampClosedOnATubeStopsTheFlow) {
     "time": { "steps_per_batch": 64, "end_time_s": 0.12 },
     "domain": { "min_m": [0.0, -0.008, -0.008], "max_m": [0.032, 0.008, 0.008], "periodic": ["x"] }
   })");
+}
+
+// A clamp on a tube with flow: a periodic tube (32 mm, radius 1.5 mm) whose blood a body force
+// drives (a pressure gradient the clamp can hold, where the inflow's pump would set the flow
+// rate whatever the pressure). A grasper with flat jaws across it, open, lets the flow develop;
+// closed between 0.03 and 0.05 s, it squeezes the tube shut and grips its wall. The flux, the
+// blood's mean axial speed in the loop (the rate of its mean displacement, which on a closed
+// loop is every cross-section's flux averaged in time: a local rise or fall of the lumen's
+// volume near one section does not count), falls from its open value to under 5% of it.
+TEST_F(ToolTest, ClampClosedOnATubeStopsTheFlow) {
+  const nlohmann::json j = clampTube();
   const scene::Scene sc = scene::parseScene(j.dump(), "tube_clamp.json");
   ASSERT_FLOAT_EQ(sc.tools[0].gripStiffness, 50.0f) << "a grasper grips with the vessel's spring stiffness by default";
   sim::Simulation sim(ctx(), sc);
@@ -791,28 +796,13 @@ TEST_F(ToolTest, ClampClosedOnATubeStopsTheFlow) {
 // above over the lumen's length): the outflow the GPU counts at the outlet plane, closed,
 // falls under 5% of what it was open.
 TEST_F(ToolTest, ClampClosedOnAnOpenTubeStopsTheOutflow) {
-  const nlohmann::json j = nlohmann::json::parse(R"({
-    "scene": "open_tube_clamp",
-    "particles": { "spacing_m": 5e-4, "neighbour_capacity": 256 },
-    "fluid": { "density_kg_m3": 1060.0, "viscosity_pa_s": 0.106, "expected_max_speed_m_s": 0.5,
-               "background_pressure_Pa": 300.0, "background_pressure_ramp_s": 0.002 },
-    "vessel": { "shape": "tube", "length_m": 0.032, "radius_m": 0.0015, "point_mass_kg": 2e-5,
-                "stiffness_N_m": 50.0, "damping_N_s_m": 0.005,
-                "inflow": { "profile": "parabolic", "driven_by": "pressure", "pressure_Pa": 594.0,
-                            "zone_length_m": 0.002, "ramp_s": 0.005 },
-                "outlet": { "condition": "pressure" } },
-    "tools": [ { "name": "clamp", "kind": "grasper", "radius_m": 5e-4, "length_m": 0.008, "jaw_width_m": 0.001,
-                 "contact_scale": 0.1,
-                 "path": [ { "time_s": 0.0, "position_m": [0.016, 0.0, -0.004], "orientation_wxyz": [0.70710678, 0, 0, 0.70710678],
-                             "jaw_opening_m": 0.007 },
-                           { "time_s": 0.03, "position_m": [0.016, 0.0, -0.004], "orientation_wxyz": [0.70710678, 0, 0, 0.70710678],
-                             "jaw_opening_m": 0.007 },
-                           { "time_s": 0.05, "position_m": [0.016, 0.0, -0.004], "orientation_wxyz": [0.70710678, 0, 0, 0.70710678],
-                             "jaw_opening_m": 0.0005 } ] } ],
-    "forces": { "gravity_m_s2": [0, 0, 0] },
-    "time": { "steps_per_batch": 64, "end_time_s": 0.12 },
-    "domain": { "min_m": [0.0, -0.008, -0.008], "max_m": [0.032, 0.008, 0.008] }
-  })");
+  nlohmann::json j = clampTube();
+  j["scene"] = "open_tube_clamp";
+  j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"driven_by", "pressure"}, {"pressure_Pa", 594.0},
+                           {"zone_length_m", 0.002}, {"ramp_s", 0.005}};
+  j["vessel"]["outlet"] = {{"condition", "pressure"}};
+  j["forces"].erase("body_force_m_s2");
+  j["domain"].erase("periodic");
   const scene::Scene sc = scene::parseScene(j.dump(), "open_tube_clamp.json");
   sim::Simulation sim(ctx(), sc);
   // the net outflow (particles across the outlet plane) against time
