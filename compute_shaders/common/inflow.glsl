@@ -62,3 +62,6 @@ uint hemo_open_bin(float s2) {
 // value copies all of it, waveform included, into per-invocation memory; the integrator's stage
 // took 10 ms instead of 4 on the dam break, llvmpipe).
 #define hemo_inflow_sample(block, k) ((block).waveform[(k) >> 2u][(k) & 3u])
+// The inflow's ramp at time t, min(t / ramp, 1) (1 without one): of the mean speed, and of a
+// pressure inlet's pressure over the background (a macro, as above).
+#define hemo_inflow_ramp(block, t) ((block).ramp > 0.0 ? clamp((t) / (block).ramp, 0.0, 1.0) : 1.0)

@@ -194,7 +194,7 @@ void main() {
     // Open ends (hemo/sim/inflow.hpp): a pressure end's buffer holds its pressure (the inlet's
     // rising over the inflow's ramp), whatever its particles' density.
     if (inflow.inletPressure != 0u && gPi.x < inflow.inletPlane) {
-      const float ramp = inflow.ramp > 0.0 ? clamp(time / inflow.ramp, 0.0, 1.0) : 1.0;
+      const float ramp = hemo_inflow_ramp(inflow, time);
       p = background + inflow.pressures.x * ramp;
     } else if (inflow.outletPressure != 0u && gPi.x >= inflow.outletPlane) {
       p = background + inflow.pressures.y;

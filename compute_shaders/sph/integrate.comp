@@ -89,9 +89,9 @@ layout(constant_id = 2) const uint kMode = 0u;
 // its code out, for llvmpipe runs the body of a branch no lane takes.
 layout(constant_id = 3) const uint kInflow = 1u;
 // Open ends (kInflow 2; hemo/sim/inflow.hpp): fluid crossing the inlet and outlet planes is
-// counted, a crosser of the inlet plane is flagged until the refill gives the buffer its image,
-// the outlet buffer is driven as the inlet buffer is, and fluid past either end of the tube is
-// parked.
+// counted, a particle that leaves a buffer into the lumen is flagged until the refill gives the
+// buffer its image, both buffers are driven (a pressure end's from the lumen's speeds next to
+// its plane), and fluid past either end of the tube or out of the domain is parked.
 layout(std430, binding = HEMO_INTEGRATE_BINDING_OPEN_COUNTERS) buffer OpenCounters { uint openCounters[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_PENDING) buffer Pending { uint pending[]; };
 // Pressure ends (common/inflow.glsl, HEMO_OPEN_BINS): this step's sums of the axial velocities
@@ -256,7 +256,7 @@ float hemo_inflow_mean_speed(float time) {
     const float b = hemo_inflow_sample(inflow, (k + 1u) % inflow.samples);
     w = a + (b - a) * (phase - float(k));
   }
-  const float ramp = inflow.ramp > 0.0 ? clamp(time / inflow.ramp, 0.0, 1.0) : 1.0;
+  const float ramp = hemo_inflow_ramp(inflow, time);
   return inflow.meanSpeed * w * ramp;
 }
 
@@ -293,7 +293,7 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
     const float lumen = openProfile[2u * HEMO_OPEN_BINS + plane];
     float excess = 0.0;  // Pa: the lumen's pressure over the end's (inlet: the end's over the lumen's)
     if (lumen > 0.5 * HEMO_OPEN_NO_PRESSURE) {
-      const float ramp = inflow.ramp > 0.0 ? clamp(time / inflow.ramp, 0.0, 1.0) : 1.0;
+      const float ramp = hemo_inflow_ramp(inflow, time);
       const float end = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : inflow.pressures.x * ramp);
       excess = outlet ? lumen - end : end - lumen;
     }
