@@ -46,14 +46,7 @@ struct InflowParams {
 // words per bin: the low and high words of sum((v_x + offset) scale) and the count; integer
 // sums, the same in any order); sph/open_profile.comp turns them into the mean speeds the next
 // step's buffers move at, and the planes' pressures into the speed each buffer adds.
-#define HEMO_OPEN_BINS 16u
-#define HEMO_OPEN_SUM_WORDS 3u
-#define HEMO_OPEN_SPEED_OFFSET 64.0
-#define HEMO_OPEN_FIXED_SCALE 16777216.0
-#define HEMO_OPEN_PRESSURE_OFFSET 1.0e6
-#define HEMO_OPEN_PRESSURE_SCALE 2048.0
-#define HEMO_OPEN_NO_PRESSURE -1.0e30  // a plane's pressure before any particle was measured
-
+// (HEMO_OPEN_BINS and the fixed-point constants: interface/sph.h, shared with the host)
 uint hemo_open_bin(float s2) {
   return min(uint(max(s2, 0.0) * float(HEMO_OPEN_BINS)), HEMO_OPEN_BINS - 1u);
 }

@@ -390,6 +390,17 @@
 #define HEMO_OPEN_COUNTER_SPAWNED 6
 #define HEMO_OPEN_COUNTER_PARKED_OUTSIDE 7  // fluid that left the domain across the axis (through a tear)
 #define HEMO_OPEN_COUNTER_COUNT 8
+// The pressure ends' speed and pressure bins (common/inflow.glsl): bins per plane, words per
+// bin (low, high, count), the fixed-point offsets and scales of speeds (m/s) and pressures (Pa),
+// and a plane's pressure before any particle was measured.
+#define HEMO_OPEN_BINS 16u
+#define HEMO_OPEN_SUM_WORDS 3u
+#define HEMO_OPEN_SPEED_OFFSET 64.0
+#define HEMO_OPEN_FIXED_SCALE 16777216.0
+#define HEMO_OPEN_PRESSURE_OFFSET 1.0e6
+#define HEMO_OPEN_PRESSURE_SCALE 2048.0
+#define HEMO_OPEN_NO_PRESSURE -1.0e30f
+
 
 // sph/open_spawn.comp: the buffers' refill, at the start of every step that rebuilds the
 // neighbour list (inside the rebuild gate, before the grid), over the fluid's slots [0, N):

@@ -197,9 +197,8 @@ SphSettings resolveNeighbourSearch(const gpu::Context& context, const ParticleSt
   }
   return s;
 }
-// The open ends' profile bins (common/inflow.glsl), and its HEMO_OPEN_NO_PRESSURE.
-constexpr std::uint64_t kOpenBins = 16, kOpenSumWords = 3;
-constexpr float HEMO_OPEN_NO_PRESSURE_VALUE = -1.0e30f;
+// The open ends' profile bins (interface/sph.h).
+constexpr std::uint64_t kOpenBins = HEMO_OPEN_BINS, kOpenSumWords = HEMO_OPEN_SUM_WORDS;
 // The boundary pass's indirect arguments of each page of the list, apart by the largest
 // storage-buffer offset alignment Vulkan allows.
 constexpr std::uint64_t kActiveArgsStride = 256;
@@ -1121,7 +1120,7 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rec.fill(pending_, 0u);
   rec.fill(openSums_, 0u);
   rec.fill(openProfile_, 0u, 0, 2 * kOpenBins * 4);  // (the buffers start at rest)
-  float none = HEMO_OPEN_NO_PRESSURE_VALUE;
+  const float none = HEMO_OPEN_NO_PRESSURE;
   std::uint32_t noneBits;
   std::memcpy(&noneBits, &none, 4);
   rec.fill(openProfile_, noneBits, 2 * kOpenBins * 4, 8);  // (no pressure measured yet)
