@@ -11,16 +11,18 @@
 int main(int argc, char** argv) {
   const char* usage =
       "usage: hemo-mesh --out FILE.stl --length-m L --radius-m R [--bend-height-m H] [--sac-radius-m RS --sac-offset-m C]\n"
-      "                 [--around N] [--along M] [--unit-m U] [--help]\n"
+      "                 [--straight-m S] [--around N] [--along M] [--unit-m U] [--help]\n"
       "  a tube of radius R from x = 0 to L whose axis rises to z = H at x = L/2 and falls back (z = H (1 - cos(2 pi x/L))/2),\n"
       "  with a spherical sac of radius RS centred C above the axis at x = L/2 (a saccular aneurysm on the bend's outer side);\n"
+      "  with S > 0, straight runs of length S lead into the bend and out of it (all of it shifted S along x: the ends at\n"
+      "  x = 0 and L + 2 S; open inlets and outlets want straight ends for their buffers);\n"
       "  N x M quads (M = 0: about square).\n"
       "  Coordinates are written in units of U m (default 0.001: millimetres, as segmentation tools write them).\n"
       "  Prints the two open ends' centres in m (for the scene's vessel.mesh.ends).\n";
   if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
   try {
     const auto args = hemo::cli::parse(argc, argv, {"--out", "--length-m", "--radius-m", "--bend-height-m", "--sac-radius-m", "--sac-offset-m",
-                                                    "--around", "--along", "--unit-m"});
+                                                    "--straight-m", "--around", "--along", "--unit-m"});
     if (!args.positional.empty()) throw hemo::cli::UsageError("unexpected argument '" + args.positional[0] + "'");
     if (!args.has("--out")) throw hemo::cli::UsageError("--out FILE.stl is required");
     if (!args.has("--length-m") || !args.has("--radius-m")) throw hemo::cli::UsageError("--length-m and --radius-m are required");
@@ -30,6 +32,7 @@ int main(int argc, char** argv) {
     spec.bendHeight = args.number("--bend-height-m", 0.0, 0.0, 1.0);
     spec.sacRadius = args.number("--sac-radius-m", 0.0, 0.0, 1.0);
     spec.sacOffset = args.number("--sac-offset-m", 0.0, 0.0, 1.0);
+    spec.straight = args.number("--straight-m", 0.0, 0.0, 1.0);
     if (args.has("--sac-radius-m") != args.has("--sac-offset-m")) throw hemo::cli::UsageError("--sac-radius-m and --sac-offset-m go together");
     spec.around = static_cast<std::uint32_t>(args.count("--around", 64, 8, 4096));
     spec.along = static_cast<std::uint32_t>(args.count("--along", 0, 0, 100000));
@@ -44,7 +47,7 @@ int main(int argc, char** argv) {
     const std::string out = args.text("--out");
     hemo::io::writeStl(out, mesh, "hemo-mesh vessel surface, unit " + std::to_string(unit) + " m");
     std::printf("wrote %s: %zu triangles, %zu vertices, unit %g m\n", out.c_str(), mesh.triangles.size(), mesh.vertices.size(), unit);
-    std::printf("ends at (0, 0, 0) m and (%g, 0, 0) m\n", spec.length);
+    std::printf("ends at (0, 0, 0) m and (%g, 0, 0) m\n", spec.length + 2.0 * spec.straight);
     return 0;
   } catch (const hemo::cli::UsageError& e) {
     std::fprintf(stderr, "hemo-mesh: %s\n%s", e.what(), usage);

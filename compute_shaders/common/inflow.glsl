@@ -1,5 +1,14 @@
-// The driven inflow zone of a periodic vessel (hemo/sim/inflow.hpp has the model), bound as a
-// uniform buffer (std140; the C++ struct's float[64] is the vec4[16] here, sample k at
+// One open end (hemo/sim/inflow.hpp, OpenEnd): along its axis from its origin, s < 0 is past
+// the end, [0, length) its buffer, and the lumen beyond; it acts within `reach` of its axis.
+struct HemoOpenEnd {
+  vec4 origin;  // xyz: the centre of the vessel's end (m); w: the buffer's length (m)
+  vec4 axis;    // xyz: unit, into the lumen; w: the lumen's radius there (m)
+  vec4 shift;   // xyz: a crosser's image lies at its position less this (m); w: the reach (m)
+  vec4 drive;   // x: a flow outlet's speed over the inlet's, (R_inlet / R_outlet)^2
+};
+
+// The driven inflow zone of a vessel (hemo/sim/inflow.hpp has the model), bound as a uniform
+// buffer (std140; the C++ struct's float[64] is the vec4[16] here, sample k at
 // waveform[k / 4][k % 4]).
 struct InflowParams {
   float zoneStart;  // m along x
@@ -19,16 +28,11 @@ struct InflowParams {
   float baseMass;     // kg, the initial particle mass (the floor)
   float reserved1;
   vec4 waveform[16];
-  // Open ends (hemo/sim/inflow.hpp; open = 0: the periodic vessel above). x planes (m): the
-  // inlet plane (= zoneEnd: the buffer [zoneStart, zoneEnd) lies upstream of it), the outlet
-  // plane, and the tube's two ends, past which fluid is parked (the outlet buffer lies in
-  // [outletPlane, endX)).
-  float inletPlane;
-  float outletPlane;
-  float startX;
-  float endX;
-  vec4 parking;       // xyz: where parked slots lie (m); w: the spawn's shift upstream (m, the buffer's length)
-  float pendingMargin; // m past the inlet plane at which a crosser still owed its image forces the refill (sph/integrate.comp)
+  // Open ends (hemo/sim/inflow.hpp; open = 0: the periodic vessel above): each end's frame,
+  // the inlet's then the outlet's (HemoOpenEnd).
+  HemoOpenEnd ends[2];
+  vec4 parking;       // xyz: where parked slots lie (m)
+  float pendingMargin; // m past an end's plane into the lumen at which a crosser still owed its image forces the refill (sph/integrate.comp)
   uint open;          // 1: open ends
   uint inletPressure;   // 1: the inlet buffer holds a pressure and takes the lumen's velocity profile (zero gradient)
   uint outletPressure;  // 1: the outlet buffer likewise
@@ -36,8 +40,18 @@ struct InflowParams {
   // (Pa; the inlet's rises over `ramp`); z: the width of the lumen's slab next to each plane
   // whose axial velocity profile the buffer takes (m); w: 1 / (rho0 c0) (m/s per Pa)
   vec4 pressures;
-  vec4 box;  // the domain across the axis: (min y, min z, max y, max z) (m); fluid beyond it is parked
+  vec4 boxMin;  // xyz: the domain (m); fluid beyond it is parked
+  vec4 boxMax;
 };
+
+// Open end e's (s, r^2) at x: the distance along its axis from its origin, and the squared
+// distance from its axis (a macro, as below).
+#define hemo_open_local(block, e, x) hemo_open_local_of((x) - (block).ends[e].origin.xyz, (block).ends[e].axis.xyz)
+vec2 hemo_open_local_of(vec3 d, vec3 axis) {
+  const float s = dot(d, axis);
+  const vec3 across = d - s * axis;
+  return vec2(s, dot(across, across));
+}
 
 // The open ends' velocity profiles (pressure ends): HEMO_OPEN_BINS bins of equal area over the
 // lumen's cross-section (bin = floor(bins r^2 / R^2)), the inlet's then the outlet's, then one

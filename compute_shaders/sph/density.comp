@@ -193,11 +193,13 @@ void main() {
   if (inflow.open != 0u) {
     // Open ends (hemo/sim/inflow.hpp): a pressure end's buffer holds its pressure (the inlet's
     // rising over the inflow's ramp), whatever its particles' density.
-    if (inflow.inletPressure != 0u && gPi.x < inflow.inletPlane) {
-      const float ramp = hemo_inflow_ramp(inflow, time);
-      p = background + inflow.pressures.x * ramp;
-    } else if (inflow.outletPressure != 0u && gPi.x >= inflow.outletPlane) {
-      p = background + inflow.pressures.y;
+    for (uint e = 0u; e < 2u; ++e) {
+      const vec2 l = hemo_open_local(inflow, e, gPi.xyz);
+      const float reach = inflow.ends[e].shift.w;
+      if ((e == 0u ? inflow.inletPressure : inflow.outletPressure) != 0u && l.x < inflow.ends[e].origin.w && l.x >= -reach &&
+          l.y < reach * reach) {
+        p = background + (e == 0u ? inflow.pressures.x * hemo_inflow_ramp(inflow, time) : inflow.pressures.y);
+      }
     }
   }
 #if !HEMO_CELL_WALK

@@ -148,14 +148,14 @@ vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v, out vec3 d, out vec3 x0) {
   x0 = texelFetch(posAtBuildT, int(i)).xyz;
   d = hemo_min_image(x - x0, hemo_pair_params());
   float r = length(d - vec3(hemo_predicted_middle(), 0.0, 0.0));
-  if (kInflow == 2u) {
-    // A crosser of the inlet plane whose image the buffer still lacks (it appears at the next
-    // rebuild, sph/open_spawn.comp) fails both tests once it is `pendingMargin` past the plane:
-    // the refill comes before the buffer's gap nears the lumen, in any flow (a plug flow alone
-    // would never rebuild the list).
-    // (the outlet's images, of reverse flow, likewise before the outlet plane)
-    const float past = pending[i] == 1u ? x.x - inflow.inletPlane : pending[i] == 2u ? inflow.outletPlane - x.x : -1.0;
-    if (past >= inflow.pendingMargin) {
+  if (kInflow == 2u && pending[i] != 0u) {
+    // A crosser of an end's plane whose image the buffer still lacks (it appears at the next
+    // rebuild, sph/open_spawn.comp) fails both tests once it is `pendingMargin` past the plane
+    // into the lumen: the refill comes before the buffer's gap nears the lumen, in any flow (a
+    // plug flow alone would never rebuild the list). (pending 1: the inlet's; 2: the outlet's,
+    // of reverse flow)
+    const uint e = pending[i] - 1u;
+    if (hemo_open_local(inflow, e, x).x - inflow.ends[e].origin.w >= inflow.pendingMargin) {
       r = 3.0e38;
     }
   }
@@ -265,40 +265,65 @@ float hemo_inflow_mean_speed(float time) {
 // held at one pressure, cannot crowd), not only its axial one.
 bool gWholeVelocity = false;
 
-// True when a fluid particle at x (start of the step) is in the inflow zone; u: its velocity,
-// s2: its (r / R)^2.
-bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2) {
+// Whether x lies in open end e's buffer (s in [0, length) within its reach); l: its (s, r^2).
+bool hemo_open_in_buffer(vec3 x, uint e, out vec2 l) {
+  l = hemo_open_local(inflow, e, x);
+  const float reach = inflow.ends[e].shift.w;
+  return l.x >= 0.0 && l.x < inflow.ends[e].origin.w && l.y < reach * reach;
+}
+
+// True when a fluid particle at x (start of the step) is in the inflow zone (open ends: in
+// either buffer); u: its velocity along `axis` (the zone's), s2: its (r / R)^2.
+bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2, out vec3 axis) {
   u = vec3(0.0);
   s2 = 0.0;
-  // (open ends: the outlet buffer [outletPlane, endX) is driven as the inlet's, hemo/sim/inflow.hpp)
-  const bool inlet = x.x >= inflow.zoneStart && x.x < inflow.zoneEnd;
-  const bool outlet = kInflow == 2u && x.x >= inflow.outletPlane;
-  if (kInflow == 0u || inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID || !(inlet || outlet)) {
+  axis = vec3(1.0, 0.0, 0.0);
+  if (kInflow == 0u || inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID) {
+    return false;
+  }
+  if (kInflow == 2u) {
+    // Open ends (hemo/sim/inflow.hpp): every particle in a buffer is driven, at rest beyond the
+    // radius, so none drifts out through the end or back into the lumen along the wall.
+    vec2 l;
+    const bool inlet = hemo_open_in_buffer(x, 0u, l);
+    const bool outlet = !inlet && hemo_open_in_buffer(x, 1u, l);
+    if (!(inlet || outlet)) {
+      return false;
+    }
+    const uint e = outlet ? 1u : 0u;
+    axis = inflow.ends[e].axis.xyz;
+    const float R = inflow.ends[e].axis.w;
+    s2 = l.y / (R * R);
+    float inward;  // m/s along the end's axis, into the lumen
+    if ((inlet && inflow.inletPressure != 0u) || (outlet && inflow.outletPressure != 0u)) {
+      // A pressure end: the lumen's speed along the axis next to the plane at this radius (a
+      // zero gradient), plus what the lumen's pressure there lacks of the end's, or less what
+      // it exceeds it by, over rho0 c0 (sph/open_profile.comp: the outgoing characteristic;
+      // without it a lumen at rest between two buffers at rest never starts to flow).
+      gWholeVelocity = true;
+      const float lumen = openProfile[2u * HEMO_OPEN_BINS + e];
+      float lack = 0.0;  // Pa: the end's pressure over the lumen's
+      if (lumen > 0.5 * HEMO_OPEN_NO_PRESSURE) {
+        const float ramp = hemo_inflow_ramp(inflow, time);
+        lack = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : inflow.pressures.x * ramp) - lumen;
+      }
+      inward = s2 < 1.0 ? openProfile[e * HEMO_OPEN_BINS + hemo_open_bin(s2)] + lack * inflow.pressures.w : 0.0;
+    } else {
+      // The inflow's profile; at the outlet, the same flow rate out of the lumen.
+      const float profile = inflow.profile == 1u ? (s2 < 1.0 ? 1.0 : 0.0) : 2.0 * max(1.0 - s2, 0.0);
+      const float speed = hemo_inflow_mean_speed(time) * profile * inflow.ends[e].drive.x;
+      inward = outlet ? -speed : speed;
+    }
+    u = inward * axis;
+    return true;
+  }
+  if (!(x.x >= inflow.zoneStart && x.x < inflow.zoneEnd)) {
     return false;
   }
   const vec2 d = x.yz - vec2(inflow.centreY, inflow.centreZ);
   s2 = dot(d, d) / (inflow.radius * inflow.radius);
-  if (s2 >= 1.0 && kInflow != 2u) {
+  if (s2 >= 1.0) {
     return false;  // outside the lumen (escaped blood is never driven)
-  }
-  // (open ends: every particle in a buffer is driven, at rest beyond the radius, so none drifts
-  // out through the tube's start or back into the lumen along the wall)
-  if (kInflow == 2u && ((inlet && inflow.inletPressure != 0u) || (outlet && inflow.outletPressure != 0u))) {
-    // A pressure end: the lumen's axial speed next to the plane at this radius (a zero
-    // gradient), plus what the lumen's pressure there lacks of the end's, or exceeds it by, over
-    // rho0 c0 (sph/open_profile.comp: the outgoing characteristic; without it a lumen at rest
-    // between two buffers at rest never starts to flow).
-    gWholeVelocity = true;
-    const uint plane = outlet ? 1u : 0u;
-    const float lumen = openProfile[2u * HEMO_OPEN_BINS + plane];
-    float excess = 0.0;  // Pa: the lumen's pressure over the end's (inlet: the end's over the lumen's)
-    if (lumen > 0.5 * HEMO_OPEN_NO_PRESSURE) {
-      const float ramp = hemo_inflow_ramp(inflow, time);
-      const float end = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : inflow.pressures.x * ramp);
-      excess = outlet ? lumen - end : end - lumen;
-    }
-    u = vec3(s2 < 1.0 ? openProfile[plane * HEMO_OPEN_BINS + hemo_open_bin(s2)] + excess * inflow.pressures.w : 0.0, 0.0, 0.0);
-    return true;
   }
   const float profile = inflow.profile == 1u ? (s2 < 1.0 ? 1.0 : 0.0) : 2.0 * max(1.0 - s2, 0.0);
   u = vec3(hemo_inflow_mean_speed(time) * profile, 0.0, 0.0);
@@ -340,47 +365,51 @@ void hemo_open_enter_buffer(uint i, uint b) {
 // Open ends (kInflow 2), after the update of fluid slot i from `start` to x: the plane
 // crossings, and parking past either end or outside the domain.
 void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
+  const vec2 l[2] = vec2[2](hemo_open_local(inflow, 0u, x.xyz), hemo_open_local(inflow, 1u, x.xyz));
   if ((inflow.inletPressure | inflow.outletPressure) != 0u) {
-    // The lumen's axial speeds in the slabs next to the planes, by radius, for the pressure
-    // ends' buffers (their zero gradient along the axis).
-    const vec2 d = x.yz - vec2(inflow.centreY, inflow.centreZ);
-    const float s2 = dot(d, d) / (inflow.radius * inflow.radius);
-    const bool nearInlet = x.x >= inflow.inletPlane && x.x < inflow.inletPlane + inflow.pressures.z;
-    const bool nearOutlet = x.x < inflow.outletPlane && x.x >= inflow.outletPlane - inflow.pressures.z;
-    if (s2 < 1.0 && (nearInlet || nearOutlet)) {
-      hemo_open_sum((nearOutlet ? HEMO_OPEN_BINS : 0u) + hemo_open_bin(s2), v.x, HEMO_OPEN_SPEED_OFFSET, HEMO_OPEN_FIXED_SCALE);
-      hemo_open_sum(2u * HEMO_OPEN_BINS + (nearOutlet ? 1u : 0u), state(i).y, HEMO_OPEN_PRESSURE_OFFSET,
-                    HEMO_OPEN_PRESSURE_SCALE);
+    // The lumen's speeds along each end's axis in the slab next to its plane, by radius, for
+    // the pressure ends' buffers (their zero gradient along the axis).
+    for (uint e = 0u; e < 2u; ++e) {
+      const float R = inflow.ends[e].axis.w;
+      const float s2 = l[e].y / (R * R);
+      const float into = l[e].x - inflow.ends[e].origin.w;  // m past the plane into the lumen
+      if (s2 < 1.0 && into >= 0.0 && into < inflow.pressures.z) {
+        hemo_open_sum(e * HEMO_OPEN_BINS + hemo_open_bin(s2), dot(v.xyz, inflow.ends[e].axis.xyz), HEMO_OPEN_SPEED_OFFSET,
+                      HEMO_OPEN_FIXED_SCALE);
+        hemo_open_sum(2u * HEMO_OPEN_BINS + e, state(i).y, HEMO_OPEN_PRESSURE_OFFSET, HEMO_OPEN_PRESSURE_SCALE);
+        break;
+      }
     }
   }
   // Each buffer holds the same particles whatever crosses its plane. A particle that leaves a
   // buffer into the lumen owes the buffer its image at the buffer's far end (pending 1: the
-  // inlet's, a buffer length upstream; 2: the outlet's, of reverse flow, a buffer length
-  // downstream); one that comes back into the buffer cancels the image it still owes, or else
-  // earns a credit (normals.w = 1 for the inlet, 2 for the outlet: fluid particles carry no
-  // normal, and open ends use summation density) that its next crossing into the lumen spends
-  // instead of asking for an image. (Near the wall, where the flow is slow, particles cross
-  // back and forth; each forward crossing made an image, and the buffer filled up.)
-  if (start.x < inflow.inletPlane && x.x >= inflow.inletPlane) {
-    atomicAdd(openCounters[HEMO_OPEN_COUNTER_IN], 1u);
-    hemo_open_leave_buffer(i, 1u);
-  } else if (start.x >= inflow.inletPlane && x.x < inflow.inletPlane) {
-    atomicAdd(openCounters[HEMO_OPEN_COUNTER_IN_BACK], 1u);
-    hemo_open_enter_buffer(i, 1u);
+  // inlet's, 2: the outlet's, of reverse flow; a buffer length back along the end's axis);
+  // one that comes back into the buffer cancels the image it still owes, or else earns a
+  // credit (normals.w = 1 for the inlet, 2 for the outlet: fluid particles carry no normal,
+  // and open ends use summation density) that its next crossing into the lumen spends instead
+  // of asking for an image. (Near the wall, where the flow is slow, particles cross back and
+  // forth; each forward crossing made an image, and the buffer filled up.)
+  bool past[2];
+  for (uint e = 0u; e < 2u; ++e) {
+    const float reach = inflow.ends[e].shift.w;
+    const float plane = inflow.ends[e].origin.w;
+    const bool near = l[e].y < reach * reach;
+    const float before = hemo_open_local(inflow, e, start).x;
+    // (the inlet's crossings into the lumen are the inflow; the outlet's out of it the outflow)
+    if (near && before < plane && l[e].x >= plane) {
+      atomicAdd(openCounters[e == 0u ? HEMO_OPEN_COUNTER_IN : HEMO_OPEN_COUNTER_OUT_BACK], 1u);
+      hemo_open_leave_buffer(i, e + 1u);
+    } else if (near && before >= plane && l[e].x < plane) {
+      atomicAdd(openCounters[e == 0u ? HEMO_OPEN_COUNTER_IN_BACK : HEMO_OPEN_COUNTER_OUT], 1u);
+      hemo_open_enter_buffer(i, e + 1u);
+    }
+    past[e] = near && l[e].x < 0.0 && l[e].x >= -reach;
   }
-  if (start.x < inflow.outletPlane && x.x >= inflow.outletPlane) {
-    atomicAdd(openCounters[HEMO_OPEN_COUNTER_OUT], 1u);
-    hemo_open_enter_buffer(i, 2u);
-  } else if (start.x >= inflow.outletPlane && x.x < inflow.outletPlane) {
-    atomicAdd(openCounters[HEMO_OPEN_COUNTER_OUT_BACK], 1u);
-    hemo_open_leave_buffer(i, 2u);
-  }
-  const bool pastEnd = x.x >= inflow.endX;
-  // Blood that has left the domain through a tear (across y or z) is parked too, and counted.
-  const bool outside = any(lessThan(x.yz, inflow.box.xy)) || any(greaterThan(x.yz, inflow.box.zw));
-  if (pastEnd || x.x < inflow.startX || outside) {
-    atomicAdd(openCounters[outside ? HEMO_OPEN_COUNTER_PARKED_OUTSIDE
-                           : pastEnd ? HEMO_OPEN_COUNTER_PARKED_END : HEMO_OPEN_COUNTER_PARKED_START], 1u);
+  // Blood that has left the domain (through a tear) is parked too, and counted.
+  const bool outside = any(lessThan(x.xyz, inflow.boxMin.xyz)) || any(greaterThan(x.xyz, inflow.boxMax.xyz));
+  if (past[0] || past[1] || outside) {
+    atomicAdd(openCounters[past[1]   ? HEMO_OPEN_COUNTER_PARKED_END
+                           : past[0] ? HEMO_OPEN_COUNTER_PARKED_START : HEMO_OPEN_COUNTER_PARKED_OUTSIDE], 1u);
     pending[i] = 0u;  // (the image would be taken from the parking point)
     x.xyz = inflow.parking.xyz;
     v = vec4(0.0, 0.0, 0.0, float(HEMO_KIND_PARKED));
@@ -416,20 +445,30 @@ vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running, out vec3 d,
   if (clock.time < params.dampingUntil) {
     v.xyz /= 1.0 + params.dampingRate * dt;  // settling phase only (implicit, so never unstable)
   }
-  vec3 u;
+  vec3 u, axis;
   float s2;
-  if (hemo_inflow_driven(start, v.w, clock.time - clock.compensation, u, s2)) {
+  if (hemo_inflow_driven(start, v.w, clock.time - clock.compensation, u, s2, axis)) {
     // The axial velocity is prescribed; the motion across the section stays free, so
     // particles that enter the zone too close can still part (a fully kinematic zone froze
     // such pairs together: 6-13 kPa at its far end and an emptied slice after it).
-    v.x = u.x;
     if (gWholeVelocity) {
-      v.yz = vec2(0.0);
+      v.xyz = u;
       x.xyz = start + u * dt;
-    } else if (kMode == HEMO_INTEGRATE_RK2_FULL) {
-      x.x = start.x + u.x * dt;  // across the section: the midpoint rule as everywhere
+    } else if (kInflow == 2u) {
+      // (an open end's axis, in any direction)
+      v.xyz += (dot(u, axis) - dot(v.xyz, axis)) * axis;
+      if (kMode == HEMO_INTEGRATE_RK2_FULL) {
+        x.xyz += dot(start + u * dt - x.xyz, axis) * axis;  // across the axis: the midpoint rule
+      } else {
+        x.xyz += v.xyz * dt;
+      }
     } else {
-      x.xyz += v.xyz * dt;
+      v.x = u.x;
+      if (kMode == HEMO_INTEGRATE_RK2_FULL) {
+        x.x = start.x + u.x * dt;  // across the section: the midpoint rule as everywhere
+      } else {
+        x.xyz += v.xyz * dt;
+      }
     }
     if (inflow.holdPressure != 0u) {
       // The lumen's supply: the mass moves a tenth of the way each step towards the one that
@@ -500,14 +539,18 @@ void main() {
       const vec4 a = accel(i);
       vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
       vec3 drift = v.xyz;
-      vec3 u;
+      vec3 u, axis;
       float s2;
-      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u, s2)) {
-        vMid.x = u.x;
-        drift.x = u.x;
+      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u, s2, axis)) {
         if (gWholeVelocity) {
           vMid = u;
           drift = u;
+        } else if (kInflow == 2u) {
+          vMid += (dot(u, axis) - dot(vMid, axis)) * axis;
+          drift += (dot(u, axis) - dot(drift, axis)) * axis;
+        } else {
+          vMid.x = u.x;
+          drift.x = u.x;
         }
       }
       velocities[i] = vec4(vMid, v.w);

@@ -1,9 +1,9 @@
 #version 450
-// The open inlet's refill (interface/sph.h, HEMO_SPAWN_*; hemo/sim/inflow.hpp): at the start
-// of every step that rebuilds the neighbour list, each fluid particle that crossed the inlet
-// plane since the last refill gets its image one buffer length upstream, at the buffer's far
-// end, in a parked slot, so the buffer holds the same particles as it did (the image of a
-// periodic seam, made without one). Three modes over the fluid's slots, with the scan of the
+// The open ends' refill (interface/sph.h, HEMO_SPAWN_*; hemo/sim/inflow.hpp): at the start
+// of every step that rebuilds the neighbour list, each fluid particle that left a buffer into
+// the lumen since the last refill gets its image one buffer length back along the end's axis,
+// at the buffer's far end, in a parked slot, so the buffer holds the same particles as it did
+// (the image of a periodic seam, made without one). Three modes over the fluid's slots, with the scan of the
 // flags between FLAGS and SCATTER (gpu::PrefixScan): the k-th crosser in slot order takes the
 // k-th parked slot in slot order, so the outcome does not depend on the order the invocations
 // run in. Run before the grid's build, which sorts the new particles into the list.
@@ -70,9 +70,10 @@ void main() {
   }
   const uint c = crossers[k] & 0x7fffffffu;
   const vec4 x = positions[c];
-  // (the inlet's image a buffer length upstream; the outlet's, of reverse flow, downstream)
-  const float shift = (crossers[k] & 0x80000000u) != 0u ? inflow.outletPlane - inflow.endX : inflow.parking.w;
-  positions[i] = vec4(x.x - shift, x.yzw);
+  // (a buffer length back along the end's axis: the inlet's upstream; the outlet's, of reverse
+  // flow, downstream)
+  const vec3 shift = inflow.ends[(crossers[k] & 0x80000000u) != 0u ? 1 : 0].shift.xyz;
+  positions[i] = vec4(x.xyz - shift, x.w);
   velocities[i] = velocities[c];
   normals[i] = normals[c];
   atomicAdd(counters[HEMO_OPEN_COUNTER_SPAWNED], 1u);

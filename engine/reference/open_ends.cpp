@@ -4,7 +4,7 @@
 
 namespace hemo::reference {
 
-RefillResult openRefill(std::uint32_t n, float shift, float outletShift, std::vector<glm::vec4>& positions,
+RefillResult openRefill(std::uint32_t n, glm::vec3 inletShift, glm::vec3 outletShift, std::vector<glm::vec4>& positions,
                         std::vector<glm::vec4>& velocities, std::vector<glm::vec4>& normals,
                         std::vector<std::uint32_t>& pending) {
   std::vector<std::uint32_t> crossers, parked;
@@ -20,8 +20,8 @@ RefillResult openRefill(std::uint32_t n, float shift, float outletShift, std::ve
       continue;
     }
     const std::uint32_t s = parked[k];
-    const float d = pending[c] == 2 ? -outletShift : shift;
-    positions[s] = glm::vec4(positions[c].x - d, positions[c].y, positions[c].z, positions[c].w);
+    const glm::vec3 d = pending[c] == 2 ? outletShift : inletShift;
+    positions[s] = glm::vec4(glm::vec3(positions[c]) - d, positions[c].w);
     velocities[s] = velocities[c];
     normals[s] = normals[c];
     pending[c] = 0;

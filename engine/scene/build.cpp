@@ -34,6 +34,7 @@ AneurysmSpec vesselSpec(const Vessel& v, const sim::SphSettings& fluid) {
   t.anchorEnds = v.anchorEnds;
   t.fluidMass = fluid.particleMass();
   a.mesh = v.mesh;
+  a.openEnds = v.inflow && v.inflow->open;
   for (const MeshRegion& r : v.meshRegions) a.regions.push_back({glm::dvec3(r.centre), double(r.radius), r.stiffnessScale, r.strengthScale});
   if (v.shape == Vessel::Shape::SaccularAneurysm) {
     a.sacRadius = v.sacRadius;
@@ -66,7 +67,7 @@ std::uint32_t reserveFor(const Scene& s, const ParticleSet& set, std::uint32_t v
   for (std::size_t i = 0; i < vessel && i < set.positions.size(); ++i) {
     if (set.velocities[i].w != float(sim::ParticleKind::Fluid)) continue;
     ++fluid;
-    buffer += set.positions[i].x >= in.zoneStart && set.positions[i].x < in.zoneEnd ? 1u : 0u;
+    buffer += in.open->inlet.inBuffer(glm::dvec3(set.positions[i])) ? 1u : 0u;
   }
   return 2 * buffer + fluid / 2;
 }

@@ -448,10 +448,10 @@ MeshVesselBuild buildMeshVessel(const AneurysmSpec& spec) {
                                     std::to_string(x0 + L) + " m (a periodic vessel's ends must match across the seam)");
       }
     }
-  } else if (!m.ends().empty()) {
+  } else if (!m.ends().empty() && !spec.openEnds) {
     throw std::invalid_argument("the mesh has " + std::to_string(m.ends().size()) +
-                                " open ends, which need a periodic x axis with the ends on its two planes (open inlets and outlets "
-                                "elsewhere are not supported yet); or close them in the mesh");
+                                " open ends, which need a periodic x axis with the ends on its two planes, or open inlets and "
+                                "outlets (AneurysmSpec::openEnds); or close them in the mesh");
   }
   const double period = t.periodic ? L : 1e3 * (glm::length(size) + dp);
   const double binX0 = t.periodic ? x0 : m.min().x - 10.0 * dp;
@@ -582,6 +582,14 @@ MeshVesselBuild buildMeshVessel(const AneurysmSpec& spec) {
   for (std::uint32_t i = 0; i < b.wall; ++i) {
     sim::WallPoint& w = net.points[i];
     w.mass = t.pointMass;
+    if (spec.openEnds) {
+      for (const MeshEnd& e : m.ends()) {
+        // (within a spacing of the end's cap, on the end's side of the vessel)
+        const glm::dvec3 d = pos[i] - e.centroid;
+        const double s = -glm::dot(d, e.normal);
+        if (s < dp && glm::length(d + s * e.normal) < e.radius + (t.layers + 1.0) * dp) w.anchored = true;
+      }
+    }
     double bestScore = 0.5;  // at least sin(30 deg) along the normal, else the point keeps its built normal
     for (std::uint32_t pa : adjacent[i])
       for (std::uint32_t pb : adjacent[i]) {
@@ -651,20 +659,22 @@ io::TriangleMesh vesselSurface(const VesselSurfaceSpec& v) {
     throw std::invalid_argument("sac offset must lie between the radius and the radius plus the sac's (the sac must join the tube)");
   }
   if (v.around < 8 || v.around > 4096) throw std::invalid_argument("around must be 8 to 4096");
-  const double pi = std::numbers::pi, L = v.length;
+  if (!std::isfinite(v.straight) || v.straight < 0.0) throw std::invalid_argument("straight length must be zero or positive");
+  const double pi = std::numbers::pi, L = v.length, S = v.straight, total = L + 2.0 * S;
   // The bend must not fold the tube onto itself: the axis' curvature radius stays above R.
   const double curvature = v.bendHeight * 2.0 * pi * pi / (L * L);
   if (curvature * v.radius >= 0.5) throw std::invalid_argument("bend height too large for the radius and length (the tube would fold)");
   const double phi = 2.0 * pi / v.around;
   const double R = v.radius * std::sqrt(phi / std::sin(phi));
-  const std::uint32_t along = v.along > 0 ? v.along : std::max<std::uint32_t>(4, std::uint32_t(std::lround(L / (R * phi))));
+  const std::uint32_t along = v.along > 0 ? v.along : std::max<std::uint32_t>(4, std::uint32_t(std::lround(total / (R * phi))));
   if (along > 100000) throw std::invalid_argument("along must be at most 100000");
-  const glm::dvec3 sac(0.5 * L, 0.0, v.bendHeight + v.sacOffset);  // relative to the start
+  const glm::dvec3 sac(S + 0.5 * L, 0.0, v.bendHeight + v.sacOffset);  // relative to the start
   io::TriangleMesh m;
   for (std::uint32_t i = 0; i < along; ++i) {
-    const double x = L * double(i) / along;
-    const double zc = 0.5 * v.bendHeight * (1.0 - std::cos(2.0 * pi * x / L));
-    const double slope = v.bendHeight * pi / L * std::sin(2.0 * pi * x / L);
+    const double x = total * double(i) / along;
+    const double xb = std::clamp(x - S, 0.0, L);  // along the bend (the straight runs: its ends)
+    const double zc = 0.5 * v.bendHeight * (1.0 - std::cos(2.0 * pi * xb / L));
+    const double slope = x - S > 0.0 && x - S < L ? v.bendHeight * pi / L * std::sin(2.0 * pi * xb / L) : 0.0;
     const double n = std::sqrt(1.0 + slope * slope);
     const glm::dvec3 e1(0.0, 1.0, 0.0), e2(-slope / n, 0.0, 1.0 / n);
     for (std::uint32_t j = 0; j < v.around; ++j) {
@@ -678,7 +688,7 @@ io::TriangleMesh vesselSurface(const VesselSurfaceSpec& v) {
       m.vertices.push_back(v.start + glm::dvec3(x, 0.0, zc) + rho * (std::cos(theta) * e1 + std::sin(theta) * e2));
     }
   }
-  for (std::uint32_t j = 0; j < v.around; ++j) m.vertices.push_back(m.vertices[j] + glm::dvec3(L, 0.0, 0.0));
+  for (std::uint32_t j = 0; j < v.around; ++j) m.vertices.push_back(m.vertices[j] + glm::dvec3(total, 0.0, 0.0));
   auto id = [&](std::uint32_t i, std::uint32_t j) { return i * v.around + j % v.around; };
   for (std::uint32_t i = 0; i < along; ++i)
     for (std::uint32_t j = 0; j < v.around; ++j) {

@@ -110,9 +110,9 @@ const std::vector<Field>& schema() {
             {
                 {"file", Kind::String, "", 0, 0, false, "", "STL (binary or ASCII) or OBJ file of the lumen's surface, relative to the scene file: one connected surface of triangles wound counter-clockwise seen from outside, open only at its ends."},
                 {"unit_m", Kind::Number, "m", 0, 1e3, true, 1.0, "Metres per unit of the file's coordinates: 0.001 for millimetres (what segmentation tools export)."},
-                {"ends", Kind::Objects, "", 0, kInf, false, Json::array(), "Every open boundary loop of the surface, named; a loop no entry names is an error (a hole). Open ends must lie on the two planes of a periodic x axis, matching across the seam (the blood leaving the outlet comes back through the inlet).", {},
+                {"ends", Kind::Objects, "", 0, kInf, false, Json::array(), "Every open boundary loop of the surface, named; a loop no entry names is an error (a hole). Either the ends lie on the two planes of a periodic x axis, matching across the seam (the blood leaving the outlet comes back through the inlet), or the vessel has open ends (vessel.outlet): one inlet and one outlet anywhere, each in the frame of its loop (the cap's centre, inward normal and equivalent radius), straight for its buffer's length.", {},
                  {
-                     {"role", Kind::Choice, "", 0, 0, false, nullptr, "What the end is: the inlet (on the domain's min x plane when vessel.inflow drives the flow: the zone starts there) or an outlet.", {"inlet", "outlet"}},
+                     {"role", Kind::Choice, "", 0, 0, false, nullptr, "What the end is: the inlet (on a periodic vessel, on the domain's min x plane when vessel.inflow drives the flow: the zone starts there) or an outlet.", {"inlet", "outlet"}},
                      {"at_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "A point at the end's centre (within its radius): which loop the entry names."},
                  }},
                 {"regions", Kind::Objects, "", 0, kInf, false, Json::array(), "Parts of the wall with other tissue, such as an aneurysm's thinner, weaker dome: a spring whose midpoint lies within a region's sphere takes its stiffness and strength scales (the first region that holds it).", {},
@@ -152,18 +152,18 @@ const std::vector<Field>& schema() {
                 {"driven_by", Kind::Choice, "", 0, 0, false, "velocity", "velocity: the zone moves at the profile and mean speed; pressure (open ends with a pressure outlet only): the inlet buffer holds pressure_Pa and moves at the lumen's own axial velocity next to it, radius by radius, so the pressure difference drives the flow.", {"velocity", "pressure"}},
                 {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "driven_by pressure: the inlet buffer's pressure over fluid.background_pressure_Pa, rising over ramp_s."},
                 {"mean_speed_m_s", Kind::Number, "m/s", -1e3, 1e3, false, 0.0, "Mean speed U over the cross-section (negative: flow along -x)."},
-                {"zone_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the driven zone from the tube's start; at least the kernel support 2h, at most half the tube."},
+                {"zone_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the driven zone from the tube's start (a mesh vessel's open inlet: from its end, along its axis); at least the kernel support 2h, at most half the tube."},
                 {"pulse_period_s", Kind::Number, "s", 0, 1e6, false, 0.0, "Period of the waveform (0: constant speed)."},
                 {"waveform", Kind::NumberList, "1", -100, 100, false, Json::array(), "Pulsatile flow: u(t) = U w(t), w sampled at equal steps over one period (2 to 64 samples, linear in between, periodic). Empty: w = 1."},
                 {"ramp_s", Kind::Number, "s", 0, 1e6, false, 0.0, "u rises linearly from 0 over this time (0: at once)."},
                 {"hold_lumen_pressure", Kind::Bool, "", 0, 0, false, false, "The zone is also the blood supply: each step a zone particle's mass becomes m rho0 / rho (between its initial mass and max_mass_ratio times it), so the zone holds the lumen at fluid.background_pressure_Pa while the wall stretches and blood leaves through a rupture."},
                 {"max_mass_ratio", Kind::Number, "1", 1, 1e3, false, 4.0, "Cap of a particle's mass over its initial mass under hold_lumen_pressure."},
             }},
-           {"outlet", Kind::Section, "", 0, 0, false, Json::object(), "Open ends (tubes and aneurysms along x, with vessel.inflow, on a domain whose x axis is not periodic): the inflow zone is the inlet buffer, fed by an image of each particle that leaves it into the lumen; the outlet buffer at the tube's end moves with the inflow's velocity profile and speed, and fluid past either end of the tube leaves the simulation (its slot parked for the inlet to reuse). The lumen's mass balance is counted exactly (hemo-run's summary, open_*).", {},
+           {"outlet", Kind::Section, "", 0, 0, false, Json::object(), "Open ends (tubes and aneurysms along x, and mesh vessels with one inlet and one outlet; with vessel.inflow, on a domain whose x axis is not periodic): the inflow zone is the inlet buffer, fed by an image of each particle that leaves it into the lumen; the outlet buffer at the vessel's other end moves with the inflow's velocity profile and flow rate, each along its end's axis, and fluid past either end leaves the simulation (its slot parked for the inlet to reuse). The lumen's mass balance is counted exactly (hemo-run's summary, open_*).", {},
             {
                 {"condition", Kind::Choice, "", 0, 0, false, "none", "none: the vessel is periodic and recycles its outflow (vessel.inflow); flow: open ends, the outlet buffer drawing the inlet's flow rate; pressure: open ends, the outlet buffer holding pressure_Pa and moving at the lumen's own axial velocity next to it, radius by radius (zero gradient).", {"none", "flow", "pressure"}},
                 {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "condition pressure: the outlet buffer's pressure over fluid.background_pressure_Pa."},
-                {"buffer_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the outlet buffer at the tube's end (0: the inflow zone's length); at least the kernel support 2h."},
+                {"buffer_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the outlet buffer at the vessel's end, along its axis (0: the inflow zone's length); at least the kernel support 2h."},
                 {"reserve_particles", Kind::Integer, "1", 0, 1e8, false, 0, "Free fluid slots for the buffers' images beyond those the outlet frees (0: automatic, twice the inlet buffer's particles and half the vessel's fluid: a sac that swells draws blood in through both ends). A run that runs out stops and says so."},
             }},
        }},
@@ -434,6 +434,26 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
   w.inflow = f;
 }
 
+// An open end of a mesh vessel must run straight for its buffer and a support beyond: the
+// buffer moves along the end's axis, and its images come a buffer length back along it. Every
+// vertex of the surface within the end's region, from `reach` behind the end to a support
+// past its plane, must lie on the end's tube (0.75 to 1.25 of its radius from the axis), not
+// past the end, and no other part of the vessel may come within its reach.
+void checkStraightEnd(const Checker& c, const VesselMesh& mesh, const sim::OpenEnd& e, const std::string& field, const char* role,
+                      float support) {
+  for (const glm::dvec3& v : mesh.surface().vertices) {
+    const glm::dvec2 l = e.local(v);
+    const double r = std::sqrt(l.y), R = e.radius;
+    if (l.x < -double(e.reach) || l.x > double(e.length) + support || r > double(e.reach) + support) continue;
+    if (l.x < -1e-3 * R || r < 0.75 * R || r > 1.25 * R) {
+      c.fail(field, std::string("the mesh's ") + role + " at " + fmtPoint(glm::dvec3(e.origin)) + " must run straight for its buffer (" +
+                        fmt(e.length) + " m) and a kernel support beyond, but its surface at " + fmtPoint(v) + " lies " + fmt(r) +
+                        " m from the end's axis and " + fmt(l.x) + " m along it (the end's radius is " + fmt(R) +
+                        " m): shorten the buffer, or extend the vessel straight at that end");
+    }
+  }
+}
+
 // vessel.outlet (after parseInflow): open ends. `out`: the checked section.
 void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, Scene& s, Vessel& w) {
   const std::string condition = out["condition"].get<std::string>();
@@ -447,8 +467,9 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   }
   if (!w.inflow) c.fail("vessel.outlet", "open ends need a vessel.inflow (the inlet): give vessel.inflow.profile");
   if (s.sph.periodic[0]) c.fail("domain.periodic", "a vessel with open ends (vessel.outlet) must not be periodic along x");
-  if (w.shape != Vessel::Shape::Tube && w.shape != Vessel::Shape::SaccularAneurysm && w.shape != Vessel::Shape::FusiformAneurysm) {
-    c.fail("vessel.outlet", "open ends apply to a tube or an aneurysm along x (not to a bifurcation or a mesh vessel yet)");
+  const bool meshed = w.shape == Vessel::Shape::Mesh;
+  if (w.shape == Vessel::Shape::Bifurcation) {
+    c.fail("vessel.outlet", "open ends apply to a tube, an aneurysm or a mesh vessel with one inlet and one outlet (not to a bifurcation yet)");
   }
   if (w.inflow->holdPressure) {
     c.fail("vessel.inflow.hold_lumen_pressure", "cannot be used with open ends (the zone's mass supply is for a closed, recycled loop)");
@@ -471,7 +492,7 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   if (s.sph.neighbourSearch == sim::NeighbourSearch::Cells) c.fail("particles.neighbour_search", "open ends need the neighbour list (\"list\" or \"auto\")");
   if (s.sph.listLayout == sim::ListLayout::Clusters) c.fail("particles.list_layout", "open ends do not walk clusters");
   const float slack = 1e-4f * s.sph.spacing;
-  if (std::abs(w.start.x - s.domain.min.x) > slack || std::abs(w.start.x + w.length - s.domain.max.x) > slack) {
+  if (!meshed && (std::abs(w.start.x - s.domain.min.x) > slack || std::abs(w.start.x + w.length - s.domain.max.x) > slack)) {
     c.fail("vessel.length_m", "a vessel with open ends must span the domain along x (start_m x = domain min x, length_m = " +
                                   fmt(double(s.domain.max.x) - s.domain.min.x) + " m): fluid leaves at the domain's ends");
   }
@@ -488,12 +509,32 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   }
   if (!(w.length - zone - buffer >= 2.0f * h2)) {
     c.fail("vessel.outlet.buffer_length_m", "the inlet and outlet buffers (" + fmt(zone) + " and " + fmt(buffer) +
-                                                " m) leave less than two kernel supports of lumen in the " + fmt(w.length) + " m tube");
+                                                " m) leave less than two kernel supports of lumen in the " + fmt(w.length) +
+                                                (meshed ? " m between the mesh's ends" : " m tube"));
   }
   sim::OpenEnds o;
-  o.startX = w.start.x;
-  o.endX = w.start.x + w.length;
-  o.outletLength = buffer;
+  const float reach = w.radius + float(w.layers + 1) * s.sph.spacing;  // (the lumen and its wall)
+  if (w.shape == Vessel::Shape::Mesh) {
+    o.inlet = w.meshInlet;
+    o.outlet = w.meshOutlet;
+    o.inlet.reach = o.inlet.radius + float(w.layers + 1) * s.sph.spacing;
+    o.outlet.reach = o.outlet.radius + float(w.layers + 1) * s.sph.spacing;
+  } else {
+    o.inlet.origin = w.start;
+    o.inlet.axis = glm::vec3(1.0f, 0.0f, 0.0f);
+    o.inlet.radius = w.radius;
+    o.inlet.reach = reach;
+    o.outlet.origin = w.start + glm::vec3(w.length, 0.0f, 0.0f);
+    o.outlet.axis = glm::vec3(-1.0f, 0.0f, 0.0f);
+    o.outlet.radius = w.radius;
+    o.outlet.reach = reach;
+  }
+  o.inlet.length = zone;
+  o.outlet.length = buffer;
+  if (meshed) {
+    checkStraightEnd(c, *w.mesh, o.inlet, "vessel.inflow.zone_length_m", "inlet", h2);
+    checkStraightEnd(c, *w.mesh, o.outlet, "vessel.outlet.buffer_length_m", "outlet", h2);
+  }
   // The gap the refill leaves at the buffer's far end stays beyond the support of the buffer
   // particles within the support of the inlet plane (two supports upstream of it), or at least
   // half a spacing (hemo/sim/inflow.hpp).
@@ -501,8 +542,8 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   // One metre past the domain's end, at its lowest corner: beyond every support, in the grid's
   // corner cell (interface/sph.h, HEMO_KIND_PARKED).
   o.parking = glm::vec3(s.domain.max.x + 1.0f, s.domain.min.y, s.domain.min.z);
-  o.boxMin = glm::vec2(s.domain.min.y, s.domain.min.z);
-  o.boxMax = glm::vec2(s.domain.max.y, s.domain.max.z);
+  o.boxMin = s.domain.min;
+  o.boxMax = s.domain.max;
   o.pressureInlet = pressureInlet;
   o.inletPressure = inflowSection["pressure_Pa"].get<float>();
   o.pressureOutlet = condition == "pressure";
@@ -580,20 +621,44 @@ void parseMesh(const Checker& c, const Json& v, const Json& raw, const Scene& s,
     }
     w.endRoles[e] = ends[std::size_t(claimed[e])]["role"].get<std::string>();
   }
-  if (!loops.empty() && !s.sph.periodic[0]) {
-    c.fail("domain.periodic", "a mesh vessel with open ends needs a periodic x axis with its ends on the two planes (open inlets and outlets elsewhere are not supported yet)");
+  const bool open = raw.contains("outlet") && raw["outlet"].is_object() && raw["outlet"].value("condition", "none") != "none";
+  if (!loops.empty() && !s.sph.periodic[0] && !open) {
+    c.fail("domain.periodic", "a mesh vessel with open ends needs either a periodic x axis with its ends on the two planes, or open "
+                              "inlets and outlets (vessel.outlet.condition \"flow\" or \"pressure\")");
   }
   const MeshEnd* inlet = nullptr;
+  const MeshEnd* outlet = nullptr;
   for (std::size_t e = 0; e < loops.size(); ++e) {
     if (w.endRoles[e] == "inlet" && (!inlet || loops[e].centroid.x < inlet->centroid.x)) inlet = &loops[e];
+    if (w.endRoles[e] == "outlet") outlet = &loops[e];
   }
   const glm::dvec3 centre = inlet ? inlet->centroid : 0.5 * (lo + hi);
   w.start = glm::vec3(s.sph.periodic[0] ? double(s.domain.min.x) : lo.x, centre.y, centre.z);
   w.length = s.sph.periodic[0] ? s.domain.max.x - s.domain.min.x : float(hi.x - lo.x);
   w.radius = float(inlet ? inlet->radius : 2.0 * vm->volume() / vm->area());
+  if (open) {
+    // Open ends (vessel.outlet): one inlet and one outlet, each in its own frame.
+    std::size_t inlets = 0, outlets = 0;
+    for (const std::string& role : w.endRoles) (role == "inlet" ? inlets : outlets) += 1;
+    if (inlets != 1 || outlets != 1) {
+      c.fail("vessel.mesh.ends", "open ends (vessel.outlet) on a mesh vessel take one inlet and one outlet, got " + std::to_string(inlets) +
+                                     " inlets and " + std::to_string(outlets) + " outlets (branching vessels are not supported yet)");
+    }
+    auto frame = [](const MeshEnd& e) {
+      sim::OpenEnd f;
+      f.origin = glm::vec3(e.centroid);
+      f.axis = glm::vec3(-e.normal);
+      f.radius = float(e.radius);
+      return f;
+    };
+    w.meshInlet = frame(*inlet);
+    w.meshOutlet = frame(*outlet);
+    w.start = w.meshInlet.origin;
+    w.length = float(glm::length(outlet->centroid - inlet->centroid));
+  }
   if (raw.contains("inflow") && raw["inflow"].value("profile", "none") != "none") {
     if (!inlet) c.fail("vessel.mesh.ends", "vessel.inflow needs an end with role \"inlet\"");
-    if (std::abs(inlet->centroid.x - double(s.domain.min.x)) > 1e-3 * s.sph.spacing) {
+    if (!open && std::abs(inlet->centroid.x - double(s.domain.min.x)) > 1e-3 * s.sph.spacing) {
       c.fail("vessel.mesh.ends", "the inlet must be the end on the plane x = domain min x (" + fmt(s.domain.min.x) +
                                      " m), where the inflow zone starts (for flow along -x give a negative vessel.inflow.mean_speed_m_s)");
     }
@@ -716,7 +781,7 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s, con
   if (s.sph.periodic[1] || s.sph.periodic[2]) c.fail("domain.periodic", "a vessel allows only x to be periodic (its axis)");
   const float slack = 1e-4f * s.sph.spacing;
   if (w.periodic) {
-    if (std::abs(w.start.x - s.domain.min.x) > slack || std::abs(w.start.x + w.length - s.domain.max.x) > slack) {
+    if (!meshed && (std::abs(w.start.x - s.domain.min.x) > slack || std::abs(w.start.x + w.length - s.domain.max.x) > slack)) {
       c.fail("vessel.length_m", "a periodic vessel must span the domain along x (start_m x = domain min x, length_m = " +
                                     fmt(double(s.domain.max.x) - s.domain.min.x) + " m)");
     }

@@ -1,5 +1,7 @@
 #include "hemo/sim/inflow.hpp"
 
+#include <glm/geometric.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -42,11 +44,17 @@ void Inflow::validate() const {
   require(std::isfinite(maxMassRatio) && maxMassRatio >= 1.0f, "the mass cap must be at least 1 (x the initial mass)");
   if (open) {
     const OpenEnds& o = *open;
-    require(std::isfinite(o.startX) && std::isfinite(o.endX) && o.endX > o.startX, "open ends: the tube's end must lie past its start");
-    require(zoneStart == o.startX, "open ends: the inlet buffer must start at the tube's start");
-    require(std::isfinite(o.outletLength) && o.outletLength > 0.0f && o.endX - o.outletLength > zoneEnd,
-            "open ends: the outlet buffer must have a positive length and leave a lumen after the inlet buffer");
-    require(std::isfinite(o.pendingMargin) && o.pendingMargin > 0.0f && o.pendingMargin < zoneEnd - zoneStart,
+    for (const OpenEnd* e : {&o.inlet, &o.outlet}) {
+      const std::string which = e == &o.inlet ? "open ends: the inlet's " : "open ends: the outlet's ";
+      for (int a = 0; a < 3; ++a) require(std::isfinite(e->origin[a]) && std::isfinite(e->axis[a]), which + "frame must be finite");
+      require(std::abs(glm::length(glm::dvec3(e->axis)) - 1.0) < 1e-5, which + "axis must be a unit vector");
+      require(std::isfinite(e->radius) && e->radius > 0.0f, which + "radius must be positive (m)");
+      require(std::isfinite(e->length) && e->length > 0.0f, which + "buffer must have a positive length (m)");
+      require(std::isfinite(e->reach) && e->reach >= e->radius, which + "reach must be at least its radius (m)");
+    }
+    require(glm::length(glm::dvec3(o.outlet.origin - o.inlet.origin)) > double(o.inlet.length) + o.outlet.length,
+            "open ends: the buffers must leave a lumen between them");
+    require(std::isfinite(o.pendingMargin) && o.pendingMargin > 0.0f && o.pendingMargin < o.inlet.length,
             "open ends: the refill margin must be positive and shorter than the inlet buffer");
     require(!holdPressure, "open ends: the zone cannot hold the lumen pressure (its mass supply is for closed loops)");
     for (int a = 0; a < 3; ++a) require(std::isfinite(o.parking[a]), "open ends: the parking point must be finite");
@@ -55,6 +63,18 @@ void Inflow::validate() const {
     require(!(o.pressureInlet || o.pressureOutlet) || (std::isfinite(o.slab) && o.slab > 0.0f),
             "open ends: a pressure end needs a slab of positive width");
   }
+}
+
+glm::dvec2 OpenEnd::local(glm::dvec3 p) const {
+  const glm::dvec3 d = p - glm::dvec3(origin), a(axis);
+  const double s = glm::dot(d, a);
+  const glm::dvec3 across = d - s * a;
+  return {s, glm::dot(across, across)};
+}
+
+bool OpenEnd::inBuffer(glm::dvec3 p) const {
+  const glm::dvec2 l = local(p);
+  return l.x >= 0.0 && l.x < double(length) && l.y < double(reach) * reach;
 }
 
 InflowParams makeInflowParams(const Inflow& in, float restDensity, float particleMass) {
@@ -77,30 +97,31 @@ InflowParams makeInflowParams(const Inflow& in, float restDensity, float particl
   p.maxMass = in.maxMassRatio * particleMass;
   p.baseMass = particleMass;
   std::copy(in.waveform.begin(), in.waveform.end(), p.waveform);
-  p.inletPlane = in.zoneEnd;
-  p.outletPlane = 3.0e38f;
-  p.startX = -3.0e38f;
-  p.endX = 3.0e38f;
   if (in.open) {
+    const OpenEnds& o = *in.open;
     p.open = 1u;
-    p.outletPlane = in.open->endX - in.open->outletLength;
-    p.startX = in.open->startX;
-    p.endX = in.open->endX;
-    p.parking[0] = in.open->parking.x;
-    p.parking[1] = in.open->parking.y;
-    p.parking[2] = in.open->parking.z;
-    p.parking[3] = in.zoneEnd - in.zoneStart;
-    p.pendingMargin = in.open->pendingMargin;
-    p.inletPressure = in.open->pressureInlet ? 1u : 0u;
-    p.outletPressure = in.open->pressureOutlet ? 1u : 0u;
-    p.pressures[0] = in.open->inletPressure;
-    p.pressures[1] = in.open->outletPressure;
-    p.pressures[2] = in.open->slab;
-    p.pressures[3] = in.open->characteristic;
-    p.box[0] = in.open->boxMin.x;
-    p.box[1] = in.open->boxMin.y;
-    p.box[2] = in.open->boxMax.x;
-    p.box[3] = in.open->boxMax.y;
+    int k = 0;
+    for (const OpenEnd* e : {&o.inlet, &o.outlet}) {
+      InflowParams::End& g = p.ends[k++];
+      const glm::vec3 shift = e->shift();
+      for (int a = 0; a < 3; ++a) g.origin[a] = e->origin[a], g.axis[a] = e->axis[a], g.shift[a] = shift[a];
+      g.origin[3] = e->length;
+      g.axis[3] = e->radius;
+      g.shift[3] = e->reach;
+      g.drive[0] = (o.inlet.radius / e->radius) * (o.inlet.radius / e->radius);
+    }
+    for (int a = 0; a < 3; ++a) {
+      p.parking[a] = o.parking[a];
+      p.boxMin[a] = o.boxMin[a];
+      p.boxMax[a] = o.boxMax[a];
+    }
+    p.pendingMargin = o.pendingMargin;
+    p.inletPressure = o.pressureInlet ? 1u : 0u;
+    p.outletPressure = o.pressureOutlet ? 1u : 0u;
+    p.pressures[0] = o.inletPressure;
+    p.pressures[1] = o.outletPressure;
+    p.pressures[2] = o.slab;
+    p.pressures[3] = o.characteristic;
   }
   return p;
 }

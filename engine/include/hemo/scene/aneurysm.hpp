@@ -42,6 +42,10 @@ struct AneurysmSpec {
     float stiffnessScale = 1.0f, strengthScale = 1.0f;
   };
   std::vector<Region> regions;
+  // Mesh vessels with open ends (vessel.outlet, hemo/sim/inflow.hpp): the domain is not
+  // periodic, and the wall points within a spacing of an end are anchored (the vessel goes on
+  // beyond its cut, as the analytic tube's anchored end rings).
+  bool openEnds = false;
 };
 
 // The inner radius (m) of the vessel at axial position x: the tube's, or on a fusiform

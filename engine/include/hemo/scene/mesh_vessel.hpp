@@ -120,8 +120,10 @@ TissueSprings springsFromMeshTissue(const VesselMesh& mesh, const MeshVesselBuil
 // far side of the sphere where it meets the sphere: the tube and sac as seen from the axis
 // (where the sac overhangs its neck, the neck widens to the sac's shadow). The rings' corners
 // sit at R sqrt(phi / sin(phi)) (phi = 2 pi / around) so each ring's polygon has the
-// circle's area. The ends are open and lie in the planes x = x0 and x0 + L, the last ring a
-// copy of the first shifted by L (a periodic vessel's ends match exactly).
+// circle's area. A straight run of length S (0: none) may lead into the bend and out of it
+// (the bend and the sac then start S along: open ends want a straight run for their buffers).
+// The ends are open and lie in the planes x = x0 and x0 + L + 2 S, the last ring a copy of
+// the first shifted by L + 2 S (a periodic vessel's ends match exactly).
 struct VesselSurfaceSpec {
   glm::dvec3 start{0.0};      // m, the axis at x = x0
   double length = 0.0;        // m, L
@@ -131,6 +133,7 @@ struct VesselSurfaceSpec {
   double sacOffset = 0.0;     // m, from the axis to the sac's centre (R < offset < R + Rs)
   std::uint32_t around = 64;  // quads around
   std::uint32_t along = 0;    // quads along (0: about square quads)
+  double straight = 0.0;      // m, S: a straight run of the tube before the bend and after it
 };
 // Throws std::invalid_argument naming the parameter.
 io::TriangleMesh vesselSurface(const VesselSurfaceSpec& spec);

@@ -26,21 +26,24 @@
 // stand for proportionally more volume (their spacing grows as (m / m0)^(1/3) at rest
 // density), and the cap bounds how long a bleed can be fed.
 //
-// Open ends (Inflow::open): the vessel is not periodic. The zone is then the inlet buffer, at
-// the tube's start, and a second zone of the outlet's length at the tube's end is the outlet
-// buffer; between the inlet plane (the zone's end) and the outlet plane lies the lumen. The
-// outlet buffer moves at the inflow's profile and speed (a flow-controlled outlet) or, as a
-// pressure end (below), holds a pressure. Fluid past either end of the tube, or out of the
-// domain through a tear, is parked (HEMO_KIND_PARKED of interface/sph.h: a free fluid slot far
-// outside the domain, which no pass sees), and every particle that leaves a buffer into the
-// lumen gets its image at the buffer's far end, a buffer length away, in a parked slot
+// Open ends (Inflow::open): the vessel is not periodic. Each end (the inlet, the outlet) has
+// its own frame: the centre of the vessel's end, the axis into the lumen, the lumen's radius
+// there. The slab of the lumen a buffer length in from the end is the end's buffer; past it
+// lies the lumen. The inlet buffer moves at the inflow's profile and speed (the velocity
+// inlet), the outlet buffer at the same flow rate (a flow-controlled outlet) or, as a pressure
+// end (below), holds a pressure. Fluid past either end, or out of the domain through a tear,
+// is parked (HEMO_KIND_PARKED of interface/sph.h: a free fluid slot far outside the domain,
+// which no pass sees), and every particle that leaves a buffer into the lumen gets its image a
+// buffer length back along the end's axis, at the buffer's far end, in a parked slot
 // (sph/open_spawn.comp), so each buffer always holds the same particles, as if it were fed
 // through a periodic seam (the outlet's only when the flow reverses). The refill runs on the
 // GPU at the start of every step that rebuilds the neighbour list; a crosser still owed its
 // image forces a rebuild once it is `pendingMargin` into the lumen, so the gap at the buffer's
 // far end never reaches within the support of the buffer particles the lumen sees. The
 // crossings of both planes are counted (integers), so the lumen's mass balance is known
-// exactly.
+// exactly. An end acts only within `reach` of its axis, and from `reach` behind its end to its
+// plane (the end's region): there it drives and parks fluid, and counts its crossings; the
+// rest of the domain, other branches of a curved vessel included, it leaves alone.
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
@@ -50,13 +53,29 @@
 
 namespace hemo::sim {
 
+// One open end's frame (see above). Along the axis from the origin, s < 0 is past the end
+// (parked), [0, length) the buffer, length and on the lumen.
+struct OpenEnd {
+  glm::vec3 origin{0.0f};         // m, the centre of the vessel's end
+  glm::vec3 axis{1.0f, 0.0f, 0.0f};  // unit, into the lumen
+  float radius = 0.0f;            // m, the lumen's radius at the end
+  float length = 0.0f;            // m, the buffer's along the axis
+  float reach = 0.0f;             // m, of the end's region from the axis (the lumen and its wall)
+  // A crosser's image lies at its position less this (a buffer length along the axis, in
+  // single precision as the GPU takes it).
+  glm::vec3 shift() const { return axis * length; }
+  // (s, r^2): the distance along the axis from the origin and the squared distance from the
+  // axis, in double precision.
+  glm::dvec2 local(glm::dvec3 p) const;
+  // Whether p lies in the buffer, s in [0, length) within reach.
+  bool inBuffer(glm::dvec3 p) const;
+};
+
 struct OpenEnds {
-  float startX = 0.0f;        // m, the tube's start (fluid before it is parked)
-  float endX = 0.0f;          // m, the tube's end (fluid at or past it is parked)
-  float outletLength = 0.0f;  // m, the outlet buffer [endX - outletLength, endX)
+  OpenEnd inlet, outlet;
   float pendingMargin = 0.0f; // m (see above)
   glm::vec3 parking{0.0f};    // m, where parked slots lie (outside the domain, beyond every support)
-  glm::vec2 boxMin{-3.0e38f}, boxMax{3.0e38f};  // m, the domain across the axis (y, z): fluid beyond is parked
+  glm::vec3 boxMin{-3.0e38f}, boxMax{3.0e38f};  // m, the domain: fluid beyond is parked
   // Pressure ends: a buffer that holds a pressure (Pa over the background pressure; the
   // inlet's rises over the inflow's ramp) instead of the Tait law's, and moves at the lumen's
   // axial velocity next to its plane, radius by radius (a zero gradient along the axis), from
@@ -79,6 +98,8 @@ struct OpenEnds {
 struct Inflow {
   enum class Profile { Parabolic, Plug };
   Profile profile = Profile::Parabolic;
+  // The periodic vessel's zone (open ends: each end's frame, OpenEnds, and the inlet's here
+  // only where its axis is x)
   float zoneStart = 0.0f;  // m along x
   float zoneEnd = 0.0f;    // m
   float centreY = 0.0f;    // m, the tube's axis
@@ -109,14 +130,20 @@ struct InflowParams {
   std::uint32_t profile, samples, enabled, holdPressure;
   float restDensity, maxMass, baseMass, reserved;
   float waveform[Inflow::kMaxSamples];
-  float inletPlane, outletPlane, startX, endX;
-  float parking[4];  // xyz m; w: the spawn's shift upstream (the zone's length)
+  struct End {
+    float origin[4];  // xyz m; w: the buffer's length (m)
+    float axis[4];    // xyz into the lumen; w: the lumen's radius (m)
+    float shift[4];   // xyz: a crosser's image lies at its position less this (m); w: the reach (m)
+    float drive[4];   // x: the flow outlet's speed over the inlet's, (R_inlet / R_outlet)^2
+  } ends[2];          // the inlet's, the outlet's
+  float parking[4];   // xyz m
   float pendingMargin;
   std::uint32_t open, inletPressure, outletPressure;
   float pressures[4];  // inlet's, outlet's (Pa over the background), slab (m), 1 / (rho0 c0)
-  float box[4];        // the domain across the axis: min y, min z, max y, max z (m)
+  float boxMin[4];     // the domain (m; xyz)
+  float boxMax[4];
 };
-static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + 80);
+static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + 2 * 64 + 80);
 
 // `restDensity` rho0 (kg/m^3) and `particleMass` m0 (kg) of the fluid.
 InflowParams makeInflowParams(const Inflow& inflow, float restDensity, float particleMass);
