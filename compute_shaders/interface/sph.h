@@ -252,7 +252,10 @@
 // InflowParams (common/inflow.glsl): the pressure an open end's buffer holds (inletPressure,
 // outletPressure) replaces the Tait pressure of the fluid in it
 #define HEMO_DENSITY_BINDING_INFLOW 12
-#define HEMO_DENSITY_BINDING_COUNT 13
+// The open ends' profiles (common/inflow.glsl, HEMO_OPEN_BINS): a velocity-driven buffer takes
+// the pressure the lumen has next to its plane
+#define HEMO_DENSITY_BINDING_OPEN_PROFILE 13
+#define HEMO_DENSITY_BINDING_COUNT 14
 
 // sph/boundary_pressure.comp: pressure and density of boundary particles extrapolated from
 // their fluid neighbours (Adami, Hu & Adams 2012).

@@ -50,6 +50,7 @@ layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_POSITION) writeonly buffer Pa
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_COUNT) writeonly buffer PairCount { uint pairCount[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_LIST) writeonly buffer PairList { uint pairList[]; };
 layout(std140, binding = HEMO_DENSITY_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
+layout(std430, binding = HEMO_DENSITY_BINDING_OPEN_PROFILE) readonly buffer OpenProfile { float openProfile[]; };
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
 layout(constant_id = 2) const uint kListWidth = 1u;
@@ -193,12 +194,18 @@ void main() {
   if (inflow.open != 0u) {
     // Open ends (hemo/sim/inflow.hpp): a pressure end's buffer holds its pressure (the inlet's
     // rising over the inflow's ramp), whatever its particles' density.
+    // A velocity-driven buffer takes the pressure the lumen has next to its plane (a zero
+    // gradient along the axis, once measured): its own summed density is cut off at its far
+    // end, and its images land among its particles.
     for (uint e = 0u; e < 2u; ++e) {
       const vec2 l = hemo_open_local(inflow, e, gPi.xyz);
       const float reach = inflow.ends[e].shift.w;
-      if ((e == 0u ? inflow.inletPressure : inflow.outletPressure) != 0u && l.x < inflow.ends[e].origin.w && l.x >= -reach &&
-          l.y < reach * reach) {
-        p = background + (e == 0u ? inflow.pressures.x * hemo_inflow_ramp(inflow, time) : inflow.pressures.y);
+      if (l.x < inflow.ends[e].origin.w && l.x >= -reach && l.y < reach * reach) {
+        if ((e == 0u ? inflow.inletPressure : inflow.outletPressure) != 0u) {
+          p = background + (e == 0u ? inflow.pressures.x * hemo_inflow_ramp(inflow, time) : inflow.pressures.y);
+        } else if (openProfile[2u * HEMO_OPEN_BINS + e] > 0.5 * HEMO_OPEN_NO_PRESSURE) {
+          p = openProfile[2u * HEMO_OPEN_BINS + e];
+        }
       }
     }
   }

@@ -282,8 +282,9 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
     return false;
   }
   if (kInflow == 2u) {
-    // Open ends (hemo/sim/inflow.hpp): every particle in a buffer is driven, at rest beyond the
-    // radius, so none drifts out through the end or back into the lumen along the wall.
+    // Open ends (hemo/sim/inflow.hpp): every particle in a buffer is driven, as a whole (its
+    // velocity, not only its axial part), at rest beyond the radius, so none drifts out
+    // through the end or back into the lumen along the wall.
     vec2 l;
     const bool inlet = hemo_open_in_buffer(x, 0u, l);
     const bool outlet = !inlet && hemo_open_in_buffer(x, 1u, l);
@@ -309,10 +310,15 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
       }
       inward = s2 < 1.0 ? openProfile[e * HEMO_OPEN_BINS + hemo_open_bin(s2)] + lack * inflow.pressures.w : 0.0;
     } else {
-      // The inflow's profile; at the outlet, the same flow rate out of the lumen.
+      // The inflow's profile; at the outlet, the same flow rate out of the lumen. The buffer
+      // moves as a whole, across the section too (its images, copies of the lumen's crossers,
+      // keep their spacing): free across the section, the buffer's particles next to its cut
+      // far end and its images landing among them were knocked sideways at up to twice the
+      // inflow's peak speed, and the inlet delivered 7% less than its profile carries.
       const float profile = inflow.profile == 1u ? (s2 < 1.0 ? 1.0 : 0.0) : 2.0 * max(1.0 - s2, 0.0);
       const float speed = hemo_inflow_mean_speed(time) * profile * inflow.ends[e].drive.x;
       inward = outlet ? -speed : speed;
+      gWholeVelocity = true;
     }
     u = inward * axis;
     return true;
@@ -366,9 +372,10 @@ void hemo_open_enter_buffer(uint i, uint b) {
 // crossings, and parking past either end or outside the domain.
 void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
   const vec2 l[2] = vec2[2](hemo_open_local(inflow, 0u, x.xyz), hemo_open_local(inflow, 1u, x.xyz));
-  if ((inflow.inletPressure | inflow.outletPressure) != 0u) {
+  {
     // The lumen's speeds along each end's axis in the slab next to its plane, by radius, for
-    // the pressure ends' buffers (their zero gradient along the axis).
+    // the pressure ends' buffers (their zero gradient along the axis), and its pressure there
+    // (the velocity-driven buffers'; sph/density.comp).
     for (uint e = 0u; e < 2u; ++e) {
       const float R = inflow.ends[e].axis.w;
       const float s2 = l[e].y / (R * R);

@@ -33,7 +33,7 @@ nlohmann::json openTube() {
   return nlohmann::json::parse(R"({
     "scene": "open_tube",
     "particles": { "spacing_m": 5e-4, "list_skin": 0.25, "neighbour_capacity": 176 },
-    "fluid": { "density_kg_m3": 1060.0, "viscosity_pa_s": 0.0035, "expected_max_speed_m_s": 0.5 },
+    "fluid": { "density_kg_m3": 1060.0, "viscosity_pa_s": 0.0035, "expected_max_speed_m_s": 0.5, "background_pressure_Pa": 200.0 },
     "vessel": { "shape": "tube", "length_m": 0.018, "radius_m": 0.002, "point_mass_kg": 2e-4,
                 "stiffness_N_m": 200.0, "damping_N_s_m": 0.01,
                 "inflow": { "profile": "parabolic", "mean_speed_m_s": 0.2, "zone_length_m": 0.003, "ramp_s": 0.005 },
@@ -144,6 +144,9 @@ TEST_F(OpenEndsTest, TubeBalancesItsMassAndCarriesTheInletsFlow) {
   sim::RunOptions opt;
   opt.until = 0.04;
   sim.run(opt);
+  const std::uint32_t lumenMid = lumenCount(sim.snapshot(), in);
+  opt.until = 0.06;
+  sim.run(opt);
   const sim::Snapshot end = sim.snapshot();
   const auto o = sim.openCounts();
   const std::int64_t in64 = std::int64_t(o.in) - o.inBack, out64 = std::int64_t(o.out) - o.outBack;
@@ -161,13 +164,14 @@ TEST_F(OpenEndsTest, TubeBalancesItsMassAndCarriesTheInletsFlow) {
   EXPECT_GE(in64, std::int64_t(o.spawned));
   EXPECT_LE(in64 - std::int64_t(o.spawned), 64);
   EXPECT_EQ(o.parkedStart, 0u);
-  // The outlet draws about what the inlet brings: the lumen holds its particles within 3%
-  // (measured: 2.5% more, the compression that drives the back flow below).
-  EXPECT_LE(std::abs(double(change)), 0.03 * lumen0);
+  // The outlet draws what the inlet brings once the soft wall has taken up the start: the
+  // lumen's count changes by under 2.5% from 0.04 s on (measured: +7.5% by then, the wall
+  // widening as the flow starts, then +1.25% to 0.06 s; +92 of 1,200 at 0.08 s).
+  std::printf("lumen %u at 0.04 s\n", lumenMid);
+  EXPECT_LE(std::abs(double(lumen0 + change) - lumenMid), 0.025 * lumen0);
   // The net inflow against the flow rate the inlet prescribes on its lattice (over the ramp's
-  // average) and against rho U pi R^2, within 10%: measured 7% under the lattice's rate, the
-  // particles that the compressed lumen pushes back into the buffer along the wall, where the
-  // prescribed profile is slow.
+  // average) and against rho U pi R^2, within 5% (measured to 0.06 s: 0.5% and 1.4% over;
+  // 0.7% under and 0.2% over to 0.08 s).
   const double m = scene.sph.particleMass();
   const double t = sim.time(), ramp = in.ramp;
   const double volume = in.meanSpeed * std::numbers::pi * in.radius * in.radius * (t - 0.5 * ramp);
@@ -175,8 +179,8 @@ TEST_F(OpenEndsTest, TubeBalancesItsMassAndCarriesTheInletsFlow) {
   const double latticeIn = lattice * (t - 0.5 * ramp);
   std::printf("mass in %.4e kg, rho Q t %.4e kg (ratio %.4f); particles in %lld, the lattice's rate %.1f (ratio %.4f)\n",
               massIn, expected, massIn / expected, static_cast<long long>(in64), latticeIn, double(in64) / latticeIn);
-  EXPECT_NEAR(double(in64) / latticeIn, 1.0, 0.10);
-  EXPECT_NEAR(massIn / expected, 1.0, 0.10);
+  EXPECT_NEAR(double(in64) / latticeIn, 1.0, 0.05);
+  EXPECT_NEAR(massIn / expected, 1.0, 0.05);
   EXPECT_EQ(sim.escapedParticles(), 0u);
   EXPECT_EQ(sim.lostParticles(), 0u);
   // Outputs leave the parked slots out.

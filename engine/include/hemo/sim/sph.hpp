@@ -572,7 +572,7 @@ class SphSolver {
   gpu::Buffer openSums_, openProfile_;
   const gpu::ComputePipeline* openProfilePass_ = nullptr;
   gpu::DescriptorSet openProfileSet_;
-  bool pressureEnds_ = false;
+  bool openProfiles_ = false;
   std::unique_ptr<gpu::PrefixScan> spawnScanner_;
   const gpu::ComputePipeline* spawn_ = nullptr;
   gpu::DescriptorSet spawnSet_;
