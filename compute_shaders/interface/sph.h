@@ -382,8 +382,11 @@
 
 // Open vessel ends' counters (uint each): fluid particles that crossed the inlet plane
 // downstream and back upstream, the outlet plane downstream and back, were parked past the
-// tube's end and before its start, were spawned into a buffer, and were parked outside the
-// domain.
+// outlet's end and past the inlet's, were spawned into the inlet's buffer, were parked
+// outside the domain, and were spawned into the outlet's buffer. Each buffer's deficit, the
+// particles it holds fewer than it started with, follows from them: the inlet's
+// IN + PARKED_START - IN_BACK - SPAWNED, the outlet's OUT_BACK + PARKED_END - OUT -
+// SPAWNED_OUTLET (sph/open_spawn.comp makes up to that many images).
 #define HEMO_OPEN_COUNTER_IN 0
 #define HEMO_OPEN_COUNTER_IN_BACK 1
 #define HEMO_OPEN_COUNTER_OUT 2
@@ -391,8 +394,9 @@
 #define HEMO_OPEN_COUNTER_PARKED_END 4
 #define HEMO_OPEN_COUNTER_PARKED_START 5
 #define HEMO_OPEN_COUNTER_SPAWNED 6
-#define HEMO_OPEN_COUNTER_PARKED_OUTSIDE 7  // fluid that left the domain across the axis (through a tear)
-#define HEMO_OPEN_COUNTER_COUNT 8
+#define HEMO_OPEN_COUNTER_PARKED_OUTSIDE 7  // fluid that left the domain (through a tear)
+#define HEMO_OPEN_COUNTER_SPAWNED_OUTLET 8
+#define HEMO_OPEN_COUNTER_COUNT 9
 // The pressure ends' speed and pressure bins (common/inflow.glsl): bins per plane, words per
 // bin (low, high, count), the fixed-point offsets and scales of speeds (m/s) and pressures (Pa),
 // and a plane's pressure before any particle was measured.
@@ -407,25 +411,30 @@
 
 // sph/open_spawn.comp: the buffers' refill, at the start of every step that rebuilds the
 // neighbour list (inside the rebuild gate, before the grid), over the fluid's slots [0, N):
-// every particle that left a buffer into the lumen since the last refill gets its image at the
-// buffer's far end, a buffer length away, in a parked slot: the k-th such particle in slot
-// order takes the k-th parked slot in slot order (a prefix scan of both flags, no float
-// atomics).
+// particles that left a buffer into the lumen since the last refill get their images at the
+// buffer's far end, a buffer length back along the end's axis, in parked slots, as many per
+// end as the buffer's deficit (HEMO_OPEN_COUNTER_*): first those that owe their buffer one
+// (pending 1 inlet, 2 outlet), then those that spent a credit crossing (3 inlet, 4 outlet: they
+// had come into the buffer from the lumen, and their image is made only where the buffer has
+// since lost particles at its far end, as reverse flow takes them out). The k-th served
+// crosser (in that order, each class in slot order) takes the k-th parked slot in slot order
+// (a prefix scan of the flags, no float atomics).
 #define HEMO_SPAWN_BINDING_POSITIONS 0
 #define HEMO_SPAWN_BINDING_VELOCITIES 1
 #define HEMO_SPAWN_BINDING_NORMALS 2
-#define HEMO_SPAWN_BINDING_PENDING 3   // uint per fluid slot (HEMO_INTEGRATE_BINDING_PENDING): 0, or the buffer owed (1 inlet, 2 outlet)
-#define HEMO_SPAWN_BINDING_SCAN 4      // uint[2N + 1]: pending flags, then parked flags, then 0; scanned
-#define HEMO_SPAWN_BINDING_CROSSERS 5  // uint per fluid slot: the slot of the k-th pending particle
+#define HEMO_SPAWN_BINDING_PENDING 3   // uint per fluid slot (HEMO_INTEGRATE_BINDING_PENDING): 0, or 1-4 (above)
+#define HEMO_SPAWN_BINDING_SCAN 4      // uint[5N + 3]: the flags of pending 1, 2, 3, 4 and of the parked slots, then 0 (scanned: 5N + 1); then the two ends' deficits
+#define HEMO_SPAWN_BINDING_CROSSERS 5  // uint per fluid slot: the slot of the k-th served crosser (bit 31: the outlet's)
 #define HEMO_SPAWN_BINDING_INFLOW 6    // InflowParams
 #define HEMO_SPAWN_BINDING_COUNTERS 7  // HEMO_OPEN_COUNTER_*
 #define HEMO_SPAWN_BINDING_STATUS 8
 #define HEMO_SPAWN_BINDING_COUNT 9
+#define HEMO_SPAWN_CLASSES 5  // the scan's segments of N flags: pending 1, 2, 3, 4, parked
 // push constants: uint n (fluid slots N), uint mode
-#define HEMO_SPAWN_FLAGS 0    // scan[i] = pending, scan[N + i] = parked, scan[2N] = 0
-#define HEMO_SPAWN_SCATTER 1  // (after the scan) crossers[scan[i]] = i for each pending slot i
-#define HEMO_SPAWN_COPY 2     // each parked slot of rank k < crossings takes crosser k's image;
-                              // the crossers served clear their flag, the others count a shortfall
+#define HEMO_SPAWN_FLAGS 0    // scan[c N + i] = (pending[i] == c + 1) (c < 4), scan[4N + i] = parked, scan[5N] = 0; the deficits
+#define HEMO_SPAWN_SCATTER 1  // (after the scan) crossers[k] = i for each served crosser i of rank k
+#define HEMO_SPAWN_COPY 2     // each parked slot of rank k < served takes crosser k's image; the
+                              // crossers served or not needed clear their flag, the others count a shortfall
 
 // sph/integrate.comp: symplectic Euler or one stage of RK2 midpoint with the GPU-reduced time
 // step, clock, status. Specialization constant 2, the stage:

@@ -154,7 +154,7 @@ vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v, out vec3 d, out vec3 x0) {
     // into the lumen: the refill comes before the buffer's gap nears the lumen, in any flow (a
     // plug flow alone would never rebuild the list). (pending 1: the inlet's; 2: the outlet's,
     // of reverse flow)
-    const uint e = pending[i] - 1u;
+    const uint e = (pending[i] - 1u) & 1u;
     if (hemo_open_local(inflow, e, x).x - inflow.ends[e].origin.w >= inflow.pendingMargin) {
       r = 3.0e38;
     }
@@ -348,22 +348,25 @@ void hemo_open_sum(uint bin, float value, float offset, float scale) {
   atomicAdd(openSums[word + 2u], 1u);
 }
 
-// Slot i has left buffer b (1 inlet, 2 outlet) into the lumen: it spends its credit for b, or
-// owes b its image.
+// Slot i has left buffer b (1 inlet, 2 outlet) into the lumen: it owes b its image (pending
+// b), or, holding a credit for b, spends it (pending b + 2: its image is made only where the
+// buffer has lost particles at its far end since, sph/open_spawn.comp).
 void hemo_open_leave_buffer(uint i, uint b) {
   if (normals[i].w == float(b)) {
     normals[i].w = 0.0;
+    pending[i] = b + 2u;
   } else {
     pending[i] = b;
   }
 }
 
-// Slot i has come back from the lumen into buffer b: it cancels the image it owes b, or earns
-// a credit for b.
+// Slot i has come into buffer b from the lumen: it cancels the image it owes b (and gets back
+// the credit it had spent on it), or earns a credit for b.
 void hemo_open_enter_buffer(uint i, uint b) {
   if (pending[i] == b) {
     pending[i] = 0u;
   } else {
+    pending[i] = pending[i] == b + 2u ? 0u : pending[i];
     normals[i].w = float(b);
   }
 }
@@ -393,9 +396,12 @@ void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
   // inlet's, 2: the outlet's, of reverse flow; a buffer length back along the end's axis);
   // one that comes back into the buffer cancels the image it still owes, or else earns a
   // credit (normals.w = 1 for the inlet, 2 for the outlet: fluid particles carry no normal,
-  // and open ends use summation density) that its next crossing into the lumen spends instead
-  // of asking for an image. (Near the wall, where the flow is slow, particles cross back and
-  // forth; each forward crossing made an image, and the buffer filled up.)
+  // and open ends use summation density) that its next crossing into the lumen spends: its
+  // image is then made only as far as the buffer has lost particles past its far end
+  // meanwhile (pending 3, 4; sph/open_spawn.comp counts each buffer's deficit). (Near the wall,
+  // where the flow is slow, particles cross back and forth: each forward crossing made an
+  // image, and the buffer filled up. Without the deficit, a buffer that reverse flow had
+  // emptied at its far end got nothing back when the flow turned.)
   bool past[2];
   for (uint e = 0u; e < 2u; ++e) {
     const float reach = inflow.ends[e].shift.w;

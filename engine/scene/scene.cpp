@@ -482,11 +482,6 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   if (condition != "pressure" && out["pressure_Pa"].get<double>() != 0.0) {
     c.fail("vessel.outlet.pressure_Pa", "only applies with vessel.outlet.condition \"pressure\"");
   }
-  if (!w.inflow->waveform.empty()) {
-    for (float v : w.inflow->waveform) {
-      if (v < 0.0f) c.fail("vessel.inflow.waveform", "must not reverse the flow with open ends (negative sample " + fmt(v) + ")");
-    }
-  }
   if (s.sph.densityMethod != sim::DensityMethod::Summation) c.fail("fluid.density", "open ends need summation density");
   if (s.sph.pressureSolver != sim::PressureSolver::Wcsph) c.fail("fluid.pressure_solver", "open ends need the wcsph pressure solver");
   if (s.sph.neighbourSearch == sim::NeighbourSearch::Cells) c.fail("particles.neighbour_search", "open ends need the neighbour list (\"list\" or \"auto\")");

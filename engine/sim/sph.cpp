@@ -1061,9 +1061,10 @@ void SphSolver::setInflow(const Inflow& inflow) {
   }
   if (openOn_ && !spawn_) {
     const std::uint64_t n = std::max(particles_->fluidCount(), 1u);
-    spawnScan_ = gpu::Buffer(*context_, (2 * n + 1) * 4, gpu::MemoryUse::Device, "open inlet's refill scan");
-    crossers_ = gpu::Buffer(*context_, n * 4, gpu::MemoryUse::Device, "open inlet's crossers by rank");
-    spawnScanner_ = std::make_unique<gpu::PrefixScan>(*context_, spawnScan_, 2 * n + 1);
+    // (the flags of HEMO_SPAWN_CLASSES segments and their total, scanned; then the two ends' deficits)
+    spawnScan_ = gpu::Buffer(*context_, (HEMO_SPAWN_CLASSES * n + 3) * 4, gpu::MemoryUse::Device, "open ends' refill scan");
+    crossers_ = gpu::Buffer(*context_, n * 4, gpu::MemoryUse::Device, "open ends' crossers by rank");
+    spawnScanner_ = std::make_unique<gpu::PrefixScan>(*context_, spawnScan_, HEMO_SPAWN_CLASSES * n + 1);
     spawn_ = &context_->pipelines().get({"sph/open_spawn", HEMO_SPAWN_BINDING_COUNT, 8, kWorkgroup, {},
                                          1u << HEMO_SPAWN_BINDING_INFLOW, 0u});
     const ParticleArrays& a = particles_->live();
@@ -1087,7 +1088,7 @@ void SphSolver::recordOpenRefill(gpu::CommandRecorder& rec) {
   const std::uint32_t n = particles_->fluidCount();
   rec.dispatch(*spawn_, spawnSet_, SpawnPush{n, HEMO_SPAWN_FLAGS}, spawn_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
-  spawnScanner_->record(rec, 2 * std::uint64_t(n) + 1);
+  spawnScanner_->record(rec, HEMO_SPAWN_CLASSES * std::uint64_t(n) + 1);
   rec.computeToCompute();
   rec.dispatch(*spawn_, spawnSet_, SpawnPush{n, HEMO_SPAWN_SCATTER}, spawn_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
@@ -1099,7 +1100,7 @@ SphSolver::OpenCounts SphSolver::readOpenCounts() const {
   const std::vector<std::uint32_t> c = openCounters_.readback<std::uint32_t>(HEMO_OPEN_COUNTER_COUNT);
   return OpenCounts{c[HEMO_OPEN_COUNTER_IN], c[HEMO_OPEN_COUNTER_IN_BACK], c[HEMO_OPEN_COUNTER_OUT],
                     c[HEMO_OPEN_COUNTER_OUT_BACK], c[HEMO_OPEN_COUNTER_PARKED_END], c[HEMO_OPEN_COUNTER_PARKED_START],
-                    c[HEMO_OPEN_COUNTER_SPAWNED], c[HEMO_OPEN_COUNTER_PARKED_OUTSIDE]};
+                    c[HEMO_OPEN_COUNTER_SPAWNED] + c[HEMO_OPEN_COUNTER_SPAWNED_OUTLET], c[HEMO_OPEN_COUNTER_PARKED_OUTSIDE]};
 }
 
 void SphSolver::setBackgroundPressure(float pascals) {

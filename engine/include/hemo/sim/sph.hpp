@@ -313,6 +313,7 @@ class SphSolver {
   OpenCounts readOpenCounts() const;
   const gpu::Buffer& pending() const { return pending_; }
   gpu::Buffer& pending() { return pending_; }  // (for tests)
+  gpu::Buffer& openCounters() { return openCounters_; }  // HEMO_OPEN_COUNTER_* (for tests)
   // Drives the fluid in a vessel's inflow zone (hemo/sim/inflow.hpp). Set-up only (an upload);
   // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
   void setInflow(const Inflow& inflow);
