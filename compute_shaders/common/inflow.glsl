@@ -42,6 +42,10 @@ struct InflowParams {
   vec4 pressures;
   vec4 boxMin;  // xyz: the domain (m); fluid beyond it is parked
   vec4 boxMax;
+  // Blood far outside the vessel's wall is parked too (hemo/sim/inflow.hpp, EscapeGrid): the
+  // mask's grid, xyz its origin (m), w 1 / its cell (1/m); its cells, and w = 1 where it is on.
+  vec4 escapeOrigin;
+  uvec4 escapeDims;
 };
 
 // Open end e's (s, r^2) at x: the distance along its axis from its origin, and the squared

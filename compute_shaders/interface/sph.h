@@ -473,7 +473,10 @@
 // outlet's; sph/open_profile.comp).
 #define HEMO_INTEGRATE_BINDING_OPEN_SUMS 25
 #define HEMO_INTEGRATE_BINDING_OPEN_PROFILE 26
-#define HEMO_INTEGRATE_BINDING_COUNT 27
+// Open ends: the escape mask (hemo/sim/inflow.hpp, EscapeGrid; a bit per cell, set where blood
+// is far enough outside the vessel's wall to be parked)
+#define HEMO_INTEGRATE_BINDING_ESCAPE_MASK 27
+#define HEMO_INTEGRATE_BINDING_COUNT 28
 
 // sph/open_profile.comp: one workgroup; each bin's mean axial speed from the integrator's sums
 // (a bin nobody crossed keeps its last speed), then the sums back to zero.

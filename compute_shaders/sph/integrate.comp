@@ -98,6 +98,7 @@ layout(std430, binding = HEMO_INTEGRATE_BINDING_PENDING) buffer Pending { uint p
 // next to each plane, and the profiles the last step's sums gave, which the buffers move at.
 layout(std430, binding = HEMO_INTEGRATE_BINDING_OPEN_SUMS) buffer OpenSums { uint openSums[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_OPEN_PROFILE) readonly buffer OpenProfile { float openProfile[]; };
+layout(std430, binding = HEMO_INTEGRATE_BINDING_ESCAPE_MASK) readonly buffer EscapeMask { uint escapeMask[]; };
 // 1: this symplectic-Euler integrator collects the tile boxes (see gCollectTiles).
 layout(constant_id = 4) const uint kCollect = 0u;
 layout(push_constant) uniform Push {
@@ -303,12 +304,15 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
       // without it a lumen at rest between two buffers at rest never starts to flow).
       gWholeVelocity = true;
       const float lumen = openProfile[2u * HEMO_OPEN_BINS + e];
-      float lack = 0.0;  // Pa: the end's pressure over the lumen's
-      if (lumen > 0.5 * HEMO_OPEN_NO_PRESSURE) {
-        const float ramp = hemo_inflow_ramp(inflow, time);
-        lack = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : inflow.pressures.x * ramp) - lumen;
-      }
+      const float end = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : inflow.pressures.x * hemo_inflow_ramp(inflow, time));
+      const float lack = lumen > 0.5 * HEMO_OPEN_NO_PRESSURE ? end - lumen : 0.0;  // Pa: the end's pressure over the lumen's
       inward = s2 < 1.0 ? openProfile[e * HEMO_OPEN_BINS + hemo_open_bin(s2)] + lack * inflow.pressures.w : 0.0;
+      // At most the speed the end's whole pressure gives the blood, sqrt(2 p / rho0) (Bernoulli):
+      // where the lumen cannot hold a pressure (a torn vessel drains through its tear) the
+      // characteristic term would add to the lumen's speed, which the buffer itself drives, step
+      // after step (a torn aneurysm's outlet buffer reached 11 m/s).
+      const float fastest = sqrt(2.0 * max(end, lumen) / params.rho0);
+      inward = clamp(inward, -fastest, fastest);
     } else {
       // The inflow's profile; at the outlet, the same flow rate out of the lumen. The buffer
       // moves as a whole, across the section too (its images, copies of the lumen's crossers,
@@ -371,6 +375,20 @@ void hemo_open_enter_buffer(uint i, uint b) {
   }
 }
 
+// Whether x lies in a cell of the escape mask (common/inflow.glsl): blood far outside the wall.
+bool hemo_open_escaped(vec3 x) {
+  if (inflow.escapeDims.w == 0u) {
+    return false;
+  }
+  const vec3 f = floor((x - inflow.escapeOrigin.xyz) * inflow.escapeOrigin.w);
+  if (any(lessThan(f, vec3(0.0))) || any(greaterThanEqual(f, vec3(inflow.escapeDims.xyz)))) {
+    return false;  // (outside the domain: the box parks it)
+  }
+  const uvec3 c = uvec3(f);
+  const uint k = c.x + inflow.escapeDims.x * (c.y + inflow.escapeDims.y * c.z);
+  return (escapeMask[k >> 5u] & (1u << (k & 31u))) != 0u;
+}
+
 // Open ends (kInflow 2), after the update of fluid slot i from `start` to x: the plane
 // crossings, and parking past either end or outside the domain.
 void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
@@ -418,8 +436,10 @@ void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
     }
     past[e] = near && l[e].x < 0.0 && l[e].x >= -reach;
   }
-  // Blood that has left the domain (through a tear) is parked too, and counted.
-  const bool outside = any(lessThan(x.xyz, inflow.boxMin.xyz)) || any(greaterThan(x.xyz, inflow.boxMax.xyz));
+  // Blood that has left the domain (through a tear), or lies in a cell of the escape mask (far
+  // enough outside the wall), is parked too, and counted.
+  const bool outside = any(lessThan(x.xyz, inflow.boxMin.xyz)) || any(greaterThan(x.xyz, inflow.boxMax.xyz)) ||
+                       hemo_open_escaped(x.xyz);
   if (past[0] || past[1] || outside) {
     atomicAdd(openCounters[past[1]   ? HEMO_OPEN_COUNTER_PARKED_END
                            : past[0] ? HEMO_OPEN_COUNTER_PARKED_START : HEMO_OPEN_COUNTER_PARKED_OUTSIDE], 1u);

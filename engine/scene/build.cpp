@@ -181,6 +181,21 @@ std::uint32_t countEscaped(const Scene& s, const std::vector<glm::vec4>& positio
   return escaped;
 }
 
+std::vector<std::uint32_t> escapeMask(const Scene& s) {
+  if (!s.vessel || !s.vessel->inflow || !s.vessel->inflow->open || !(s.vessel->inflow->open->parkBeyond > 0.0f)) return {};
+  const sim::OpenEnds& o = *s.vessel->inflow->open;
+  const AneurysmSpec spec = vesselSpec(s);
+  const sim::EscapeGrid& g = o.escape;
+  // (all of a cell: its centre that far and half its diagonal more)
+  const float margin = o.parkBeyond + 0.5f * std::sqrt(3.0f) * g.cell;
+  std::vector<std::uint32_t> words(g.words(), 0u);
+  const std::size_t cells = std::size_t(g.dims.x) * g.dims.y * g.dims.z;
+  for (std::size_t k = 0; k < cells; ++k) {
+    if (outsideVessel(spec, g.centre(k), margin)) words[k / 32] |= 1u << (k % 32);
+  }
+  return words;
+}
+
 std::uint32_t countLost(const std::vector<glm::vec4>& positions, const std::vector<glm::vec4>& velocities) {
   std::uint32_t lost = 0;
   for (std::size_t i = 0; i < positions.size() && i < velocities.size(); ++i) {

@@ -164,6 +164,7 @@ const std::vector<Field>& schema() {
                 {"condition", Kind::Choice, "", 0, 0, false, "none", "none: the vessel is periodic and recycles its outflow (vessel.inflow); flow: open ends, the outlet buffer drawing the inlet's flow rate; pressure: open ends, the outlet buffer holding pressure_Pa and moving at the lumen's own axial velocity next to it, radius by radius (zero gradient).", {"none", "flow", "pressure"}},
                 {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "condition pressure: the outlet buffer's pressure over fluid.background_pressure_Pa."},
                 {"buffer_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the outlet buffer at the vessel's end, along its axis (0: the inflow zone's length); at least the kernel support 2h."},
+                {"park_escaped_beyond_m", Kind::Number, "m", 0, 1, false, 0.0, "Blood farther than this outside the vessel's wall (beyond its outer layer) is removed, its slot freed for the buffers, and counted as escaped, so a bleeding vessel does not run out of free slots while its blood crosses the domain (0: only blood that leaves the domain). Give more than the wall moves, or blood in a swelling sac would be taken; the domain is divided into cells of two spacings, and a cell takes the blood in it when all of it lies that far out."},
                 {"reserve_particles", Kind::Integer, "1", 0, 1e8, false, 0, "Free fluid slots for the buffers' images beyond those the outlet frees (0: automatic, twice the inlet buffer's particles and half the vessel's fluid: a sac that swells draws blood in through both ends). A run that runs out stops and says so."},
             }},
        }},
@@ -458,7 +459,7 @@ void checkStraightEnd(const Checker& c, const VesselMesh& mesh, const sim::OpenE
 void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, Scene& s, Vessel& w) {
   const std::string condition = out["condition"].get<std::string>();
   if (condition == "none") {
-    for (const char* key : {"buffer_length_m", "reserve_particles", "pressure_Pa"}) {
+    for (const char* key : {"buffer_length_m", "reserve_particles", "pressure_Pa", "park_escaped_beyond_m"}) {
       if (out.contains(key) && out[key] != Json(0) && out[key] != Json(0.0)) {
         c.fail(std::string("vessel.outlet.") + key, "is set but vessel.outlet.condition is \"none\" (choose \"flow\")");
       }
@@ -545,6 +546,8 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   o.outletPressure = out["pressure_Pa"].get<float>();
   o.slab = h2;  // the lumen's slab next to each plane whose speeds a pressure end takes
   o.characteristic = 1.0f / (s.sph.restDensity * s.sph.soundSpeed);
+  o.parkBeyond = out["park_escaped_beyond_m"].get<float>();
+  if (o.parkBeyond > 0.0f) o.escape = sim::EscapeGrid::over(s.domain.min, s.domain.max, s.sph.spacing);
   w.inflow->open = o;
   w.reserveParticles = out["reserve_particles"].get<std::uint32_t>();
   s.sph.parkedSlots = true;

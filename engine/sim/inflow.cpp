@@ -62,7 +62,22 @@ void Inflow::validate() const {
     require(std::isfinite(o.inletPressure) && std::isfinite(o.outletPressure), "open ends: the pressures must be finite (Pa)");
     require(!(o.pressureInlet || o.pressureOutlet) || (std::isfinite(o.slab) && o.slab > 0.0f),
             "open ends: a pressure end needs a slab of positive width");
+    require(std::isfinite(o.parkBeyond) && o.parkBeyond >= 0.0f, "open ends: the escape distance must be zero or positive (m)");
+    require(!(o.parkBeyond > 0.0f) || (o.escape.cell > 0.0f && o.escape.words() > 0), "open ends: an escape distance needs its grid");
   }
+}
+
+EscapeGrid EscapeGrid::over(glm::vec3 lo, glm::vec3 hi, float spacing) {
+  EscapeGrid g;
+  g.origin = lo;
+  g.cell = 2.0f * spacing;
+  for (int a = 0; a < 3; ++a) g.dims[a] = std::max(1u, std::uint32_t(std::ceil((hi[a] - lo[a]) / g.cell)));
+  return g;
+}
+
+glm::vec3 EscapeGrid::centre(std::size_t k) const {
+  const auto x = std::uint32_t(k % dims.x), y = std::uint32_t(k / dims.x % dims.y), z = std::uint32_t(k / (std::size_t(dims.x) * dims.y));
+  return origin + cell * (glm::vec3(float(x), float(y), float(z)) + 0.5f);
 }
 
 glm::dvec2 OpenEnd::local(glm::dvec3 p) const {
@@ -122,6 +137,11 @@ InflowParams makeInflowParams(const Inflow& in, float restDensity, float particl
     p.pressures[1] = o.outletPressure;
     p.pressures[2] = o.slab;
     p.pressures[3] = o.characteristic;
+    if (o.parkBeyond > 0.0f) {
+      for (int a = 0; a < 3; ++a) p.escapeOrigin[a] = o.escape.origin[a], p.escapeDims[a] = o.escape.dims[a];
+      p.escapeOrigin[3] = 1.0f / o.escape.cell;
+      p.escapeDims[3] = 1u;
+    }
   }
   return p;
 }

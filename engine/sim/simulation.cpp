@@ -130,6 +130,7 @@ Simulation::Simulation(gpu::Context& context, const scene::Scene& scene) : conte
   if (scene.vessel && scene.vessel->inflow) {
     inflow_ = *scene.vessel->inflow;
     solver_->setInflow(*inflow_);
+    if (inflow_->open && inflow_->open->parkBeyond > 0.0f) solver_->setEscapeMask(scene::escapeMask(scene));
   }
   if (!scene.tools.empty()) {  // (after the wall: the tools push its free points)
     try {
@@ -513,8 +514,8 @@ void Simulation::checkStatus(std::uint64_t batchFirstStep, const SphStatus& stat
     std::ostringstream msg;
     msg << "the open ends ran out of free fluid slots (in the batch from step " << batchFirstStep << ", t = " << time()
         << " s): particles that entered the lumen found no slot for their images in the buffers (" << status.openShortfall
-        << " times, counted at each refill); raise vessel.outlet.reserve_particles (blood that leaves the vessel frees "
-        << "its slot only when it leaves the domain)";
+        << " times, counted at each refill); raise vessel.outlet.reserve_particles, or let blood that leaves the vessel "
+        << "free its slot nearer the wall than the domain's faces (vessel.outlet.park_escaped_beyond_m)";
     throw SimulationError(msg.str());
   }
   if (status.nonFinite == 0) return;

@@ -555,7 +555,9 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       openCounters_(context, HEMO_OPEN_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "open ends' counters"),
       pending_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "open inlet's crossers owed an image"),
       openSums_(context, (2 * kOpenBins + 2) * kOpenSumWords * 4, gpu::MemoryUse::Device, "open ends' speed sums"),
-      openProfile_(context, (2 * kOpenBins + 2) * 4, gpu::MemoryUse::Device, "open ends' speed profiles") {
+      openProfile_(context, (2 * kOpenBins + 2) * 4, gpu::MemoryUse::Device, "open ends' speed profiles"),
+      escapeMask_(context, settings_.parkedSlots ? EscapeGrid::over(domainMin, domainMax, settings_.spacing).words() * 4 : 4,
+                  gpu::MemoryUse::Device, "open ends' escape mask") {
   const SphSettings& settings = settings_;  // (Auto resolved)
   cellWalk_ = settings.neighbourSearch == NeighbourSearch::Cells;
   const bool contiguous = contiguousList(context, settings);
@@ -883,7 +885,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
                                        {HEMO_INTEGRATE_BINDING_OPEN_COUNTERS, &openCounters_},
                                        {HEMO_INTEGRATE_BINDING_PENDING, &pending_},
                                        {HEMO_INTEGRATE_BINDING_OPEN_SUMS, &openSums_},
-                                       {HEMO_INTEGRATE_BINDING_OPEN_PROFILE, &openProfile_}});
+                                       {HEMO_INTEGRATE_BINDING_OPEN_PROFILE, &openProfile_},
+                                       {HEMO_INTEGRATE_BINDING_ESCAPE_MASK, &escapeMask_}});
   // (both variants' layouts are the same: one set serves them)
   rebuildDecideSet_ = rebuildDecide_[1]->makeSet({{HEMO_DECIDE_BINDING_TILE_GRID, &tileGrid_},
                                                   {HEMO_DECIDE_BINDING_TILE_BOXES, &tileBoxes_},
@@ -1094,6 +1097,14 @@ void SphSolver::recordOpenRefill(gpu::CommandRecorder& rec) {
   rec.computeToCompute();
   rec.dispatch(*spawn_, spawnSet_, SpawnPush{n, HEMO_SPAWN_COPY}, spawn_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
+}
+
+void SphSolver::setEscapeMask(const std::vector<std::uint32_t>& words) {
+  if (words.size() * 4 != escapeMask_.size()) {
+    throw std::invalid_argument("open ends' escape mask: " + std::to_string(words.size()) + " words for a grid of " +
+                                std::to_string(escapeMask_.size() / 4));
+  }
+  escapeMask_.upload(words);
 }
 
 SphSolver::OpenCounts SphSolver::readOpenCounts() const {

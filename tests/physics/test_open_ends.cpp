@@ -332,6 +332,40 @@ TEST_F(OpenEndsTest, PressureDropDrivesPoiseuilleFlow) {
   EXPECT_GT(o.in, 100u);
 }
 
+// A pressure end's buffer moves at most at the speed its whole pressure gives the blood,
+// sqrt(2 p / rho0): with the lumen next to the outlet measured at 5 m/s outwards and at 0 Pa
+// (a torn vessel draining through its tear, where the characteristic term would add to the
+// speed the buffer itself drives), the outlet buffer moves out at sqrt(2 p_bg / rho0).
+TEST_F(OpenEndsTest, PressureEndsMoveNoFasterThanTheirPressureDrives) {
+  nlohmann::json j = openTube();
+  j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"driven_by", "pressure"}, {"pressure_Pa", 300.0},
+                           {"zone_length_m", 0.003}, {"ramp_s", 0.005}};
+  j["vessel"]["outlet"] = {{"condition", "pressure"}};
+  const scene::Scene scene = scene::parseScene(j.dump(), "open_tube");
+  const sim::OpenEnds& ends = *scene.vessel->inflow->open;
+  sim::Simulation sim(ctx(), scene);
+  sim::RunOptions opt;
+  opt.steps = 2;
+  sim.run(opt);
+  std::vector<float> profile(2 * HEMO_OPEN_BINS + 2, 0.0f);
+  for (std::uint32_t b = 0; b < HEMO_OPEN_BINS; ++b) profile[HEMO_OPEN_BINS + b] = -5.0f;  // (along the outlet's inward axis)
+  sim.solver().openProfile().upload(profile);
+  opt.steps = 1;  // (one step moves the buffers at these profiles)
+  sim.run(opt);
+  const double fastest = std::sqrt(2.0 * 200.0 / 1060.0);
+  const sim::Snapshot s = sim.snapshot();
+  std::uint32_t driven = 0, faster = 0;
+  for (std::size_t i = 0; i < s.positions.size(); ++i) {
+    const glm::dvec3 p(s.positions[i]);
+    if (s.velocities[i].w != float(sim::ParticleKind::Fluid) || !ends.outlet.inBuffer(p) || ends.outlet.local(p).y >= 0.002 * 0.002) continue;
+    ++driven;
+    faster += glm::length(glm::dvec3(s.velocities[i])) > fastest * (1.0 + 1e-5);
+    EXPECT_NEAR(s.velocities[i].x, fastest, 1e-5 * fastest) << "the outlet buffer's particle " << i;
+  }
+  EXPECT_GT(driven, 100u);
+  EXPECT_EQ(faster, 0u);
+}
+
 // Blood that leaves the domain across the axis (through a tear) is parked and counted as
 // escaped; its slot is free for the buffers.
 TEST_F(OpenEndsTest, BloodLeavingTheDomainIsParkedAndCountedAsEscaped) {
@@ -357,6 +391,59 @@ TEST_F(OpenEndsTest, BloodLeavingTheDomainIsParkedAndCountedAsEscaped) {
   EXPECT_EQ(sim.openCounts().parkedOutside, 7u);
   EXPECT_EQ(sim.escapedParticles(), 7u);
   const auto o = sim.openCounts();
+  EXPECT_EQ(sim.activeFluidParticles(), before - 7u + o.spawned - o.parkedEnd - o.parkedStart);
+}
+
+// With vessel.outlet.park_escaped_beyond_m, blood that far outside the wall is parked before it
+// reaches the domain's faces (the mask against a CPU classification of the same cells), and
+// counted as escaped; blood nearer the wall, and the lumen's, is left alone.
+TEST_F(OpenEndsTest, BloodFarOutsideTheWallIsParked) {
+  nlohmann::json j = openTube();
+  j["domain"]["min_m"] = {0.0, -0.007, -0.007};
+  j["domain"]["max_m"] = {0.018, 0.007, 0.007};
+  j["vessel"]["outlet"]["park_escaped_beyond_m"] = 0.001;  // (the wall's outer layer is 0.75 mm out, R 2 mm)
+  const scene::Scene scene = scene::parseScene(j.dump(), "open_tube_bleeding");
+  const sim::OpenEnds& ends = *scene.vessel->inflow->open;
+  ASSERT_GT(ends.escape.cell, 0.0f);
+  // The mask: a cell is set exactly where its centre lies farther than the distance and half
+  // its diagonal beyond the wall's outer side (R + layers dp), away from the tube's ends.
+  const std::vector<std::uint32_t> mask = scene::escapeMask(scene);
+  ASSERT_EQ(mask.size(), ends.escape.words());
+  const double wallOut = 0.002 + 2 * 5e-4, reach = 1e-3 + 0.5 * std::sqrt(3.0) * ends.escape.cell;
+  std::size_t set = 0, wrong = 0;
+  for (std::size_t k = 0; k < std::size_t(ends.escape.dims.x) * ends.escape.dims.y * ends.escape.dims.z; ++k) {
+    const glm::dvec3 c(ends.escape.centre(k));
+    const double r = std::hypot(c.y, c.z);
+    const bool bit = (mask[k / 32] >> (k % 32)) & 1u;
+    if (std::abs(r - (wallOut + reach)) > 1e-6) wrong += bit != (r > wallOut + reach);
+    set += bit;
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GT(set, 100u);
+  sim::Simulation sim(ctx(), scene);
+  sim::RunOptions opt;
+  opt.steps = 2;
+  sim.run(opt);
+  const std::uint32_t before = sim.activeFluidParticles();
+  std::vector<glm::vec4> pos = sim.store().readPositions(), vel = sim.store().readVelocities();
+  // 7 particles 3 mm beyond the wall's outer side (in set cells), 5 only 0.7 mm beyond it.
+  std::uint32_t far = 0, near = 0;
+  for (std::size_t i = 0; i < pos.size() && near < 5; ++i) {
+    if (vel[i].w != float(sim::ParticleKind::Fluid) || pos[i].x < 0.006f || pos[i].x > 0.012f) continue;
+    const float r = far < 7 ? 0.006f : 0.0037f;
+    const float a = 0.7f * float(far + near);
+    pos[i] = glm::vec4(pos[i].x, r * std::cos(a), r * std::sin(a), pos[i].w);
+    vel[i] = glm::vec4(0.0f, 0.0f, 0.0f, vel[i].w);
+    (far < 7 ? far : near) += 1;
+  }
+  ASSERT_EQ(far + near, 12u);
+  sim.store().live().positions.upload(pos);
+  sim.store().live().velocities.upload(vel);
+  opt.steps = 3;
+  sim.run(opt);
+  const auto o = sim.openCounts();
+  EXPECT_EQ(o.parkedOutside, 7u);
+  EXPECT_EQ(sim.escapedParticles(), 12u);  // (the 5 near ones are outside the wall too, not yet parked)
   EXPECT_EQ(sim.activeFluidParticles(), before - 7u + o.spawned - o.parkedEnd - o.parkedStart);
 }
 

@@ -119,14 +119,14 @@ TEST(SceneFuzz, MutatedScenesLoadOrAreRefusedWithASceneError) {
   // Scenes small enough to build here (a mutant may ask for billions of particles, which is
   // the simulation's fit check's business: hemo-run refuses it before building). A vessel from
   // a mesh (its file found beside the scenes, as hemo-run finds it) takes 0.05 s to load and
-  // check and seconds to count and build (the layout of its wall is the build): the mesh
-  // scene takes every fourth of its turns, and its first loaded mutant is built, with
+  // check and seconds to count and build (the layout of its wall is the build): each mesh
+  // scene takes every fourth of its turns, and the first loaded mesh mutant is built, with
   // the full budget only (the sanitizer run's unit tests build mesh vessels already).
   constexpr std::uint64_t kBuildLimit = 60000;
   const int meshBuilds = std::getenv("HEMO_FUZZ_MUTANTS") ? 0 : 1;
   std::vector<bool> meshScene;
   for (const std::string& t : texts) meshScene.push_back(Json::parse(t).value("vessel", Json::object()).value("shape", "") == "mesh");
-  ASSERT_EQ(std::count(meshScene.begin(), meshScene.end(), true), 1) << "the scenes hold one mesh scene";
+  ASSERT_GE(std::count(meshScene.begin(), meshScene.end(), true), 1) << "the scenes hold a mesh scene";
   int loaded = 0, refused = 0, built = 0, meshLoaded = 0;
   for (int m = 0; m < kMutants; ++m) {
     const std::size_t which = static_cast<std::size_t>(m) % texts.size();

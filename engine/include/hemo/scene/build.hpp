@@ -25,6 +25,11 @@ std::uint64_t countSceneParticles(const Scene& scene);
 // Fluid particles that have left the scene: outside the domain, or outside the vessel's wall
 // by more than a spacing. `positions` and `velocities` as in ParticleSet (w: mass, kind).
 // A particle whose position or velocity is not finite is lost, not escaped (countLost).
+// Open ends with an escape distance (vessel.outlet.park_escaped_beyond_m, sim::OpenEnds): the
+// escape grid's mask, a bit per cell, set where all of the cell lies farther than the distance
+// outside the vessel's wall (its built geometry: scene::outsideVessel). Empty without.
+std::vector<std::uint32_t> escapeMask(const Scene& scene);
+
 std::uint32_t countEscaped(const Scene& scene, const std::vector<glm::vec4>& positions,
                            const std::vector<glm::vec4>& velocities);
 // Particles of any kind whose position or velocity is not finite: the simulation has lost

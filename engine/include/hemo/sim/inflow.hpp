@@ -47,6 +47,8 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include <cstddef>
+
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -71,8 +73,27 @@ struct OpenEnd {
   bool inBuffer(glm::dvec3 p) const;
 };
 
+// Where blood outside the vessel is parked before it leaves the domain (OpenEnds::parkBeyond):
+// the domain in cubic cells of `cell` m from `origin`, cell k = x + nx (y + ny z); bit k of the
+// mask (word k / 32) is set where all of the cell lies farther than parkBeyond outside the
+// vessel's wall (scene::escapeMask builds it from the vessel's geometry).
+struct EscapeGrid {
+  glm::vec3 origin{0.0f};
+  float cell = 0.0f;  // m (0: no grid)
+  glm::uvec3 dims{0u};
+  std::size_t words() const { return (std::size_t(dims.x) * dims.y * dims.z + 31) / 32; }
+  // Cells of two spacings over the domain [lo, hi].
+  static EscapeGrid over(glm::vec3 lo, glm::vec3 hi, float spacing);
+  glm::vec3 centre(std::size_t k) const;
+};
+
 struct OpenEnds {
   OpenEnd inlet, outlet;
+  // Blood farther than this outside the vessel's wall is parked (and counted as escaped), so a
+  // bleed frees its slots for the buffers without waiting for the blood to leave the domain
+  // (m; 0: only blood that leaves the domain). The mask of the grid's cells where that holds.
+  float parkBeyond = 0.0f;
+  EscapeGrid escape;
   float pendingMargin = 0.0f; // m (see above)
   glm::vec3 parking{0.0f};    // m, where parked slots lie (outside the domain, beyond every support)
   glm::vec3 boxMin{-3.0e38f}, boxMax{3.0e38f};  // m, the domain: fluid beyond is parked
@@ -142,8 +163,10 @@ struct InflowParams {
   float pressures[4];  // inlet's, outlet's (Pa over the background), slab (m), 1 / (rho0 c0)
   float boxMin[4];     // the domain (m; xyz)
   float boxMax[4];
+  float escapeOrigin[4];         // EscapeGrid: xyz m; w: 1 / cell (1/m)
+  std::uint32_t escapeDims[4];   // xyz cells; w: 1 where the mask parks blood
 };
-static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + 2 * 64 + 80);
+static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + 2 * 64 + 112);
 
 // `restDensity` rho0 (kg/m^3) and `particleMass` m0 (kg) of the fluid.
 InflowParams makeInflowParams(const Inflow& inflow, float restDensity, float particleMass);

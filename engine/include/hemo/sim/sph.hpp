@@ -314,6 +314,11 @@ class SphSolver {
   const gpu::Buffer& pending() const { return pending_; }
   gpu::Buffer& pending() { return pending_; }  // (for tests)
   gpu::Buffer& openCounters() { return openCounters_; }  // HEMO_OPEN_COUNTER_* (for tests)
+  gpu::Buffer& openProfile() { return openProfile_; }    // the ends' speeds and pressures (for tests)
+  // Open ends with an escape distance (OpenEnds::parkBeyond): the mask of their escape grid,
+  // a bit per cell (scene::escapeMask). Set-up only (an upload); throws std::invalid_argument
+  // when its size is not the grid's.
+  void setEscapeMask(const std::vector<std::uint32_t>& words);
   // Drives the fluid in a vessel's inflow zone (hemo/sim/inflow.hpp). Set-up only (an upload);
   // throws std::invalid_argument for a bad inflow. Without it no particle is driven.
   void setInflow(const Inflow& inflow);
@@ -571,6 +576,7 @@ class SphSolver {
   // Pressure ends: the integrator's sums of the axial speeds by bin next to each plane and the
   // profiles sph/open_profile.comp makes of them (common/inflow.glsl, HEMO_OPEN_BINS).
   gpu::Buffer openSums_, openProfile_;
+  gpu::Buffer escapeMask_;  // open ends' escape mask (EscapeGrid; a word without open ends)
   const gpu::ComputePipeline* openProfilePass_ = nullptr;
   gpu::DescriptorSet openProfileSet_;
   bool openProfiles_ = false;
