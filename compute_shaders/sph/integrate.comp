@@ -15,7 +15,7 @@
 // sph/rebuild_decide.comp reduces to the decision on the next step's grid and list build.
 // A fluid particle that starts the step in the inflow zone of a vessel moves along the axis at
 // the prescribed velocity instead (hemo/sim/inflow.hpp), in every mode; across the section it
-// moves freely.
+// moves freely (an open end's buffer moves as a whole, across the section too).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -274,11 +274,11 @@ bool hemo_open_in_buffer(vec3 x, uint e, out vec2 l) {
 }
 
 // True when a fluid particle at x (start of the step) is in the inflow zone (open ends: in
-// either buffer); u: its velocity along `axis` (the zone's), s2: its (r / R)^2.
-bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2, out vec3 axis) {
+// either buffer); u: its velocity (the periodic zone: its axial part, along x; an open end's
+// buffer: the whole of it, gWholeVelocity), s2: its (r / R)^2.
+bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2) {
   u = vec3(0.0);
   s2 = 0.0;
-  axis = vec3(1.0, 0.0, 0.0);
   if (kInflow == 0u || inflow.enabled == 0u || uint(kind) != HEMO_KIND_FLUID) {
     return false;
   }
@@ -293,7 +293,6 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
       return false;
     }
     const uint e = outlet ? 1u : 0u;
-    axis = inflow.ends[e].axis.xyz;
     const float R = inflow.ends[e].axis.w;
     s2 = l.y / (R * R);
     float inward;  // m/s along the end's axis, into the lumen
@@ -302,7 +301,6 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
       // zero gradient), plus what the lumen's pressure there lacks of the end's, or less what
       // it exceeds it by, over rho0 c0 (sph/open_profile.comp: the outgoing characteristic;
       // without it a lumen at rest between two buffers at rest never starts to flow).
-      gWholeVelocity = true;
       const float lumen = openProfile[2u * HEMO_OPEN_BINS + e];
       const float end = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : inflow.pressures.x * hemo_inflow_ramp(inflow, time));
       const float lack = lumen > 0.5 * HEMO_OPEN_NO_PRESSURE ? end - lumen : 0.0;  // Pa: the end's pressure over the lumen's
@@ -322,9 +320,9 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
       const float profile = inflow.profile == 1u ? (s2 < 1.0 ? 1.0 : 0.0) : 2.0 * max(1.0 - s2, 0.0);
       const float speed = hemo_inflow_mean_speed(time) * profile * inflow.ends[e].drive.x;
       inward = outlet ? -speed : speed;
-      gWholeVelocity = true;
     }
-    u = inward * axis;
+    gWholeVelocity = true;
+    u = inward * inflow.ends[e].axis.xyz;
     return true;
   }
   if (!(x.x >= inflow.zoneStart && x.x < inflow.zoneEnd)) {
@@ -393,20 +391,18 @@ bool hemo_open_escaped(vec3 x) {
 // crossings, and parking past either end or outside the domain.
 void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
   const vec2 l[2] = vec2[2](hemo_open_local(inflow, 0u, x.xyz), hemo_open_local(inflow, 1u, x.xyz));
-  {
-    // The lumen's speeds along each end's axis in the slab next to its plane, by radius, for
-    // the pressure ends' buffers (their zero gradient along the axis), and its pressure there
-    // (the velocity-driven buffers'; sph/density.comp).
-    for (uint e = 0u; e < 2u; ++e) {
-      const float R = inflow.ends[e].axis.w;
-      const float s2 = l[e].y / (R * R);
-      const float into = l[e].x - inflow.ends[e].origin.w;  // m past the plane into the lumen
-      if (s2 < 1.0 && into >= 0.0 && into < inflow.pressures.z) {
-        hemo_open_sum(e * HEMO_OPEN_BINS + hemo_open_bin(s2), dot(v.xyz, inflow.ends[e].axis.xyz), HEMO_OPEN_SPEED_OFFSET,
-                      HEMO_OPEN_FIXED_SCALE);
-        hemo_open_sum(2u * HEMO_OPEN_BINS + e, state(i).y, HEMO_OPEN_PRESSURE_OFFSET, HEMO_OPEN_PRESSURE_SCALE);
-        break;
-      }
+  // The lumen's speeds along each end's axis in the slab next to its plane, by radius, for the
+  // pressure ends' buffers (their zero gradient along the axis), and its pressure there (every
+  // buffer's: sph/density.comp, and the pressure ends' characteristic term).
+  for (uint e = 0u; e < 2u; ++e) {
+    const float R = inflow.ends[e].axis.w;
+    const float s2 = l[e].y / (R * R);
+    const float into = l[e].x - inflow.ends[e].origin.w;  // m past the plane into the lumen
+    if (s2 < 1.0 && into >= 0.0 && into < inflow.pressures.z) {
+      hemo_open_sum(e * HEMO_OPEN_BINS + hemo_open_bin(s2), dot(v.xyz, inflow.ends[e].axis.xyz), HEMO_OPEN_SPEED_OFFSET,
+                    HEMO_OPEN_FIXED_SCALE);
+      hemo_open_sum(2u * HEMO_OPEN_BINS + e, state(i).y, HEMO_OPEN_PRESSURE_OFFSET, HEMO_OPEN_PRESSURE_SCALE);
+      break;
     }
   }
   // Each buffer holds the same particles whatever crosses its plane. A particle that leaves a
@@ -478,23 +474,16 @@ vec2 hemo_advance(uint i, ClockRecord clock, float dt, bool running, out vec3 d,
   if (clock.time < params.dampingUntil) {
     v.xyz /= 1.0 + params.dampingRate * dt;  // settling phase only (implicit, so never unstable)
   }
-  vec3 u, axis;
+  vec3 u;
   float s2;
-  if (hemo_inflow_driven(start, v.w, clock.time - clock.compensation, u, s2, axis)) {
-    // The axial velocity is prescribed; the motion across the section stays free, so
-    // particles that enter the zone too close can still part (a fully kinematic zone froze
-    // such pairs together: 6-13 kPa at its far end and an emptied slice after it).
+  if (hemo_inflow_driven(start, v.w, clock.time - clock.compensation, u, s2)) {
+    // The periodic zone's axial velocity is prescribed; the motion across the section stays
+    // free, so particles that enter the zone too close can still part (a fully kinematic zone
+    // froze such pairs together: 6-13 kPa at its far end and an emptied slice after it). An
+    // open end's buffer moves as a whole (gWholeVelocity).
     if (gWholeVelocity) {
       v.xyz = u;
       x.xyz = start + u * dt;
-    } else if (kInflow == 2u) {
-      // (an open end's axis, in any direction)
-      v.xyz += (dot(u, axis) - dot(v.xyz, axis)) * axis;
-      if (kMode == HEMO_INTEGRATE_RK2_FULL) {
-        x.xyz += dot(start + u * dt - x.xyz, axis) * axis;  // across the axis: the midpoint rule
-      } else {
-        x.xyz += v.xyz * dt;
-      }
     } else {
       v.x = u.x;
       if (kMode == HEMO_INTEGRATE_RK2_FULL) {
@@ -572,15 +561,12 @@ void main() {
       const vec4 a = accel(i);
       vec3 vMid = v.xyz + a.xyz * (0.5 * dt);
       vec3 drift = v.xyz;
-      vec3 u, axis;
+      vec3 u;
       float s2;
-      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u, s2, axis)) {
+      if (hemo_inflow_driven(x.xyz, v.w, clock.time - clock.compensation, u, s2)) {
         if (gWholeVelocity) {
           vMid = u;
           drift = u;
-        } else if (kInflow == 2u) {
-          vMid += (dot(u, axis) - dot(vMid, axis)) * axis;
-          drift += (dot(u, axis) - dot(drift, axis)) * axis;
         } else {
           vMid.x = u.x;
           drift.x = u.x;
