@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <string>
@@ -54,6 +55,23 @@ std::uint32_t lumenCount(const sim::Snapshot& s, const sim::Inflow& in) {
          in.open->outlet.local(p).x >= in.open->outlet.length;
   }
   return n;
+}
+
+// The net crossings into and out of the lumen (the GPU's counts), and the lumen's count's
+// change from `before` to `now`.
+std::array<std::int64_t, 3> netCrossings(const sim::SphSolver::OpenCounts& o, std::uint32_t now, std::uint32_t before) {
+  return {std::int64_t(o.in) - o.inBack, std::int64_t(o.out) - o.outBack, std::int64_t(now) - before};
+}
+
+// The pressure-driven tubes' developed states: runs to 0.03 s, then hands `samples` states
+// 0.5 ms apart to `use`.
+void developedStates(sim::Simulation& sim, int samples, const std::function<void(const sim::Snapshot&)>& use) {
+  for (int k = 0; k <= samples; ++k) {
+    sim::RunOptions opt;
+    opt.until = 0.03 + 0.0005 * k;
+    sim.run(opt);
+    if (k > 0) use(sim.snapshot());
+  }
 }
 
 TEST_F(OpenEndsTest, RefillMatchesReference) {
@@ -174,8 +192,7 @@ TEST_F(OpenEndsTest, TubeBalancesItsMassAndCarriesTheInletsFlow) {
   sim.run(opt);
   const sim::Snapshot end = sim.snapshot();
   const auto o = sim.openCounts();
-  const std::int64_t in64 = std::int64_t(o.in) - o.inBack, out64 = std::int64_t(o.out) - o.outBack;
-  const std::int64_t change = std::int64_t(lumenCount(end, in)) - lumen0;
+  const auto [in64, out64, change] = netCrossings(o, lumenCount(end, in), lumen0);
   std::printf("open tube to t = %.4f s: in %u (back %u), out %u (back %u), parked %u + %u, spawned %u; lumen %u -> %lld\n",
               sim.time(), o.in, o.inBack, o.out, o.outBack, o.parkedEnd, o.parkedStart, o.spawned, lumen0,
               static_cast<long long>(lumen0 + change));
@@ -256,8 +273,7 @@ TEST_F(OpenEndsTest, ReverseFlowAtAVelocityInletKeepsTheBufferFull) {
   sim.run(opt);
   const sim::Snapshot last = sim.snapshot();
   const auto o = sim.openCounts();
-  const std::int64_t in64 = std::int64_t(o.in) - o.inBack, out64 = std::int64_t(o.out) - o.outBack;
-  const std::int64_t change = std::int64_t(lumenCount(last, in)) - lumen0;
+  const auto [in64, out64, change] = netCrossings(o, lumenCount(last, in), lumen0);
   std::printf("reversing inlet to t = %.4f s: in %u (back %u), out %u (back %u), parked %u + %u, spawned %u; lumen %u -> %lld; "
               "inlet buffer %u -> %u; net in %lld, the waveform's %.1f\n",
               sim.time(), o.in, o.inBack, o.out, o.outBack, o.parkedEnd, o.parkedStart, o.spawned, lumen0,
@@ -299,12 +315,7 @@ TEST_F(OpenEndsTest, PressureDropDrivesPoiseuilleFlow) {
   // middle's particles), and its particles' mean speed against Poiseuille's at their radii.
   double gradient = 0, speed = 0, want = 0;
   const int samples = 10;
-  for (int k = 0; k <= samples; ++k) {
-    sim::RunOptions opt;
-    opt.until = 0.03 + 0.0005 * k;
-    sim.run(opt);
-    if (k == 0) continue;
-    const sim::Snapshot s = sim.snapshot();
+  developedStates(sim, samples, [&](const sim::Snapshot& s) {
     double n = 0, sx = 0, sp = 0, sxx = 0, sxp = 0;
     for (std::size_t i = 0; i < s.positions.size(); ++i) {
       const glm::vec4 p = s.positions[i];
@@ -322,7 +333,7 @@ TEST_F(OpenEndsTest, PressureDropDrivesPoiseuilleFlow) {
     }
     ASSERT_GT(n, 100);
     gradient += -(n * sxp - sx * sp) / (n * sxx - sx * sx) / samples;
-  }
+  });
   std::printf("pressure-driven tube at t = %.3f s: gradient %.0f Pa/m (dp / L %.0f), mean speed over Poiseuille's at dp / L %.3f\n",
               sim.time(), gradient, nominal, speed / want);
   EXPECT_NEAR(gradient / nominal, 1.0, 0.15);
@@ -366,28 +377,37 @@ TEST_F(OpenEndsTest, PressureEndsMoveNoFasterThanTheirPressureDrives) {
   EXPECT_EQ(faster, 0u);
 }
 
-// Blood that leaves the domain across the axis (through a tear) is parked and counted as
-// escaped; its slot is free for the buffers.
-TEST_F(OpenEndsTest, BloodLeavingTheDomainIsParkedAndCountedAsEscaped) {
-  const scene::Scene scene = scene::parseScene(openTube().dump(), "open_tube");
-  sim::Simulation sim(ctx(), scene);
+// Runs `sim` 2 steps, puts `count` of the fluid particles of the lumen's middle (x 6-12 mm)
+// where `place` says (it gets the particle's position and its number among them) at rest, and
+// runs 3 steps more; returns the active fluid particles before.
+std::uint32_t displaceAndRun(sim::Simulation& sim, std::uint32_t count, const std::function<void(glm::vec4&, std::uint32_t)>& place) {
   sim::RunOptions opt;
   opt.steps = 2;
   sim.run(opt);
   const std::uint32_t before = sim.activeFluidParticles();
   std::vector<glm::vec4> pos = sim.store().readPositions(), vel = sim.store().readVelocities();
   std::uint32_t moved = 0;
-  for (std::size_t i = 0; i < pos.size() && moved < 7; ++i) {
+  for (std::size_t i = 0; i < pos.size() && moved < count; ++i) {
     if (vel[i].w != float(sim::ParticleKind::Fluid) || pos[i].x < 0.006f || pos[i].x > 0.012f) continue;
-    pos[i].z = scene.domain.max.z + 1e-5f;  // just beyond the domain's top, in the lumen's stretch
+    place(pos[i], moved++);
     vel[i] = glm::vec4(0.0f, 0.0f, 0.0f, vel[i].w);
-    ++moved;
   }
-  ASSERT_EQ(moved, 7u);
+  EXPECT_EQ(moved, count);
   sim.store().live().positions.upload(pos);
   sim.store().live().velocities.upload(vel);
   opt.steps = 3;
   sim.run(opt);
+  return before;
+}
+
+// Blood that leaves the domain across the axis (through a tear) is parked and counted as
+// escaped; its slot is free for the buffers.
+TEST_F(OpenEndsTest, BloodLeavingTheDomainIsParkedAndCountedAsEscaped) {
+  const scene::Scene scene = scene::parseScene(openTube().dump(), "open_tube");
+  sim::Simulation sim(ctx(), scene);
+  const std::uint32_t before = displaceAndRun(sim, 7, [&](glm::vec4& p, std::uint32_t) {
+    p.z = scene.domain.max.z + 1e-5f;  // just beyond the domain's top, in the lumen's stretch
+  });
   EXPECT_EQ(sim.openCounts().parkedOutside, 7u);
   EXPECT_EQ(sim.escapedParticles(), 7u);
   const auto o = sim.openCounts();
@@ -421,26 +441,11 @@ TEST_F(OpenEndsTest, BloodFarOutsideTheWallIsParked) {
   EXPECT_EQ(wrong, 0u);
   EXPECT_GT(set, 100u);
   sim::Simulation sim(ctx(), scene);
-  sim::RunOptions opt;
-  opt.steps = 2;
-  sim.run(opt);
-  const std::uint32_t before = sim.activeFluidParticles();
-  std::vector<glm::vec4> pos = sim.store().readPositions(), vel = sim.store().readVelocities();
   // 7 particles 3 mm beyond the wall's outer side (in set cells), 5 only 0.7 mm beyond it.
-  std::uint32_t far = 0, near = 0;
-  for (std::size_t i = 0; i < pos.size() && near < 5; ++i) {
-    if (vel[i].w != float(sim::ParticleKind::Fluid) || pos[i].x < 0.006f || pos[i].x > 0.012f) continue;
-    const float r = far < 7 ? 0.006f : 0.0037f;
-    const float a = 0.7f * float(far + near);
-    pos[i] = glm::vec4(pos[i].x, r * std::cos(a), r * std::sin(a), pos[i].w);
-    vel[i] = glm::vec4(0.0f, 0.0f, 0.0f, vel[i].w);
-    (far < 7 ? far : near) += 1;
-  }
-  ASSERT_EQ(far + near, 12u);
-  sim.store().live().positions.upload(pos);
-  sim.store().live().velocities.upload(vel);
-  opt.steps = 3;
-  sim.run(opt);
+  const std::uint32_t before = displaceAndRun(sim, 12, [](glm::vec4& p, std::uint32_t k) {
+    const float r = k < 7 ? 0.006f : 0.0037f, a = 0.7f * float(k);
+    p = glm::vec4(p.x, r * std::cos(a), r * std::sin(a), p.w);
+  });
   const auto o = sim.openCounts();
   EXPECT_EQ(o.parkedOutside, 7u);
   EXPECT_EQ(sim.escapedParticles(), 12u);  // (the 5 near ones are outside the wall too, not yet parked)
@@ -540,13 +545,7 @@ TEST_F(OpenEndsTest, ObliqueMeshTubeCarriesThePressureDrivenFlow) {
   const double L = 0.018 - ends.inlet.length - ends.outlet.length;  // the lumen between the planes
   const double nominal = 300.0 / L;
   double speed = 0.0, want = 0.0;
-  const int samples = 6;
-  for (int k = 0; k <= samples; ++k) {
-    sim::RunOptions opt;
-    opt.until = 0.03 + 0.0005 * k;
-    sim.run(opt);
-    if (k == 0) continue;
-    const sim::Snapshot s = sim.snapshot();
+  developedStates(sim, 6, [&](const sim::Snapshot& s) {
     for (std::size_t i = 0; i < s.positions.size(); ++i) {
       if (s.velocities[i].w != float(sim::ParticleKind::Fluid)) continue;
       const glm::dvec2 l = ends.inlet.local(glm::dvec3(s.positions[i]));
@@ -554,11 +553,10 @@ TEST_F(OpenEndsTest, ObliqueMeshTubeCarriesThePressureDrivenFlow) {
       speed += glm::dot(glm::dvec3(s.velocities[i]), tube.axis);
       want += nominal * (R * R - l.y) / (4.0 * mu);
     }
-  }
+  });
   const sim::Snapshot end = sim.snapshot();
   const auto o = sim.openCounts();
-  const std::int64_t in64 = std::int64_t(o.in) - o.inBack, out64 = std::int64_t(o.out) - o.outBack;
-  const std::int64_t change = std::int64_t(lumenCount(end, in)) - lumen0;
+  const auto [in64, out64, change] = netCrossings(o, lumenCount(end, in), lumen0);
   std::printf("oblique mesh tube to t = %.4f s: in %u (back %u), out %u (back %u), parked %u + %u + %u, spawned %u; lumen %u -> %lld; "
               "mean speed over Poiseuille's %.3f\n",
               sim.time(), o.in, o.inBack, o.out, o.outBack, o.parkedEnd, o.parkedStart, o.parkedOutside, o.spawned, lumen0,
