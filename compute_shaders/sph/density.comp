@@ -50,6 +50,7 @@ layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_POSITION) writeonly buffer Pa
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_COUNT) writeonly buffer PairCount { uint pairCount[]; };
 layout(std430, binding = HEMO_DENSITY_BINDING_PAIR_LIST) writeonly buffer PairList { uint pairList[]; };
 layout(std140, binding = HEMO_DENSITY_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
+#include "common/inflow_speed.glsl"
 layout(std430, binding = HEMO_DENSITY_BINDING_OPEN_PROFILE) readonly buffer OpenProfile { float openProfile[]; };
 layout(constant_id = 1) const uint kContinuity = 0u;  // 0 summation, 1 / 2 continuity (see above)
 // 4: the list is read four entries per texel (common/sph_params.glsl, hemo_list_texel)
@@ -202,7 +203,7 @@ void main() {
       const float reach = inflow.ends[e].shift.w;
       if (l.x < inflow.ends[e].origin.w && l.x >= -reach && l.y < reach * reach) {
         if ((e == 0u ? inflow.inletPressure : inflow.outletPressure) != 0u) {
-          p = background + (e == 0u ? inflow.pressures.x * hemo_inflow_ramp(inflow, time) : inflow.pressures.y);
+          p = background + (e == 0u ? hemo_inlet_pressure(time) : inflow.pressures.y);
         } else if (openProfile[2u * HEMO_OPEN_BINS + e] > 0.5 * HEMO_OPEN_NO_PRESSURE) {
           p = openProfile[2u * HEMO_OPEN_BINS + e];
         }

@@ -62,6 +62,7 @@ layout(std140, binding = HEMO_INTEGRATE_BINDING_DRIFT_RANGE) uniform DriftRange 
 layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_PARTIALS) writeonly buffer Partials { vec4 partials[]; };
 layout(std430, binding = HEMO_INTEGRATE_BINDING_CHECK_COUNT) writeonly buffer PartialCount { uint partialCount; };
 layout(std140, binding = HEMO_INTEGRATE_BINDING_INFLOW) uniform Inflow { InflowParams inflow; };
+#include "common/inflow_speed.glsl"
 layout(binding = HEMO_INTEGRATE_BINDING_STATE) uniform samplerBuffer stateT;
 // The tile test (symplectic Euler; interface/sph.h): every invocation widens its particle's
 // tile's box, and lists the tile when it is the first; sph/rebuild_decide.comp reads them.
@@ -246,20 +247,6 @@ void hemo_store_rebuild_partial(vec2 test, bool valid) {
   }
 }
 
-// Mean inflow speed u(t) = U w(t) ramp(t) (m/s).
-float hemo_inflow_mean_speed(float time) {
-  float w = 1.0;
-  if (inflow.period > 0.0 && inflow.samples > 0u) {
-    const float cycles = time / inflow.period;
-    const float phase = (cycles - floor(cycles)) * float(inflow.samples);
-    const uint k = min(uint(phase), inflow.samples - 1u);
-    const float a = hemo_inflow_sample(inflow, k);
-    const float b = hemo_inflow_sample(inflow, (k + 1u) % inflow.samples);
-    w = a + (b - a) * (phase - float(k));
-  }
-  const float ramp = hemo_inflow_ramp(inflow, time);
-  return inflow.meanSpeed * w * ramp;
-}
 
 // Set by hemo_inflow_driven: the velocity it gives is the particle's whole velocity (a
 // pressure end's buffer, which moves as a whole: across the section too, so its particles,
@@ -302,7 +289,7 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
       // it exceeds it by, over rho0 c0 (sph/open_profile.comp: the outgoing characteristic;
       // without it a lumen at rest between two buffers at rest never starts to flow).
       const float lumen = openProfile[2u * HEMO_OPEN_BINS + e];
-      const float end = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : inflow.pressures.x * hemo_inflow_ramp(inflow, time));
+      const float end = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : hemo_inlet_pressure(time));
       const float lack = lumen > 0.5 * HEMO_OPEN_NO_PRESSURE ? end - lumen : 0.0;  // Pa: the end's pressure over the lumen's
       inward = s2 < 1.0 ? openProfile[e * HEMO_OPEN_BINS + hemo_open_bin(s2)] + lack * inflow.pressures.w : 0.0;
       // At most the speed the end's whole pressure gives the blood, sqrt(2 p / rho0) (Bernoulli):

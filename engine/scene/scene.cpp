@@ -150,11 +150,11 @@ const std::vector<Field>& schema() {
             {
                 {"profile", Kind::Choice, "", 0, 0, false, "none", "Velocity profile over the cross-section: parabolic (Poiseuille, peak 2x the mean), plug (uniform), or none (no inflow). Open ends with driven_by pressure: the profile the inlet's speed is measured against is the lumen's own, and this only switches the inlet on (give parabolic).", {"none", "parabolic", "plug"}},
                 {"driven_by", Kind::Choice, "", 0, 0, false, "velocity", "velocity: the zone moves at the profile and mean speed; pressure (open ends with a pressure outlet only): the inlet buffer holds pressure_Pa and moves at the lumen's own axial velocity next to it, radius by radius, so the pressure difference drives the flow.", {"velocity", "pressure"}},
-                {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "driven_by pressure: the inlet buffer's pressure over fluid.background_pressure_Pa, rising over ramp_s."},
+                {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "driven_by pressure: the inlet buffer's pressure over fluid.background_pressure_Pa, rising over ramp_s (times w(t) with a waveform)."},
                 {"mean_speed_m_s", Kind::Number, "m/s", -1e3, 1e3, false, 0.0, "Mean speed U over the cross-section (negative: flow along -x)."},
                 {"zone_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the driven zone from the tube's start (a mesh vessel's open inlet: from its end, along its axis); at least the kernel support 2h, at most half the tube."},
                 {"pulse_period_s", Kind::Number, "s", 0, 1e6, false, 0.0, "Period of the waveform (0: constant speed)."},
-                {"waveform", Kind::NumberList, "1", -100, 100, false, Json::array(), "Pulsatile flow: u(t) = U w(t), w sampled at equal steps over one period (2 to 64 samples, linear in between, periodic). Empty: w = 1."},
+                {"waveform", Kind::NumberList, "1", -100, 100, false, Json::array(), "Pulsatile flow: u(t) = U w(t) (a pressure inlet: its pressure_Pa times w(t)), w sampled at equal steps over one period (2 to 64 samples, linear in between, periodic). Empty: w = 1."},
                 {"ramp_s", Kind::Number, "s", 0, 1e6, false, 0.0, "u rises linearly from 0 over this time (0: at once)."},
                 {"hold_lumen_pressure", Kind::Bool, "", 0, 0, false, false, "The zone is also the blood supply: each step a zone particle's mass becomes m rho0 / rho (between its initial mass and max_mass_ratio times it), so the zone holds the lumen at fluid.background_pressure_Pa while the wall stretches and blood leaves through a rupture."},
                 {"max_mass_ratio", Kind::Number, "1", 1, 1e3, false, 4.0, "Cap of a particle's mass over its initial mass under hold_lumen_pressure."},
@@ -426,8 +426,9 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
   if (byPressure && !open) c.fail("vessel.inflow.driven_by", "\"pressure\" needs open ends with a pressure outlet (vessel.outlet.condition \"pressure\")");
   if (!byPressure && raw.contains("pressure_Pa")) c.fail("vessel.inflow.pressure_Pa", "only applies with vessel.inflow.driven_by \"pressure\"");
   if (byPressure && raw.contains("mean_speed_m_s")) c.fail("vessel.inflow.mean_speed_m_s", "does not apply to a pressure inlet (its speed is the lumen's)");
-  if (byPressure && !f.waveform.empty()) c.fail("vessel.inflow.waveform", "does not apply to a pressure inlet (yet)");
-  if (byPressure) f.meanSpeed = 1.0f;  // (unused: the pressure inlet moves at the lumen's measured speed)
+  // (a pressure inlet moves at the lumen's measured speed; its pressure_Pa follows the mean
+  // speed's waveform and ramp, w(t) ramp(t): common/inflow_speed.glsl)
+  if (byPressure) f.meanSpeed = 1.0f;
   if (f.meanSpeed == 0.0f) c.fail("vessel.inflow.mean_speed_m_s", "must be non-zero when an inflow profile is chosen");
   if (!(s.sph.backgroundPressure > 0.0f) && !open) {
     c.fail("fluid.background_pressure_Pa", "must be positive with a vessel.inflow: the lumen pressure is what pushes the fluid into the zone behind the pump (without it the zone runs empty); a few times rho U^2 is enough");

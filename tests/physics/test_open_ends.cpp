@@ -343,6 +343,60 @@ TEST_F(OpenEndsTest, PressureDropDrivesPoiseuilleFlow) {
   EXPECT_GT(o.in, 100u);
 }
 
+// A pulsatile pressure inlet: the waveform (2, 0 over a 20 ms beat: the pressure_Pa of 300 Pa
+// swinging between 600 and 0 over the background) scales the inlet's pressure. The buffer's
+// particles hold bg + 300 w(t) at each state (within the pressure's change over a step), and
+// more blood comes in over the beats' high halves than over their low halves.
+TEST_F(OpenEndsTest, PulsatilePressureInletFollowsItsWaveform) {
+  nlohmann::json j = openTube();
+  j["fluid"]["viscosity_pa_s"] = 0.1;
+  j["fluid"]["background_pressure_Pa"] = 200.0;
+  j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"driven_by", "pressure"}, {"pressure_Pa", 300.0}, {"zone_length_m", 0.003},
+                           {"ramp_s", 0.0}, {"pulse_period_s", 0.02}, {"waveform", {2.0, 0.0}}};
+  j["vessel"]["outlet"] = {{"condition", "pressure"}};
+  const scene::Scene scene = scene::parseScene(j.dump(), "open_tube_pulsatile_pressure");
+  const sim::Inflow& in = *scene.vessel->inflow;
+  sim::Simulation sim(ctx(), scene);
+  // (the buffer's pressure is the density pass's, at the start of the last step; the pressure
+  // changes by 300 * 2 / 10 ms = 6e4 Pa/s, about 1.5 Pa a step)
+  auto checkBuffer = [&](double t) {
+    sim::RunOptions opt;
+    opt.until = t;
+    sim.run(opt);
+    const sim::Snapshot s = sim.snapshot();
+    const double want = 200.0 + 300.0 * in.meanSpeedAt(sim.time());
+    std::uint32_t inBuffer = 0, off = 0;
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+      if (s.velocities[i].w != float(sim::ParticleKind::Fluid) || !in.open->inlet.inBuffer(glm::dvec3(s.positions[i]))) continue;
+      ++inBuffer;
+      off += std::abs(s.densityPressure[i].y - want) > 3.0;
+    }
+    EXPECT_GT(inBuffer, 100u);
+    EXPECT_EQ(off, 0u) << "at t = " << sim.time() << " s the inlet buffer must hold " << want << " Pa";
+    return want;
+  };
+  // Through two beats: the net inflow over each beat's high half (pressure above its mean) and
+  // low half.
+  std::int64_t high = 0, low = 0, last = 0;
+  for (int q = 1; q <= 8; ++q) {
+    const double t = 0.005 * q;  // quarter beats: the waveform's extremes at 0, 10, 20 ms
+    checkBuffer(t);
+    const auto o = sim.openCounts();
+    const std::int64_t net = std::int64_t(o.in) - o.inBack;
+    // quarter q covers (t - 5 ms, t]: the high half is around the beat's start, 15-25 ms (mod 20)
+    const int phase = (q - 1) % 4;
+    ((phase == 0 || phase == 3) ? high : low) += net - last;
+    last = net;
+  }
+  std::printf("pulsatile pressure inlet: net in %lld over the beats' high halves, %lld over their low halves\n",
+              static_cast<long long>(high), static_cast<long long>(low));
+  EXPECT_GT(high, 0);
+  // (measured 305 against 167: the flow lags the pressure, Womersley's number R sqrt(omega / nu)
+  // being 3.5 here)
+  EXPECT_GT(double(high), 1.4 * double(low)) << "the inflow must follow the inlet's pressure";
+  EXPECT_EQ(sim.escapedParticles(), 0u);
+}
+
 // A pressure end's buffer moves at most at the speed its whole pressure gives the blood,
 // sqrt(2 p / rho0): with the lumen next to the outlet measured at 5 m/s outwards and at 0 Pa
 // (a torn vessel draining through its tear, where the characteristic term would add to the

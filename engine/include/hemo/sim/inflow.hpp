@@ -98,7 +98,7 @@ struct OpenEnds {
   glm::vec3 parking{0.0f};    // m, where parked slots lie (outside the domain, beyond every support)
   glm::vec3 boxMin{-3.0e38f}, boxMax{3.0e38f};  // m, the domain: fluid beyond is parked
   // Pressure ends: a buffer that holds a pressure (Pa over the background pressure; the
-  // inlet's rises over the inflow's ramp) instead of the Tait law's, and moves at the lumen's
+  // inlet's rises over the inflow's ramp and follows its waveform) instead of the Tait law's, and moves at the lumen's
   // axial velocity next to its plane, radius by radius (a zero gradient along the axis), from
   // a slab of `slab` m (Tafuni et al. 2018 prescribe the pressure and extrapolate the
   // velocity likewise). Without: the inlet moves at the inflow's profile, and so does the
