@@ -510,22 +510,20 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
                                                 (meshed ? " m between the mesh's ends" : " m tube"));
   }
   sim::OpenEnds o;
-  const float reach = w.radius + float(w.layers + 1) * s.sph.spacing;  // (the lumen and its wall)
   if (w.shape == Vessel::Shape::Mesh) {
     o.inlet = w.meshInlet;
     o.outlet = w.meshOutlet;
-    o.inlet.reach = o.inlet.radius + float(w.layers + 1) * s.sph.spacing;
-    o.outlet.reach = o.outlet.radius + float(w.layers + 1) * s.sph.spacing;
   } else {
     o.inlet.origin = w.start;
     o.inlet.axis = glm::vec3(1.0f, 0.0f, 0.0f);
     o.inlet.radius = w.radius;
-    o.inlet.reach = reach;
     o.outlet.origin = w.start + glm::vec3(w.length, 0.0f, 0.0f);
     o.outlet.axis = glm::vec3(-1.0f, 0.0f, 0.0f);
     o.outlet.radius = w.radius;
-    o.outlet.reach = reach;
   }
+  // (each end's region: the lumen and its wall)
+  o.inlet.reach = o.inlet.radius + float(w.layers + 1) * s.sph.spacing;
+  o.outlet.reach = o.outlet.radius + float(w.layers + 1) * s.sph.spacing;
   o.inlet.length = zone;
   o.outlet.length = buffer;
   if (meshed) {

@@ -1056,8 +1056,8 @@ void SphSolver::setInflow(const Inflow& inflow) {
     for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, inflowVariant());
     integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, inflowVariant(), true);
   }
-  openProfiles_ = openOn_;  // (the lumen's speeds and pressure next to each plane: every open end uses them)
-  if (openProfiles_ && !openProfilePass_) {
+  // (the lumen's speeds and pressure next to each plane: every open end uses them)
+  if (openOn_ && !openProfilePass_) {
     openProfilePass_ = &context_->pipelines().get({"sph/open_profile", HEMO_OPROFILE_BINDING_COUNT, 0, kWorkgroup, {}, 0u, 0u});
     openProfileSet_ = openProfilePass_->makeSet({{HEMO_OPROFILE_BINDING_SUMS, &openSums_},
                                                  {HEMO_OPROFILE_BINDING_PROFILE, &openProfile_}});
@@ -1388,7 +1388,7 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
     rec.dispatch(*rebuildDecide_[tiles], rebuildDecideSet_,
                  DecidePush{rebuildThreshold(), rebuildGate_.slots(), moving < n ? 1u : 0u, groups.x, groups.y},
                  rebuildDecide_[tiles]->groupsFor(1u));
-    if (openProfiles_) {  // (the open ends' profiles for the next step, beside the decision)
+    if (openOn_) {  // (the open ends' profiles for the next step, beside the decision)
       rec.dispatch(*openProfilePass_, openProfileSet_, nullptr, 0, openProfilePass_->groupsFor(2 * kOpenBins + 2));
     }
     if (tiles != 0u) {

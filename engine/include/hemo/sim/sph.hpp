@@ -573,13 +573,12 @@ class SphSolver {
   // crossers' flags (uint per slot), bound to the integrator in every scene (4 bytes per slot);
   // the refill's scan of the flags, the crossers by rank, its scan and pass (made by setInflow).
   gpu::Buffer openCounters_, pending_, spawnScan_, crossers_;
-  // Pressure ends: the integrator's sums of the axial speeds by bin next to each plane and the
+  // Open ends: the integrator's sums of the axial speeds by bin (and the pressure) next to each plane and the
   // profiles sph/open_profile.comp makes of them (common/inflow.glsl, HEMO_OPEN_BINS).
   gpu::Buffer openSums_, openProfile_;
   gpu::Buffer escapeMask_;  // open ends' escape mask (EscapeGrid; a word without open ends)
   const gpu::ComputePipeline* openProfilePass_ = nullptr;
   gpu::DescriptorSet openProfileSet_;
-  bool openProfiles_ = false;
   std::unique_ptr<gpu::PrefixScan> spawnScanner_;
   const gpu::ComputePipeline* spawn_ = nullptr;
   gpu::DescriptorSet spawnSet_;
