@@ -583,7 +583,7 @@ Json accuracy(Context& ctx, const std::string& only, const std::string& solverOn
         "domain": {"min_m": [0.0, -0.004, -0.004], "max_m": [0.018, 0.004, 0.004]}})";
       const hemo::scene::Scene scene = hemo::scene::parseScene(text, "open_tube_bench");
       const hemo::sim::Inflow& in = *scene.vessel->inflow;
-      const double outletPlane = double(in.open->outlet.origin.x) - in.open->outlet.length;
+      const double outletPlane = double(in.open->outlets[0].origin.x) - in.open->outlets[0].length;
       const double lo = in.zoneEnd + 4.0 * dp, hi = outletPlane - 4.0 * dp;
       const double G = drop / (outletPlane - in.zoneEnd);
       hemo::sim::Simulation sim(ctx, scene);

@@ -4,7 +4,9 @@ struct HemoOpenEnd {
   vec4 origin;  // xyz: the centre of the vessel's end (m); w: the buffer's length (m)
   vec4 axis;    // xyz: unit, into the lumen; w: the lumen's radius there (m)
   vec4 shift;   // xyz: a crosser's image lies at its position less this (m); w: the reach (m)
-  vec4 drive;   // x: a flow outlet's speed over the inlet's, (R_inlet / R_outlet)^2
+  vec4 drive;   // x: a flow outlet's speed over the inlet's, (R_inlet / R_outlet)^2; y: a pressure
+                // end's pressure over the background (Pa; the inlet's follows the inflow's
+                // waveform and ramp, common/inflow_speed.glsl); z: 1 for a pressure end
 };
 
 // The driven inflow zone of a vessel (hemo/sim/inflow.hpp has the model), bound as a uniform
@@ -29,17 +31,16 @@ struct InflowParams {
   float reserved1;
   vec4 waveform[16];
   // Open ends (hemo/sim/inflow.hpp; open = 0: the periodic vessel above): each end's frame,
-  // the inlet's then the outlet's (HemoOpenEnd).
-  HemoOpenEnd ends[2];
+  // the inlet's then the outlets' (HemoOpenEnd; endCount of them).
+  HemoOpenEnd ends[HEMO_OPEN_MAX_ENDS];
   vec4 parking;       // xyz: where parked slots lie (m)
   float pendingMargin; // m past an end's plane into the lumen at which a crosser still owed its image forces the refill (sph/integrate.comp)
   uint open;          // 1: open ends
-  uint inletPressure;   // 1: the inlet buffer holds a pressure and takes the lumen's velocity profile (zero gradient)
-  uint outletPressure;  // 1: the outlet buffer likewise
-  // (pressure ends) xy: the inlet's and the outlet's pressure over the background pressure
-  // (Pa; the inlet's rises over `ramp`); z: the width of the lumen's slab next to each plane
-  // whose axial velocity profile the buffer takes (m); w: 1 / (rho0 c0) (m/s per Pa)
-  vec4 pressures;
+  uint endCount;      // ends in use
+  uint reserved2;
+  // (pressure ends) x: the width of the lumen's slab next to each plane whose axial velocity
+  // profile the buffer takes (m); y: 1 / (rho0 c0) (m/s per Pa)
+  vec4 slab;
   vec4 boxMin;  // xyz: the domain (m); fluid beyond it is parked
   vec4 boxMax;
   // Blood far outside the vessel's wall is parked too (hemo/sim/inflow.hpp, EscapeGrid): the
@@ -58,8 +59,8 @@ vec2 hemo_open_local_of(vec3 d, vec3 axis) {
 }
 
 // The open ends' velocity profiles (pressure ends): HEMO_OPEN_BINS bins of equal area over the
-// lumen's cross-section (bin = floor(bins r^2 / R^2)), the inlet's then the outlet's, then one
-// bin of pressure per plane. The integrator sums each bin's axial velocities (pressures) of
+// lumen's cross-section (bin = floor(bins r^2 / R^2)) per end, then one bin of pressure per
+// plane (interface/sph.h, HEMO_OPEN_PRESSURE). The integrator sums each bin's axial velocities (pressures) of
 // the lumen's particles in the slab next to the plane, in fixed point (HEMO_OPEN_SUM_WORDS
 // words per bin: the low and high words of sum((v_x + offset) scale) and the count; integer
 // sums, the same in any order); sph/open_profile.comp turns them into the mean speeds the next

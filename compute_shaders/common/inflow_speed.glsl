@@ -20,5 +20,11 @@ float hemo_inflow_mean_speed(float time) {
 // times the waveform and the ramp (the loader gives a pressure inlet a mean speed of 1, so
 // that is the mean speed's w(t) ramp(t)).
 float hemo_inlet_pressure(float time) {
-  return inflow.pressures.x * hemo_inflow_mean_speed(time);
+  return inflow.ends[0].drive.y * hemo_inflow_mean_speed(time);
+}
+
+// Open end e's pressure over the background pressure at time t (Pa; a pressure end's: the
+// inlet's follows the waveform, an outlet's is constant).
+float hemo_open_end_pressure(uint e, float time) {
+  return e == 0u ? hemo_inlet_pressure(time) : inflow.ends[e].drive.y;
 }

@@ -380,23 +380,25 @@
 #define HEMO_DTREDUCE_BINDING_TOOL_LOG 8
 #define HEMO_DTREDUCE_BINDING_COUNT 9
 
-// Open vessel ends' counters (uint each): fluid particles that crossed the inlet plane
-// downstream and back upstream, the outlet plane downstream and back, were parked past the
-// outlet's end and past the inlet's, were spawned into the inlet's buffer, were parked
-// outside the domain, and were spawned into the outlet's buffer. Each buffer's deficit, the
-// particles it holds fewer than it started with, follows from them: the inlet's
-// IN + PARKED_START - IN_BACK - SPAWNED, the outlet's OUT_BACK + PARKED_END - OUT -
-// SPAWNED_OUTLET (sph/open_spawn.comp makes up to that many images).
-#define HEMO_OPEN_COUNTER_IN 0
-#define HEMO_OPEN_COUNTER_IN_BACK 1
-#define HEMO_OPEN_COUNTER_OUT 2
-#define HEMO_OPEN_COUNTER_OUT_BACK 3
-#define HEMO_OPEN_COUNTER_PARKED_END 4
-#define HEMO_OPEN_COUNTER_PARKED_START 5
-#define HEMO_OPEN_COUNTER_SPAWNED 6
-#define HEMO_OPEN_COUNTER_PARKED_OUTSIDE 7  // fluid that left the domain (through a tear)
-#define HEMO_OPEN_COUNTER_SPAWNED_OUTLET 8
-#define HEMO_OPEN_COUNTER_COUNT 9
+// Open vessel ends (hemo/sim/inflow.hpp): at most this many, end 0 the inlet, then the outlets.
+#define HEMO_OPEN_MAX_ENDS 8u
+// Their counters (uint each): fluid particles parked outside the domain (through a tear), and
+// per end e: those that left its buffer into the lumen across its plane, came into its buffer
+// from the lumen, were parked past its end, and were spawned into its buffer as images. Each
+// buffer's deficit, the particles it holds fewer than it started with, follows from them:
+// LEAVE + PARKED - ENTER - SPAWNED (sph/open_spawn.comp makes up to that many images). The
+// inlet's net inflow is its LEAVE - ENTER, an outlet's net outflow its ENTER - LEAVE.
+#define HEMO_OPEN_COUNTER_PARKED_OUTSIDE 0u
+#define HEMO_OPEN_COUNTER_LEAVE(e) (1u + 4u * (e))
+#define HEMO_OPEN_COUNTER_ENTER(e) (2u + 4u * (e))
+#define HEMO_OPEN_COUNTER_PARKED(e) (3u + 4u * (e))
+#define HEMO_OPEN_COUNTER_SPAWNED(e) (4u + 4u * (e))
+#define HEMO_OPEN_COUNTER_COUNT (1u + 4u * HEMO_OPEN_MAX_ENDS)
+// A fluid slot's pending value (HEMO_INTEGRATE_BINDING_PENDING): 0, or end e's image owed to
+// its buffer (OWING), or owed after spending a credit (CREDITED; sph/integrate.comp). A
+// particle's credit for end e is normals.w = e + 1.
+#define HEMO_OPEN_OWING(e) (1u + (e))
+#define HEMO_OPEN_CREDITED(e) (1u + HEMO_OPEN_MAX_ENDS + (e))
 // The pressure ends' speed and pressure bins (common/inflow.glsl): bins per plane, words per
 // bin (low, high, count), the fixed-point offsets and scales of speeds (m/s) and pressures (Pa),
 // and a plane's pressure before any particle was measured.
@@ -407,6 +409,10 @@
 #define HEMO_OPEN_PRESSURE_OFFSET 1.0e6
 #define HEMO_OPEN_PRESSURE_SCALE 2048.0
 #define HEMO_OPEN_NO_PRESSURE -1.0e30f
+// The profile's layout (float each; the sums': HEMO_OPEN_SUM_WORDS words each): end e's speed
+// bin b at e BINS + b, its plane's pressure at PRESSURE(e).
+#define HEMO_OPEN_PRESSURE(e) (HEMO_OPEN_MAX_ENDS * HEMO_OPEN_BINS + (e))
+#define HEMO_OPEN_PROFILE_SIZE (HEMO_OPEN_MAX_ENDS * (HEMO_OPEN_BINS + 1u))
 
 
 // sph/open_spawn.comp: the buffers' refill, at the start of every step that rebuilds the
@@ -414,24 +420,26 @@
 // particles that left a buffer into the lumen since the last refill get their images at the
 // buffer's far end, a buffer length back along the end's axis, in parked slots, as many per
 // end as the buffer's deficit (HEMO_OPEN_COUNTER_*): first those that owe their buffer one
-// (pending 1 inlet, 2 outlet), then those that spent a credit crossing (3 inlet, 4 outlet: they
-// had come into the buffer from the lumen, and their image is made only where the buffer has
+// (HEMO_OPEN_OWING), then those that spent a credit crossing (HEMO_OPEN_CREDITED: they had
+// come into the buffer from the lumen, and their image is made only where the buffer has
 // since lost particles at its far end, as reverse flow takes them out). The k-th served
-// crosser (in that order, each class in slot order) takes the k-th parked slot in slot order
-// (a prefix scan of the flags, no float atomics).
+// crosser (the owing of every end in end order, then the credited likewise, each class in
+// slot order) takes the k-th parked slot in slot order (a prefix scan of the flags, no float
+// atomics). With E ends (InflowParams.endCount) the scan has 2E + 1 segments of N flags:
+// owing of ends 0..E-1, credited of ends 0..E-1, the parked slots.
 #define HEMO_SPAWN_BINDING_POSITIONS 0
 #define HEMO_SPAWN_BINDING_VELOCITIES 1
 #define HEMO_SPAWN_BINDING_NORMALS 2
-#define HEMO_SPAWN_BINDING_PENDING 3   // uint per fluid slot (HEMO_INTEGRATE_BINDING_PENDING): 0, or 1-4 (above)
-#define HEMO_SPAWN_BINDING_SCAN 4      // uint[5N + 3]: the flags of pending 1, 2, 3, 4 and of the parked slots, then 0 (scanned: 5N + 1); then the two ends' deficits
-#define HEMO_SPAWN_BINDING_CROSSERS 5  // uint per fluid slot: the slot of the k-th served crosser (bit 31: the outlet's)
+#define HEMO_SPAWN_BINDING_PENDING 3   // uint per fluid slot (HEMO_INTEGRATE_BINDING_PENDING)
+#define HEMO_SPAWN_BINDING_SCAN 4      // uint[(2E + 1) N + 1 + E]: the segments' flags, then 0 (scanned: (2E + 1) N + 1); then the ends' deficits
+#define HEMO_SPAWN_BINDING_CROSSERS 5  // uint per fluid slot: the slot of the k-th served crosser (bits 29-31: its end)
 #define HEMO_SPAWN_BINDING_INFLOW 6    // InflowParams
 #define HEMO_SPAWN_BINDING_COUNTERS 7  // HEMO_OPEN_COUNTER_*
 #define HEMO_SPAWN_BINDING_STATUS 8
 #define HEMO_SPAWN_BINDING_COUNT 9
-#define HEMO_SPAWN_CLASSES 5  // the scan's segments of N flags: pending 1, 2, 3, 4, parked
+#define HEMO_SPAWN_END_SHIFT 29u       // (fluid slots stay below 2^29)
 // push constants: uint n (fluid slots N), uint mode
-#define HEMO_SPAWN_FLAGS 0    // scan[c N + i] = (pending[i] == c + 1) (c < 4), scan[4N + i] = parked, scan[5N] = 0; the deficits
+#define HEMO_SPAWN_FLAGS 0    // the segments' flags, scan[(2E + 1) N] = 0, the deficits
 #define HEMO_SPAWN_SCATTER 1  // (after the scan) crossers[k] = i for each served crosser i of rank k
 #define HEMO_SPAWN_COPY 2     // each parked slot of rank k < served takes crosser k's image; the
                               // crossers served or not needed clear their flag, the others count a shortfall

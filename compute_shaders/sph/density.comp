@@ -198,15 +198,16 @@ void main() {
     // A velocity-driven buffer takes the pressure the lumen has next to its plane (a zero
     // gradient along the axis, once measured): its own summed density is cut off at its far
     // end, and its images land among its particles.
-    for (uint e = 0u; e < 2u; ++e) {
+    for (uint e = 0u; e < inflow.endCount; ++e) {
       const vec2 l = hemo_open_local(inflow, e, gPi.xyz);
       const float reach = inflow.ends[e].shift.w;
       if (l.x < inflow.ends[e].origin.w && l.x >= -reach && l.y < reach * reach) {
-        if ((e == 0u ? inflow.inletPressure : inflow.outletPressure) != 0u) {
-          p = background + (e == 0u ? hemo_inlet_pressure(time) : inflow.pressures.y);
-        } else if (openProfile[2u * HEMO_OPEN_BINS + e] > 0.5 * HEMO_OPEN_NO_PRESSURE) {
-          p = openProfile[2u * HEMO_OPEN_BINS + e];
+        if (inflow.ends[e].drive.z != 0.0) {
+          p = background + hemo_open_end_pressure(e, time);
+        } else if (openProfile[HEMO_OPEN_PRESSURE(e)] > 0.5 * HEMO_OPEN_NO_PRESSURE) {
+          p = openProfile[HEMO_OPEN_PRESSURE(e)];
         }
+        break;
       }
     }
   }

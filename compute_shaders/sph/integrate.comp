@@ -154,9 +154,9 @@ vec2 hemo_rebuild_test(uint i, vec3 x, vec3 v, out vec3 d, out vec3 x0) {
     // A crosser of an end's plane whose image the buffer still lacks (it appears at the next
     // rebuild, sph/open_spawn.comp) fails both tests once it is `pendingMargin` past the plane
     // into the lumen: the refill comes before the buffer's gap nears the lumen, in any flow (a
-    // plug flow alone would never rebuild the list). (pending 1: the inlet's; 2: the outlet's,
-    // of reverse flow)
-    const uint e = (pending[i] - 1u) & 1u;
+    // plug flow alone would never rebuild the list). (HEMO_OPEN_OWING, HEMO_OPEN_CREDITED: the
+    // end it owes an image)
+    const uint e = (pending[i] - 1u) % HEMO_OPEN_MAX_ENDS;
     if (hemo_open_local(inflow, e, x).x - inflow.ends[e].origin.w >= inflow.pendingMargin) {
       r = 3.0e38;
     }
@@ -261,7 +261,7 @@ bool hemo_open_in_buffer(vec3 x, uint e, out vec2 l) {
 }
 
 // True when a fluid particle at x (start of the step) is in the inflow zone (open ends: in
-// either buffer); u: its velocity (the periodic zone: its axial part, along x; an open end's
+// any end's buffer); u: its velocity (the periodic zone: its axial part, along x; an open end's
 // buffer: the whole of it, gWholeVelocity), s2: its (r / R)^2.
 bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2) {
   u = vec3(0.0);
@@ -274,24 +274,25 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
     // velocity, not only its axial part), at rest beyond the radius, so none drifts out
     // through the end or back into the lumen along the wall.
     vec2 l;
-    const bool inlet = hemo_open_in_buffer(x, 0u, l);
-    const bool outlet = !inlet && hemo_open_in_buffer(x, 1u, l);
-    if (!(inlet || outlet)) {
+    uint e = 0u;
+    while (e < inflow.endCount && !hemo_open_in_buffer(x, e, l)) {
+      ++e;
+    }
+    if (e == inflow.endCount) {
       return false;
     }
-    const uint e = outlet ? 1u : 0u;
     const float R = inflow.ends[e].axis.w;
     s2 = l.y / (R * R);
     float inward;  // m/s along the end's axis, into the lumen
-    if ((inlet && inflow.inletPressure != 0u) || (outlet && inflow.outletPressure != 0u)) {
+    if (inflow.ends[e].drive.z != 0.0) {
       // A pressure end: the lumen's speed along the axis next to the plane at this radius (a
       // zero gradient), plus what the lumen's pressure there lacks of the end's, or less what
       // it exceeds it by, over rho0 c0 (sph/open_profile.comp: the outgoing characteristic;
       // without it a lumen at rest between two buffers at rest never starts to flow).
-      const float lumen = openProfile[2u * HEMO_OPEN_BINS + e];
-      const float end = hemo_background_pressure(time, params) + (outlet ? inflow.pressures.y : hemo_inlet_pressure(time));
+      const float lumen = openProfile[HEMO_OPEN_PRESSURE(e)];
+      const float end = hemo_background_pressure(time, params) + hemo_open_end_pressure(e, time);
       const float lack = lumen > 0.5 * HEMO_OPEN_NO_PRESSURE ? end - lumen : 0.0;  // Pa: the end's pressure over the lumen's
-      inward = s2 < 1.0 ? openProfile[e * HEMO_OPEN_BINS + hemo_open_bin(s2)] + lack * inflow.pressures.w : 0.0;
+      inward = s2 < 1.0 ? openProfile[e * HEMO_OPEN_BINS + hemo_open_bin(s2)] + lack * inflow.slab.y : 0.0;
       // At most the speed the end's whole pressure gives the blood, sqrt(2 p / rho0) (Bernoulli):
       // where the lumen cannot hold a pressure (a torn vessel drains through its tear) the
       // characteristic term would add to the lumen's speed, which the buffer itself drives, step
@@ -306,7 +307,7 @@ bool hemo_inflow_driven(vec3 x, float kind, float time, out vec3 u, out float s2
       // inflow's peak speed, and the inlet delivered 7% less than its profile carries.
       const float profile = inflow.profile == 1u ? (s2 < 1.0 ? 1.0 : 0.0) : 2.0 * max(1.0 - s2, 0.0);
       const float speed = hemo_inflow_mean_speed(time) * profile * inflow.ends[e].drive.x;
-      inward = outlet ? -speed : speed;
+      inward = e == 0u ? speed : -speed;
     }
     gWholeVelocity = true;
     u = inward * inflow.ends[e].axis.xyz;
@@ -337,26 +338,27 @@ void hemo_open_sum(uint bin, float value, float offset, float scale) {
   atomicAdd(openSums[word + 2u], 1u);
 }
 
-// Slot i has left buffer b (1 inlet, 2 outlet) into the lumen: it owes b its image (pending
-// b), or, holding a credit for b, spends it (pending b + 2: its image is made only where the
-// buffer has lost particles at its far end since, sph/open_spawn.comp).
-void hemo_open_leave_buffer(uint i, uint b) {
-  if (normals[i].w == float(b)) {
+// Slot i has left end e's buffer into the lumen: it owes the buffer its image
+// (HEMO_OPEN_OWING), or, holding a credit for it (normals.w = e + 1), spends it
+// (HEMO_OPEN_CREDITED: its image is made only where the buffer has lost particles at its far
+// end since, sph/open_spawn.comp).
+void hemo_open_leave_buffer(uint i, uint e) {
+  if (normals[i].w == float(e + 1u)) {
     normals[i].w = 0.0;
-    pending[i] = b + 2u;
+    pending[i] = HEMO_OPEN_CREDITED(e);
   } else {
-    pending[i] = b;
+    pending[i] = HEMO_OPEN_OWING(e);
   }
 }
 
-// Slot i has come into buffer b from the lumen: it cancels the image it owes b (and gets back
-// the credit it had spent on it), or earns a credit for b.
-void hemo_open_enter_buffer(uint i, uint b) {
-  if (pending[i] == b) {
+// Slot i has come into end e's buffer from the lumen: it cancels the image it owes the buffer
+// (and gets back the credit it had spent on it), or earns a credit for it.
+void hemo_open_enter_buffer(uint i, uint e) {
+  if (pending[i] == HEMO_OPEN_OWING(e)) {
     pending[i] = 0u;
   } else {
-    pending[i] = pending[i] == b + 2u ? 0u : pending[i];
-    normals[i].w = float(b);
+    pending[i] = pending[i] == HEMO_OPEN_CREDITED(e) ? 0u : pending[i];
+    normals[i].w = float(e + 1u);
   }
 }
 
@@ -375,57 +377,59 @@ bool hemo_open_escaped(vec3 x) {
 }
 
 // Open ends (kInflow 2), after the update of fluid slot i from `start` to x: the plane
-// crossings, and parking past either end or outside the domain.
+// crossings, and parking past an end or outside the domain.
 void hemo_open_ends(uint i, vec3 start, inout vec4 x, inout vec4 v) {
-  const vec2 l[2] = vec2[2](hemo_open_local(inflow, 0u, x.xyz), hemo_open_local(inflow, 1u, x.xyz));
   // The lumen's speeds along each end's axis in the slab next to its plane, by radius, for the
   // pressure ends' buffers (their zero gradient along the axis), and its pressure there (every
   // buffer's: sph/density.comp, and the pressure ends' characteristic term).
-  for (uint e = 0u; e < 2u; ++e) {
+  for (uint e = 0u; e < inflow.endCount; ++e) {
+    const vec2 l = hemo_open_local(inflow, e, x.xyz);
     const float R = inflow.ends[e].axis.w;
-    const float s2 = l[e].y / (R * R);
-    const float into = l[e].x - inflow.ends[e].origin.w;  // m past the plane into the lumen
-    if (s2 < 1.0 && into >= 0.0 && into < inflow.pressures.z) {
+    const float s2 = l.y / (R * R);
+    const float into = l.x - inflow.ends[e].origin.w;  // m past the plane into the lumen
+    if (s2 < 1.0 && into >= 0.0 && into < inflow.slab.x) {
       hemo_open_sum(e * HEMO_OPEN_BINS + hemo_open_bin(s2), dot(v.xyz, inflow.ends[e].axis.xyz), HEMO_OPEN_SPEED_OFFSET,
                     HEMO_OPEN_FIXED_SCALE);
-      hemo_open_sum(2u * HEMO_OPEN_BINS + e, state(i).y, HEMO_OPEN_PRESSURE_OFFSET, HEMO_OPEN_PRESSURE_SCALE);
+      hemo_open_sum(HEMO_OPEN_PRESSURE(e), state(i).y, HEMO_OPEN_PRESSURE_OFFSET, HEMO_OPEN_PRESSURE_SCALE);
       break;
     }
   }
   // Each buffer holds the same particles whatever crosses its plane. A particle that leaves a
-  // buffer into the lumen owes the buffer its image at the buffer's far end (pending 1: the
-  // inlet's, 2: the outlet's, of reverse flow; a buffer length back along the end's axis);
-  // one that comes back into the buffer cancels the image it still owes, or else earns a
-  // credit (normals.w = 1 for the inlet, 2 for the outlet: fluid particles carry no normal,
-  // and open ends use summation density) that its next crossing into the lumen spends: its
-  // image is then made only as far as the buffer has lost particles past its far end
-  // meanwhile (pending 3, 4; sph/open_spawn.comp counts each buffer's deficit). (Near the wall,
+  // buffer into the lumen owes the buffer its image at the buffer's far end (HEMO_OPEN_OWING;
+  // a buffer length back along the end's axis: the inflow at the inlet, reverse flow at an
+  // outlet); one that comes back into the buffer cancels the image it still owes, or else
+  // earns a credit (normals.w = e + 1: fluid particles carry no normal, and open ends use
+  // summation density) that its next crossing into the lumen spends: its image is then made
+  // only as far as the buffer has lost particles past its far end meanwhile
+  // (HEMO_OPEN_CREDITED; sph/open_spawn.comp counts each buffer's deficit). (Near the wall,
   // where the flow is slow, particles cross back and forth: each forward crossing made an
   // image, and the buffer filled up. Without the deficit, a buffer that reverse flow had
   // emptied at its far end got nothing back when the flow turned.)
-  bool past[2];
-  for (uint e = 0u; e < 2u; ++e) {
+  uint parkedBy = HEMO_OPEN_MAX_ENDS;  // the end past which the particle lies (none)
+  for (uint e = 0u; e < inflow.endCount; ++e) {
+    const vec2 l = hemo_open_local(inflow, e, x.xyz);
     const float reach = inflow.ends[e].shift.w;
     const float plane = inflow.ends[e].origin.w;
-    const bool near = l[e].y < reach * reach;
+    const bool near = l.y < reach * reach;
     const float before = hemo_open_local(inflow, e, start).x;
-    // (the inlet's crossings into the lumen are the inflow; the outlet's out of it the outflow)
-    if (near && before < plane && l[e].x >= plane) {
-      atomicAdd(openCounters[e == 0u ? HEMO_OPEN_COUNTER_IN : HEMO_OPEN_COUNTER_OUT_BACK], 1u);
-      hemo_open_leave_buffer(i, e + 1u);
-    } else if (near && before >= plane && l[e].x < plane) {
-      atomicAdd(openCounters[e == 0u ? HEMO_OPEN_COUNTER_IN_BACK : HEMO_OPEN_COUNTER_OUT], 1u);
-      hemo_open_enter_buffer(i, e + 1u);
+    // (the inlet's crossings into the lumen are the inflow; an outlet's out of it its outflow)
+    if (near && before < plane && l.x >= plane) {
+      atomicAdd(openCounters[HEMO_OPEN_COUNTER_LEAVE(e)], 1u);
+      hemo_open_leave_buffer(i, e);
+    } else if (near && before >= plane && l.x < plane) {
+      atomicAdd(openCounters[HEMO_OPEN_COUNTER_ENTER(e)], 1u);
+      hemo_open_enter_buffer(i, e);
     }
-    past[e] = near && l[e].x < 0.0 && l[e].x >= -reach;
+    if (parkedBy == HEMO_OPEN_MAX_ENDS && near && l.x < 0.0 && l.x >= -reach) {
+      parkedBy = e;
+    }
   }
   // Blood that has left the domain (through a tear), or lies in a cell of the escape mask (far
   // enough outside the wall), is parked too, and counted.
   const bool outside = any(lessThan(x.xyz, inflow.boxMin.xyz)) || any(greaterThan(x.xyz, inflow.boxMax.xyz)) ||
                        hemo_open_escaped(x.xyz);
-  if (past[0] || past[1] || outside) {
-    atomicAdd(openCounters[past[1]   ? HEMO_OPEN_COUNTER_PARKED_END
-                           : past[0] ? HEMO_OPEN_COUNTER_PARKED_START : HEMO_OPEN_COUNTER_PARKED_OUTSIDE], 1u);
+  if (parkedBy < HEMO_OPEN_MAX_ENDS || outside) {
+    atomicAdd(openCounters[parkedBy < HEMO_OPEN_MAX_ENDS ? HEMO_OPEN_COUNTER_PARKED(parkedBy) : HEMO_OPEN_COUNTER_PARKED_OUTSIDE], 1u);
     pending[i] = 0u;  // (the image would be taken from the parking point)
     x.xyz = inflow.parking.xyz;
     v = vec4(0.0, 0.0, 0.0, float(HEMO_KIND_PARKED));

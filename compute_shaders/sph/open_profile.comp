@@ -1,7 +1,7 @@
 #version 450
 // The pressure ends' velocity profiles (common/inflow.glsl, HEMO_OPEN_BINS; hemo/sim/inflow.hpp):
-// one workgroup after the integrator, an invocation per bin, the inlet's then the outlet's, then
-// the two planes' pressures. A bin's mean is its fixed-point sum over its count; a bin no
+// after the integrator, an invocation per bin (HEMO_OPEN_PROFILE_SIZE: every end's speed bins,
+// then the planes' pressures). A bin's mean is its fixed-point sum over its count; a bin no
 // particle sat in this step keeps the value it had (the pressures start at
 // HEMO_OPEN_NO_PRESSURE: none yet). The sums go back to zero for the next step.
 #extension GL_GOOGLE_include_directive : require
@@ -14,10 +14,10 @@ layout(std430, binding = HEMO_OPROFILE_BINDING_PROFILE) buffer Profile { float p
 
 void main() {
   const uint b = hemo_global_index();
-  if (b >= 2u * HEMO_OPEN_BINS + 2u) {
+  if (b >= HEMO_OPEN_PROFILE_SIZE) {
     return;
   }
-  const bool pressure = b >= 2u * HEMO_OPEN_BINS;  // (the planes' mean pressures, Pa)
+  const bool pressure = b >= HEMO_OPEN_PRESSURE(0u);  // (the planes' mean pressures, Pa)
   const float scale = pressure ? HEMO_OPEN_PRESSURE_SCALE : HEMO_OPEN_FIXED_SCALE;
   const float offset = pressure ? HEMO_OPEN_PRESSURE_OFFSET : HEMO_OPEN_SPEED_OFFSET;
   const uint word = b * HEMO_OPEN_SUM_WORDS;

@@ -29,30 +29,33 @@ layout(push_constant) uniform Push {
   uint mode;  // HEMO_SPAWN_*
 } pc;
 
-// The flag segment of pending value c (1-4) and the parked slots' (c = 0 gives segment 4).
-uint hemo_spawn_segment(uint c) {
-  return c == 0u ? 4u : c - 1u;
+// The flag segment of pending value c (interface/sph.h: HEMO_OPEN_OWING, HEMO_OPEN_CREDITED)
+// among E ends: owing e -> e, credited e -> E + e; the parked slots' (c = 0) is 2E.
+uint hemo_spawn_segment(uint c, uint ends) {
+  if (c == 0u) {
+    return 2u * ends;
+  }
+  return c <= HEMO_OPEN_MAX_ENDS ? c - 1u : ends + c - 1u - HEMO_OPEN_MAX_ENDS;
 }
 
-// How many crossers of segment `seg` (0-3: pending 1-4) are served, from the scan: each end
-// serves its owing crossers first, then those that spent a credit, up to its deficit.
-uint hemo_spawn_served(uint seg, uint n) {
-  const uint e = seg & 1u;
-  const uint deficit = scan[5u * n + 1u + e];
+// How many crossers of segment `seg` (< 2E) are served, from the scan: each end serves its
+// owing crossers first, then those that spent a credit, up to its deficit.
+uint hemo_spawn_served(uint seg, uint n, uint ends) {
+  const uint e = seg < ends ? seg : seg - ends;
+  const uint deficit = scan[(2u * ends + 1u) * n + 1u + e];
   const uint owing = scan[(e + 1u) * n] - scan[e * n];
   const uint owingServed = min(deficit, owing);
-  if (seg < 2u) {
+  if (seg < ends) {
     return owingServed;
   }
   return min(deficit - owingServed, scan[(seg + 1u) * n] - scan[seg * n]);
 }
 
-// Where segment `seg`'s served crossers start in the served order (owing inlet, owing outlet,
-// credited inlet, credited outlet).
-uint hemo_spawn_offset(uint seg, uint n) {
+// Where segment `seg`'s served crossers start in the served order (the segments in order).
+uint hemo_spawn_offset(uint seg, uint n, uint ends) {
   uint offset = 0u;
   for (uint s = 0u; s < seg; ++s) {
-    offset += hemo_spawn_served(s, n);
+    offset += hemo_spawn_served(s, n, ends);
   }
   return offset;
 }
@@ -60,25 +63,27 @@ uint hemo_spawn_offset(uint seg, uint n) {
 void main() {
   const uint i = hemo_global_index();
   const uint n = pc.n;
+  const uint ends = inflow.endCount;
+  const uint parkedSeg = 2u * ends;
   if (pc.mode == HEMO_SPAWN_FLAGS) {
     if (i == 0u) {
-      scan[5u * n] = 0u;
+      scan[(parkedSeg + 1u) * n] = 0u;
       // Each buffer's deficit, the particles it holds fewer than it started with: what left it
       // into the lumen or past its end, less what came into it from the lumen and its images
       // (integers; the differences are taken modulo 2^32, exact while below 2^31).
-      const int inlet = int(counters[HEMO_OPEN_COUNTER_IN] + counters[HEMO_OPEN_COUNTER_PARKED_START] -
-                            counters[HEMO_OPEN_COUNTER_IN_BACK] - counters[HEMO_OPEN_COUNTER_SPAWNED]);
-      const int outlet = int(counters[HEMO_OPEN_COUNTER_OUT_BACK] + counters[HEMO_OPEN_COUNTER_PARKED_END] -
-                             counters[HEMO_OPEN_COUNTER_OUT] - counters[HEMO_OPEN_COUNTER_SPAWNED_OUTLET]);
-      scan[5u * n + 1u] = uint(max(inlet, 0));
-      scan[5u * n + 2u] = uint(max(outlet, 0));
+      for (uint e = 0u; e < ends; ++e) {
+        const int deficit = int(counters[HEMO_OPEN_COUNTER_LEAVE(e)] + counters[HEMO_OPEN_COUNTER_PARKED(e)] -
+                                counters[HEMO_OPEN_COUNTER_ENTER(e)] - counters[HEMO_OPEN_COUNTER_SPAWNED(e)]);
+        scan[(parkedSeg + 1u) * n + 1u + e] = uint(max(deficit, 0));
+      }
     }
     if (i < n) {
       const uint c = pending[i];  // (a pending slot is never a free one)
-      for (uint seg = 0u; seg < 4u; ++seg) {
-        scan[seg * n + i] = c == seg + 1u ? 1u : 0u;
+      const uint mine = c != 0u ? hemo_spawn_segment(c, ends)
+                                : (uint(velocities[i].w) == HEMO_KIND_PARKED ? parkedSeg : parkedSeg + 1u);
+      for (uint seg = 0u; seg <= parkedSeg; ++seg) {
+        scan[seg * n + i] = seg == mine ? 1u : 0u;
       }
-      scan[4u * n + i] = c == 0u && uint(velocities[i].w) == HEMO_KIND_PARKED ? 1u : 0u;
     }
     return;
   }
@@ -87,19 +92,20 @@ void main() {
   }
   const uint c = pending[i];
   if (c != 0u) {
-    const uint seg = hemo_spawn_segment(c);
+    const uint seg = hemo_spawn_segment(c, ends);
+    const uint e = seg < ends ? seg : seg - ends;
     const uint rank = scan[seg * n + i] - scan[seg * n];
-    const bool served = rank < hemo_spawn_served(seg, n);
-    const uint k = hemo_spawn_offset(seg, n) + rank;  // its place in the served order
+    const bool served = rank < hemo_spawn_served(seg, n, ends);
+    const uint k = hemo_spawn_offset(seg, n, ends) + rank;  // its place in the served order
     if (pc.mode == HEMO_SPAWN_SCATTER) {
       if (served) {
-        crossers[k] = i | ((seg & 1u) != 0u ? 0x80000000u : 0u);  // (bit 31: the outlet's)
+        crossers[k] = i | (e << HEMO_SPAWN_END_SHIFT);
       }
       return;
     }
     // HEMO_SPAWN_COPY (only this invocation touches its flag; the copies below read the
     // crosser's own data). A crosser not served is not needed: its buffer is full.
-    if (!served || k < scan[5u * n] - scan[4u * n]) {
+    if (!served || k < scan[(parkedSeg + 1u) * n] - scan[parkedSeg * n]) {
       pending[i] = 0u;
     } else {
       atomicAdd(status[HEMO_STATUS_OPEN_SHORTFALL], 1u);
@@ -109,18 +115,17 @@ void main() {
   if (pc.mode != HEMO_SPAWN_COPY || uint(velocities[i].w) != HEMO_KIND_PARKED) {
     return;
   }
-  const uint k = scan[4u * n + i] - scan[4u * n];  // this slot's rank among the parked ones
-  if (k >= hemo_spawn_offset(4u, n)) {
+  const uint k = scan[parkedSeg * n + i] - scan[parkedSeg * n];  // this slot's rank among the parked ones
+  if (k >= hemo_spawn_offset(parkedSeg, n, ends)) {
     return;
   }
-  const bool outletImage = (crossers[k] & 0x80000000u) != 0u;
-  const uint from = crossers[k] & 0x7fffffffu;
+  const uint e = crossers[k] >> HEMO_SPAWN_END_SHIFT;
+  const uint from = crossers[k] & ((1u << HEMO_SPAWN_END_SHIFT) - 1u);
   const vec4 x = positions[from];
-  // (a buffer length back along the end's axis: the inlet's upstream; the outlet's, of reverse
+  // (a buffer length back along the end's axis: the inlet's upstream; an outlet's, of reverse
   // flow, downstream)
-  const vec3 shift = inflow.ends[outletImage ? 1 : 0].shift.xyz;
-  positions[i] = vec4(x.xyz - shift, x.w);
+  positions[i] = vec4(x.xyz - inflow.ends[e].shift.xyz, x.w);
   velocities[i] = velocities[from];
   normals[i] = vec4(normals[from].xyz, 0.0);  // (the image holds no credit)
-  atomicAdd(counters[outletImage ? HEMO_OPEN_COUNTER_SPAWNED_OUTLET : HEMO_OPEN_COUNTER_SPAWNED], 1u);
+  atomicAdd(counters[HEMO_OPEN_COUNTER_SPAWNED(e)], 1u);
 }

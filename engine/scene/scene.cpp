@@ -441,14 +441,14 @@ void parseInflow(const Checker& c, const Json& in, const Json& raw, const Scene&
 // vertex of the surface within the end's region, from `reach` behind the end to a support
 // past its plane, must lie on the end's tube (0.75 to 1.25 of its radius from the axis), not
 // past the end, and no other part of the vessel may come within its reach.
-void checkStraightEnd(const Checker& c, const VesselMesh& mesh, const sim::OpenEnd& e, const std::string& field, const char* role,
+void checkStraightEnd(const Checker& c, const VesselMesh& mesh, const sim::OpenEnd& e, const std::string& field, const std::string& role,
                       float support) {
   for (const glm::dvec3& v : mesh.surface().vertices) {
     const glm::dvec2 l = e.local(v);
     const double r = std::sqrt(l.y), R = e.radius;
     if (l.x < -double(e.reach) || l.x > double(e.length) + support || r > double(e.reach) + support) continue;
     if (l.x < -1e-3 * R || r < 0.75 * R || r > 1.25 * R) {
-      c.fail(field, std::string("the mesh's ") + role + " at " + fmtPoint(glm::dvec3(e.origin)) + " must run straight for its buffer (" +
+      c.fail(field, "the mesh's " + role + " at " + fmtPoint(glm::dvec3(e.origin)) + " must run straight for its buffer (" +
                         fmt(e.length) + " m) and a kernel support beyond, but its surface at " + fmtPoint(v) + " lies " + fmt(r) +
                         " m from the end's axis and " + fmt(l.x) + " m along it (the end's radius is " + fmt(R) +
                         " m): shorten the buffer, or extend the vessel straight at that end");
@@ -512,23 +512,37 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   sim::OpenEnds o;
   if (w.shape == Vessel::Shape::Mesh) {
     o.inlet = w.meshInlet;
-    o.outlet = w.meshOutlet;
+    o.outlets = w.meshOutlets;
   } else {
     o.inlet.origin = w.start;
     o.inlet.axis = glm::vec3(1.0f, 0.0f, 0.0f);
     o.inlet.radius = w.radius;
-    o.outlet.origin = w.start + glm::vec3(w.length, 0.0f, 0.0f);
-    o.outlet.axis = glm::vec3(-1.0f, 0.0f, 0.0f);
-    o.outlet.radius = w.radius;
+    sim::OpenEnd& tail = o.outlets.emplace_back();
+    tail.origin = w.start + glm::vec3(w.length, 0.0f, 0.0f);
+    tail.axis = glm::vec3(-1.0f, 0.0f, 0.0f);
+    tail.radius = w.radius;
+  }
+  if (o.outlets.size() > 1 && condition != "pressure") {
+    c.fail("vessel.outlet.condition", "must be \"pressure\" on a vessel with " + std::to_string(o.outlets.size()) +
+                                          " outlets (a flow outlet draws the inlet's flow; a split would need its ratios)");
   }
   // (each end's region: the lumen and its wall)
   o.inlet.reach = o.inlet.radius + float(w.layers + 1) * s.sph.spacing;
-  o.outlet.reach = o.outlet.radius + float(w.layers + 1) * s.sph.spacing;
   o.inlet.length = zone;
-  o.outlet.length = buffer;
+  o.inlet.pressure = pressureInlet;
+  o.inlet.pressurePa = pressureInlet ? inflowSection["pressure_Pa"].get<float>() : 0.0f;
+  for (sim::OpenEnd& end : o.outlets) {
+    end.reach = end.radius + float(w.layers + 1) * s.sph.spacing;
+    end.length = buffer;
+    end.pressure = condition == "pressure";
+    end.pressurePa = end.pressure ? out["pressure_Pa"].get<float>() : 0.0f;
+  }
   if (meshed) {
     checkStraightEnd(c, *w.mesh, o.inlet, "vessel.inflow.zone_length_m", "inlet", h2);
-    checkStraightEnd(c, *w.mesh, o.outlet, "vessel.outlet.buffer_length_m", "outlet", h2);
+    for (std::size_t k = 0; k < o.outlets.size(); ++k) {
+      checkStraightEnd(c, *w.mesh, o.outlets[k], "vessel.outlet.buffer_length_m",
+                       o.outlets.size() == 1 ? std::string("outlet") : "outlet " + std::to_string(k + 1), h2);
+    }
   }
   // The gap the refill leaves at the buffer's far end stays beyond the support of the buffer
   // particles within the support of the inlet plane (two supports upstream of it), or at least
@@ -539,10 +553,6 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   o.parking = glm::vec3(s.domain.max.x + 1.0f, s.domain.min.y, s.domain.min.z);
   o.boxMin = s.domain.min;
   o.boxMax = s.domain.max;
-  o.pressureInlet = pressureInlet;
-  o.inletPressure = inflowSection["pressure_Pa"].get<float>();
-  o.pressureOutlet = condition == "pressure";
-  o.outletPressure = out["pressure_Pa"].get<float>();
   o.slab = h2;  // the lumen's slab next to each plane whose speeds a pressure end takes
   o.characteristic = 1.0f / (s.sph.restDensity * s.sph.soundSpeed);
   o.parkBeyond = out["park_escaped_beyond_m"].get<float>();
@@ -624,22 +634,22 @@ void parseMesh(const Checker& c, const Json& v, const Json& raw, const Scene& s,
                               "inlets and outlets (vessel.outlet.condition \"flow\" or \"pressure\")");
   }
   const MeshEnd* inlet = nullptr;
-  const MeshEnd* outlet = nullptr;
   for (std::size_t e = 0; e < loops.size(); ++e) {
     if (w.endRoles[e] == "inlet" && (!inlet || loops[e].centroid.x < inlet->centroid.x)) inlet = &loops[e];
-    if (w.endRoles[e] == "outlet") outlet = &loops[e];
   }
   const glm::dvec3 centre = inlet ? inlet->centroid : 0.5 * (lo + hi);
   w.start = glm::vec3(s.sph.periodic[0] ? double(s.domain.min.x) : lo.x, centre.y, centre.z);
   w.length = s.sph.periodic[0] ? s.domain.max.x - s.domain.min.x : float(hi.x - lo.x);
   w.radius = float(inlet ? inlet->radius : 2.0 * vm->volume() / vm->area());
   if (open) {
-    // Open ends (vessel.outlet): one inlet and one outlet, each in its own frame.
+    // Open ends (vessel.outlet): one inlet and one or more outlets (a branching vessel), each
+    // in its own frame.
     std::size_t inlets = 0, outlets = 0;
     for (const std::string& role : w.endRoles) (role == "inlet" ? inlets : outlets) += 1;
-    if (inlets != 1 || outlets != 1) {
-      c.fail("vessel.mesh.ends", "open ends (vessel.outlet) on a mesh vessel take one inlet and one outlet, got " + std::to_string(inlets) +
-                                     " inlets and " + std::to_string(outlets) + " outlets (branching vessels are not supported yet)");
+    if (inlets != 1 || outlets < 1 || outlets + 1 > sim::OpenEnds::kMaxEnds) {
+      c.fail("vessel.mesh.ends", "open ends (vessel.outlet) on a mesh vessel take one inlet and 1 to " +
+                                     std::to_string(sim::OpenEnds::kMaxEnds - 1) + " outlets, got " + std::to_string(inlets) +
+                                     " inlets and " + std::to_string(outlets) + " outlets");
     }
     auto frame = [](const MeshEnd& e) {
       sim::OpenEnd f;
@@ -649,9 +659,14 @@ void parseMesh(const Checker& c, const Json& v, const Json& raw, const Scene& s,
       return f;
     };
     w.meshInlet = frame(*inlet);
-    w.meshOutlet = frame(*outlet);
     w.start = w.meshInlet.origin;
-    w.length = float(glm::length(outlet->centroid - inlet->centroid));
+    // (the length: the nearest outlet's distance, which bounds the buffers)
+    w.length = 3.0e38f;
+    for (std::size_t e = 0; e < loops.size(); ++e) {
+      if (w.endRoles[e] != "outlet") continue;
+      w.meshOutlets.push_back(frame(loops[e]));
+      w.length = std::min(w.length, float(glm::length(loops[e].centroid - inlet->centroid)));
+    }
   }
   if (raw.contains("inflow") && raw["inflow"].value("profile", "none") != "none") {
     if (!inlet) c.fail("vessel.mesh.ends", "vessel.inflow needs an end with role \"inlet\"");

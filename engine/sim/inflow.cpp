@@ -44,24 +44,35 @@ void Inflow::validate() const {
   require(std::isfinite(maxMassRatio) && maxMassRatio >= 1.0f, "the mass cap must be at least 1 (x the initial mass)");
   if (open) {
     const OpenEnds& o = *open;
-    for (const OpenEnd* e : {&o.inlet, &o.outlet}) {
-      const std::string which = e == &o.inlet ? "open ends: the inlet's " : "open ends: the outlet's ";
+    require(!o.outlets.empty() && o.endCount() <= OpenEnds::kMaxEnds,
+            "open ends: one inlet and 1 to " + std::to_string(OpenEnds::kMaxEnds - 1) + " outlets, got " + std::to_string(o.outlets.size()) + " outlets");
+    for (std::size_t k = 0; k < o.endCount(); ++k) {
+      const OpenEnd* e = &o.end(k);
+      const std::string which = k == 0 ? "open ends: the inlet's " : "open ends: outlet " + std::to_string(k) + "'s ";
       for (int a = 0; a < 3; ++a) require(std::isfinite(e->origin[a]) && std::isfinite(e->axis[a]), which + "frame must be finite");
       require(std::abs(glm::length(glm::dvec3(e->axis)) - 1.0) < 1e-5, which + "axis must be a unit vector");
       require(std::isfinite(e->radius) && e->radius > 0.0f, which + "radius must be positive (m)");
       require(std::isfinite(e->length) && e->length > 0.0f, which + "buffer must have a positive length (m)");
       require(std::isfinite(e->reach) && e->reach >= e->radius, which + "reach must be at least its radius (m)");
+      require(std::isfinite(e->pressurePa), which + "pressure must be finite (Pa)");
+      require(e->pressure || e->pressurePa == 0.0f, which + "pressure applies only to a pressure end");
+      for (std::size_t j = 0; j < k; ++j) {
+        const OpenEnd& f = o.end(j);
+        require(glm::length(glm::dvec3(e->origin - f.origin)) > double(e->length) + f.length,
+                "open ends: the buffers must leave a lumen between them");
+      }
+      if (k > 0) {
+        require(!o.inlet.pressure || e->pressure, "open ends: a pressure inlet needs pressure outlets");
+        require(o.outlets.size() == 1 || e->pressure, "open ends: several outlets must be pressure outlets (a flow split would need its ratios)");
+      }
     }
-    require(glm::length(glm::dvec3(o.outlet.origin - o.inlet.origin)) > double(o.inlet.length) + o.outlet.length,
-            "open ends: the buffers must leave a lumen between them");
     require(std::isfinite(o.pendingMargin) && o.pendingMargin > 0.0f && o.pendingMargin < o.inlet.length,
             "open ends: the refill margin must be positive and shorter than the inlet buffer");
     require(!holdPressure, "open ends: the zone cannot hold the lumen pressure (its mass supply is for closed loops)");
     for (int a = 0; a < 3; ++a) require(std::isfinite(o.parking[a]), "open ends: the parking point must be finite");
-    require(!o.pressureInlet || o.pressureOutlet, "open ends: a pressure inlet needs a pressure outlet");
-    require(std::isfinite(o.inletPressure) && std::isfinite(o.outletPressure), "open ends: the pressures must be finite (Pa)");
-    require(!(o.pressureInlet || o.pressureOutlet) || (std::isfinite(o.slab) && o.slab > 0.0f),
-            "open ends: a pressure end needs a slab of positive width");
+    bool anyPressure = false;
+    for (std::size_t k = 0; k < o.endCount(); ++k) anyPressure = anyPressure || o.end(k).pressure;
+    require(!anyPressure || (std::isfinite(o.slab) && o.slab > 0.0f), "open ends: a pressure end needs a slab of positive width");
     require(std::isfinite(o.parkBeyond) && o.parkBeyond >= 0.0f, "open ends: the escape distance must be zero or positive (m)");
     require(!(o.parkBeyond > 0.0f) || (o.escape.cell > 0.0f && o.escape.words() > 0), "open ends: an escape distance needs its grid");
   }
@@ -115,15 +126,18 @@ InflowParams makeInflowParams(const Inflow& in, float restDensity, float particl
   if (in.open) {
     const OpenEnds& o = *in.open;
     p.open = 1u;
-    int k = 0;
-    for (const OpenEnd* e : {&o.inlet, &o.outlet}) {
-      InflowParams::End& g = p.ends[k++];
+    p.endCount = std::uint32_t(o.endCount());
+    for (std::size_t k = 0; k < o.endCount(); ++k) {
+      const OpenEnd* e = &o.end(k);
+      InflowParams::End& g = p.ends[k];
       const glm::vec3 shift = e->shift();
       for (int a = 0; a < 3; ++a) g.origin[a] = e->origin[a], g.axis[a] = e->axis[a], g.shift[a] = shift[a];
       g.origin[3] = e->length;
       g.axis[3] = e->radius;
       g.shift[3] = e->reach;
       g.drive[0] = (o.inlet.radius / e->radius) * (o.inlet.radius / e->radius);
+      g.drive[1] = e->pressurePa;
+      g.drive[2] = e->pressure ? 1.0f : 0.0f;
     }
     for (int a = 0; a < 3; ++a) {
       p.parking[a] = o.parking[a];
@@ -131,12 +145,8 @@ InflowParams makeInflowParams(const Inflow& in, float restDensity, float particl
       p.boxMax[a] = o.boxMax[a];
     }
     p.pendingMargin = o.pendingMargin;
-    p.inletPressure = o.pressureInlet ? 1u : 0u;
-    p.outletPressure = o.pressureOutlet ? 1u : 0u;
-    p.pressures[0] = o.inletPressure;
-    p.pressures[1] = o.outletPressure;
-    p.pressures[2] = o.slab;
-    p.pressures[3] = o.characteristic;
+    p.slab[0] = o.slab;
+    p.slab[1] = o.characteristic;
     if (o.parkBeyond > 0.0f) {
       for (int a = 0; a < 3; ++a) p.escapeOrigin[a] = o.escape.origin[a], p.escapeDims[a] = o.escape.dims[a];
       p.escapeOrigin[3] = 1.0f / o.escape.cell;

@@ -198,7 +198,8 @@ SphSettings resolveNeighbourSearch(const gpu::Context& context, const ParticleSt
   return s;
 }
 // The open ends' profile bins (interface/sph.h).
-constexpr std::uint64_t kOpenBins = HEMO_OPEN_BINS, kOpenSumWords = HEMO_OPEN_SUM_WORDS;
+constexpr std::uint64_t kOpenBins = HEMO_OPEN_BINS, kOpenSumWords = HEMO_OPEN_SUM_WORDS, kOpenProfile = HEMO_OPEN_PROFILE_SIZE;
+static_assert(OpenEnds::kMaxEnds == HEMO_OPEN_MAX_ENDS);
 // The boundary pass's indirect arguments of each page of the list, apart by the largest
 // storage-buffer offset alignment Vulkan allows.
 constexpr std::uint64_t kActiveArgsStride = 256;
@@ -554,8 +555,8 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       recordedIterations_(settings_.solverMaxIterations),
       openCounters_(context, HEMO_OPEN_COUNTER_COUNT * 4, gpu::MemoryUse::Device, "open ends' counters"),
       pending_(context, perParticle(particles, 4), gpu::MemoryUse::Device, "open inlet's crossers owed an image"),
-      openSums_(context, (2 * kOpenBins + 2) * kOpenSumWords * 4, gpu::MemoryUse::Device, "open ends' speed sums"),
-      openProfile_(context, (2 * kOpenBins + 2) * 4, gpu::MemoryUse::Device, "open ends' speed profiles"),
+      openSums_(context, kOpenProfile * kOpenSumWords * 4, gpu::MemoryUse::Device, "open ends' speed sums"),
+      openProfile_(context, kOpenProfile * 4, gpu::MemoryUse::Device, "open ends' speed profiles"),
       escapeMask_(context, settings_.parkedSlots ? EscapeGrid::over(domainMin, domainMax, settings_.spacing).words() * 4 : 4,
                   gpu::MemoryUse::Device, "open ends' escape mask") {
   const SphSettings& settings = settings_;  // (Auto resolved)
@@ -1049,9 +1050,14 @@ void SphSolver::setInflow(const Inflow& inflow) {
     throw std::invalid_argument("open ends need the solver's settings to say the fluid has parked slots (SphSettings::parkedSlots)");
   }
   if (openOn_ && !inflow.open) throw std::invalid_argument("a vessel's open ends cannot be closed while it runs");
+  if (openOn_ && p.endCount != openEnds_) throw std::invalid_argument("a vessel's open ends cannot change in number while it runs");
+  if (inflow.open && particles_->fluidCount() >= (1u << HEMO_SPAWN_END_SHIFT)) {
+    throw std::invalid_argument("open ends take at most 2^" + std::to_string(HEMO_SPAWN_END_SHIFT) + " fluid slots");
+  }
   inflow_.upload(std::vector<InflowParams>{p});
   inflowOn_ = p.enabled != 0u;
   openOn_ = p.open != 0u;
+  openEnds_ = p.endCount;
   if (inflowOn_) {
     for (std::uint32_t mode = 0; mode < 3; ++mode) integratePipeline(mode, inflowVariant());
     integratePipeline(HEMO_INTEGRATE_SYMPLECTIC_EULER, inflowVariant(), true);
@@ -1064,10 +1070,11 @@ void SphSolver::setInflow(const Inflow& inflow) {
   }
   if (openOn_ && !spawn_) {
     const std::uint64_t n = std::max(particles_->fluidCount(), 1u);
-    // (the flags of HEMO_SPAWN_CLASSES segments and their total, scanned; then the two ends' deficits)
-    spawnScan_ = gpu::Buffer(*context_, (HEMO_SPAWN_CLASSES * n + 3) * 4, gpu::MemoryUse::Device, "open ends' refill scan");
+    // (the flags of 2E + 1 segments and their total, scanned; then the ends' deficits)
+    const std::uint64_t segments = 2 * std::uint64_t(openEnds_) + 1;
+    spawnScan_ = gpu::Buffer(*context_, (segments * n + 1 + openEnds_) * 4, gpu::MemoryUse::Device, "open ends' refill scan");
     crossers_ = gpu::Buffer(*context_, n * 4, gpu::MemoryUse::Device, "open ends' crossers by rank");
-    spawnScanner_ = std::make_unique<gpu::PrefixScan>(*context_, spawnScan_, HEMO_SPAWN_CLASSES * n + 1);
+    spawnScanner_ = std::make_unique<gpu::PrefixScan>(*context_, spawnScan_, segments * n + 1);
     spawn_ = &context_->pipelines().get({"sph/open_spawn", HEMO_SPAWN_BINDING_COUNT, 8, kWorkgroup, {},
                                          1u << HEMO_SPAWN_BINDING_INFLOW, 0u});
     const ParticleArrays& a = particles_->live();
@@ -1091,7 +1098,7 @@ void SphSolver::recordOpenRefill(gpu::CommandRecorder& rec) {
   const std::uint32_t n = particles_->fluidCount();
   rec.dispatch(*spawn_, spawnSet_, SpawnPush{n, HEMO_SPAWN_FLAGS}, spawn_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
-  spawnScanner_->record(rec, HEMO_SPAWN_CLASSES * std::uint64_t(n) + 1);
+  spawnScanner_->record(rec, (2 * std::uint64_t(openEnds_) + 1) * n + 1);
   rec.computeToCompute();
   rec.dispatch(*spawn_, spawnSet_, SpawnPush{n, HEMO_SPAWN_SCATTER}, spawn_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();
@@ -1109,9 +1116,20 @@ void SphSolver::setEscapeMask(const std::vector<std::uint32_t>& words) {
 
 SphSolver::OpenCounts SphSolver::readOpenCounts() const {
   const std::vector<std::uint32_t> c = openCounters_.readback<std::uint32_t>(HEMO_OPEN_COUNTER_COUNT);
-  return OpenCounts{c[HEMO_OPEN_COUNTER_IN], c[HEMO_OPEN_COUNTER_IN_BACK], c[HEMO_OPEN_COUNTER_OUT],
-                    c[HEMO_OPEN_COUNTER_OUT_BACK], c[HEMO_OPEN_COUNTER_PARKED_END], c[HEMO_OPEN_COUNTER_PARKED_START],
-                    c[HEMO_OPEN_COUNTER_SPAWNED] + c[HEMO_OPEN_COUNTER_SPAWNED_OUTLET], c[HEMO_OPEN_COUNTER_PARKED_OUTSIDE]};
+  OpenCounts o;
+  o.parkedOutside = c[HEMO_OPEN_COUNTER_PARKED_OUTSIDE];
+  for (std::uint32_t e = 0; e < openEnds_; ++e) {
+    const OpenCounts::End end{c[HEMO_OPEN_COUNTER_LEAVE(e)], c[HEMO_OPEN_COUNTER_ENTER(e)], c[HEMO_OPEN_COUNTER_PARKED(e)],
+                              c[HEMO_OPEN_COUNTER_SPAWNED(e)]};
+    o.ends.push_back(end);
+    o.spawned += end.spawned;
+    if (e == 0) {
+      o.in = end.leave, o.inBack = end.enter, o.parkedStart = end.parked;
+    } else {
+      o.out += end.enter, o.outBack += end.leave, o.parkedEnd += end.parked;
+    }
+  }
+  return o;
 }
 
 void SphSolver::setBackgroundPressure(float pascals) {
@@ -1132,11 +1150,11 @@ void SphSolver::recordReset(gpu::CommandRecorder& rec) {
   rec.fill(openCounters_, 0u);
   rec.fill(pending_, 0u);
   rec.fill(openSums_, 0u);
-  rec.fill(openProfile_, 0u, 0, 2 * kOpenBins * 4);  // (the buffers start at rest)
+  rec.fill(openProfile_, 0u, 0, HEMO_OPEN_PRESSURE(0u) * 4);  // (the buffers start at rest)
   const float none = HEMO_OPEN_NO_PRESSURE;
   std::uint32_t noneBits;
   std::memcpy(&noneBits, &none, 4);
-  rec.fill(openProfile_, noneBits, 2 * kOpenBins * 4, 8);  // (no pressure measured yet)
+  rec.fill(openProfile_, noneBits, HEMO_OPEN_PRESSURE(0u) * 4, HEMO_OPEN_MAX_ENDS * 4);  // (no pressure measured yet)
   rec.transferToTransfer();  // the fills below overwrite some of these words
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_FIRST_BAD_STEP * 4, 4);
   rec.fill(status_, 0xffffffffu, HEMO_STATUS_BAD_INPUT_ID * 4, 8);  // and BAD_FORCE_ID
@@ -1389,7 +1407,7 @@ void SphSolver::recordIntegrateMode(gpu::CommandRecorder& rec, std::uint32_t ste
                  DecidePush{rebuildThreshold(), rebuildGate_.slots(), moving < n ? 1u : 0u, groups.x, groups.y},
                  rebuildDecide_[tiles]->groupsFor(1u));
     if (openOn_) {  // (the open ends' profiles for the next step, beside the decision)
-      rec.dispatch(*openProfilePass_, openProfileSet_, nullptr, 0, openProfilePass_->groupsFor(2 * kOpenBins + 2));
+      rec.dispatch(*openProfilePass_, openProfileSet_, nullptr, 0, openProfilePass_->groupsFor(kOpenProfile));
     }
     if (tiles != 0u) {
       integrateArgsValid_ = true;

@@ -52,7 +52,7 @@ std::uint32_t lumenCount(const sim::Snapshot& s, const sim::Inflow& in) {
   for (std::size_t i = 0; i < s.positions.size(); ++i) {
     const glm::dvec3 p(s.positions[i]);
     n += s.velocities[i].w == float(sim::ParticleKind::Fluid) && in.open->inlet.local(p).x >= in.open->inlet.length &&
-         in.open->outlet.local(p).x >= in.open->outlet.length;
+         in.open->outlets[0].local(p).x >= in.open->outlets[0].length;
   }
   return n;
 }
@@ -74,8 +74,20 @@ void developedStates(sim::Simulation& sim, int samples, const std::function<void
   }
 }
 
+// The refill with four ends: the open tube's, and two more pressure outlets far off the tube
+// (their regions hold no fluid, so the two steps that sort the slots run as the tube's).
 TEST_F(OpenEndsTest, RefillMatchesReference) {
-  const scene::Scene scene = scene::parseScene(openTube().dump(), "open_tube");
+  scene::Scene scene = scene::parseScene(openTube().dump(), "open_tube");
+  sim::OpenEnds& open = *scene.vessel->inflow->open;
+  open.slab = 0.001f;
+  for (sim::OpenEnd& end : open.outlets) end.pressure = true;
+  for (int k = 0; k < 2; ++k) {
+    sim::OpenEnd extra = open.outlets[0];
+    extra.origin = glm::vec3(0.004f + 0.008f * float(k), 0.5f, 0.0f);
+    extra.axis = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f * float(k)));
+    open.outlets.push_back(extra);
+  }
+  const auto ends = std::uint32_t(open.endCount());
   sim::Simulation sim(ctx(), scene);
   sim::RunOptions opt;
   opt.steps = 2;  // (sorted: the fluid's slots first)
@@ -87,12 +99,15 @@ TEST_F(OpenEndsTest, RefillMatchesReference) {
   std::mt19937_64 rng = rngFor("refill");
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   std::vector<std::uint32_t> pending(store.count(), 0u);
-  // Random states of the fluid's slots: parked or fluid, and pending crossers of all four
-  // classes among the fluid; random counters, so each buffer's deficit serves some of its
-  // crossers and not others (fewer free slots than served crossers in the second round: the
-  // shortfall).
+  std::vector<glm::vec3> shifts;
+  for (std::uint32_t e = 0; e < ends; ++e) shifts.push_back(open.end(e).shift());
+  // Random states of the fluid's slots: parked or fluid, and pending crossers of every class
+  // (owing and credited, of each end) among the fluid; random counters, so each buffer's
+  // deficit serves some of its crossers and not others (fewer free slots than served crossers
+  // in the second round: the shortfall).
   for (int round = 0; round < 2; ++round) {
-    std::uint32_t free = 0, byClass[4] = {};
+    std::uint32_t free = 0;
+    std::vector<std::uint32_t> owing(ends, 0), credited(ends, 0);
     for (std::uint32_t i = 0; i < n; ++i) {
       const float r = 0.5f * (u(rng) + 1.0f);
       pending[i] = 0;
@@ -103,29 +118,31 @@ TEST_F(OpenEndsTest, RefillMatchesReference) {
       } else {
         vel[i].w = float(HEMO_KIND_FLUID);
         if (r > 0.8f) {
-          pending[i] = 1u + std::min(3u, std::uint32_t((r - 0.8f) / 0.05f));  // (all four classes)
-          ++byClass[pending[i] - 1];
+          const auto cls = std::min(2 * ends - 1, std::uint32_t((r - 0.8f) / 0.2f * float(2 * ends)));  // (every class)
+          const std::uint32_t e = cls % ends;
+          pending[i] = cls < ends ? HEMO_OPEN_OWING(e) : HEMO_OPEN_CREDITED(e);
+          ++(cls < ends ? owing : credited)[e];
         }
       }
       pos[i] = glm::vec4(0.01f * u(rng), 0.004f * u(rng), 0.004f * u(rng), pos[i].w);
       vel[i] = glm::vec4(u(rng), u(rng), u(rng), vel[i].w);
       nrm[i] = glm::vec4(u(rng), u(rng), u(rng), 1000.0f + u(rng));
     }
-    // Deficits: the inlet's between its owing crossers and all its crossers, the outlet's
-    // under its owing ones (counters in the billions: the differences wrap as on the GPU).
-    std::vector<std::uint32_t> counters(HEMO_OPEN_COUNTER_COUNT, 0u);
+    // Deficits: end e's between its owing crossers and all its crossers (even ends), or under
+    // its owing ones (odd ends), from counters in the billions (the differences wrap as on the
+    // GPU).
+    std::vector<std::uint32_t> counters(HEMO_OPEN_COUNTER_COUNT, 0u), deficitWanted;
     const std::uint32_t big = 4000000000u;
-    counters[HEMO_OPEN_COUNTER_IN] = big;
-    counters[HEMO_OPEN_COUNTER_PARKED_START] = byClass[0] + byClass[2] / 2 + 1000u;
-    counters[HEMO_OPEN_COUNTER_IN_BACK] = big - 500u;  // (wraps: IN + PARKED_START overflows 2^32)
-    counters[HEMO_OPEN_COUNTER_SPAWNED] = 1500u;
-    counters[HEMO_OPEN_COUNTER_OUT_BACK] = 7u;
-    counters[HEMO_OPEN_COUNTER_PARKED_END] = 100000u + byClass[1] / 2;
-    counters[HEMO_OPEN_COUNTER_OUT] = 100000u;
-    counters[HEMO_OPEN_COUNTER_SPAWNED_OUTLET] = 7u;
-    const std::array<std::uint32_t, 2> deficits = reference::openDeficits(counters);
-    EXPECT_EQ(deficits[0], byClass[0] + byClass[2] / 2);
-    EXPECT_EQ(deficits[1], byClass[1] / 2);
+    for (std::uint32_t e = 0; e < ends; ++e) {
+      const std::uint32_t d = e % 2 == 0 ? owing[e] + credited[e] / 2 : owing[e] / 2;
+      deficitWanted.push_back(d);
+      counters[HEMO_OPEN_COUNTER_LEAVE(e)] = big + 13u * e;
+      counters[HEMO_OPEN_COUNTER_ENTER(e)] = big - 500u;  // (wraps: LEAVE + PARKED overflows 2^32)
+      counters[HEMO_OPEN_COUNTER_SPAWNED(e)] = 1500u + 7u * e;
+      counters[HEMO_OPEN_COUNTER_PARKED(e)] = d + 1500u + 7u * e - 500u - 13u * e;
+    }
+    const std::vector<std::uint32_t> deficits = reference::openDeficits(counters, ends);
+    EXPECT_EQ(deficits, deficitWanted);
     store.live().positions.upload(pos);
     store.live().velocities.upload(vel);
     store.live().normals.upload(nrm);
@@ -137,15 +154,15 @@ TEST_F(OpenEndsTest, RefillMatchesReference) {
     sim.solver().recordOpenRefill(rec);
     rec.end();
     rec.submitAndWait();
-    const sim::OpenEnds& ends = *scene.vessel->inflow->open;
-    const reference::RefillResult want = reference::openRefill(n, ends.inlet.shift(), ends.outlet.shift(), deficits, pos, vel, nrm, pending);
-    const std::uint32_t served = deficits[0] + deficits[1];
-    EXPECT_EQ(want.spawned + want.spawnedOutlet, std::min(served, free));
+    const reference::RefillResult want = reference::openRefill(n, shifts, deficits, pos, vel, nrm, pending);
+    std::uint32_t served = 0, spawned = 0;
+    for (std::uint32_t e = 0; e < ends; ++e) served += deficits[e], spawned += want.spawned[e];
+    EXPECT_EQ(spawned, std::min(served, free));
     EXPECT_EQ(want.shortfall, served > free ? served - free : 0u);
     if (round == 1) {
       EXPECT_GT(want.shortfall, 0u) << "the second round must run out of free slots";
     } else {
-      EXPECT_GT(want.spawnedOutlet, 0u);
+      for (std::uint32_t e = 0; e < ends; ++e) EXPECT_GT(want.spawned[e], 0u) << "end " << e;
     }
     const auto gp = store.readPositions(), gv = store.readVelocities(), gn = store.readNormals();
     const auto gpend = sim.solver().pending().readback<std::uint32_t>(store.count());
@@ -161,8 +178,9 @@ TEST_F(OpenEndsTest, RefillMatchesReference) {
     EXPECT_EQ(mismatches, 0u) << "round " << round;
     EXPECT_EQ(sim.solver().readStatus().openShortfall - shortBefore, want.shortfall);
     const auto gc = sim.solver().openCounters().readback<std::uint32_t>(HEMO_OPEN_COUNTER_COUNT);
-    EXPECT_EQ(gc[HEMO_OPEN_COUNTER_SPAWNED] - counters[HEMO_OPEN_COUNTER_SPAWNED], want.spawned);
-    EXPECT_EQ(gc[HEMO_OPEN_COUNTER_SPAWNED_OUTLET] - counters[HEMO_OPEN_COUNTER_SPAWNED_OUTLET], want.spawnedOutlet);
+    for (std::uint32_t e = 0; e < ends; ++e) {
+      EXPECT_EQ(gc[HEMO_OPEN_COUNTER_SPAWNED(e)] - counters[HEMO_OPEN_COUNTER_SPAWNED(e)], want.spawned[e]) << "end " << e;
+    }
   }
 }
 
@@ -306,7 +324,7 @@ TEST_F(OpenEndsTest, PressureDropDrivesPoiseuilleFlow) {
   const sim::Inflow& in = *scene.vessel->inflow;
   sim::Simulation sim(ctx(), scene);
   const float dp = scene.sph.spacing;
-  const double outletPlane = double(in.open->outlet.origin.x) - in.open->outlet.length;
+  const double outletPlane = double(in.open->outlets[0].origin.x) - in.open->outlets[0].length;
   const double lo = in.zoneEnd + 4.0 * dp, hi = outletPlane - 4.0 * dp;
   const double R = in.radius, mu = 0.1;
   const double nominal = 300.0 / (outletPlane - in.zoneEnd);
@@ -422,7 +440,7 @@ TEST_F(OpenEndsTest, PressureEndsMoveNoFasterThanTheirPressureDrives) {
   std::uint32_t driven = 0, faster = 0;
   for (std::size_t i = 0; i < s.positions.size(); ++i) {
     const glm::dvec3 p(s.positions[i]);
-    if (s.velocities[i].w != float(sim::ParticleKind::Fluid) || !ends.outlet.inBuffer(p) || ends.outlet.local(p).y >= 0.002 * 0.002) continue;
+    if (s.velocities[i].w != float(sim::ParticleKind::Fluid) || !ends.outlets[0].inBuffer(p) || ends.outlets[0].local(p).y >= 0.002 * 0.002) continue;
     ++driven;
     faster += glm::length(glm::dvec3(s.velocities[i])) > fastest * (1.0 + 1e-5);
     EXPECT_NEAR(s.velocities[i].x, fastest, 1e-5 * fastest) << "the outlet buffer's particle " << i;
@@ -590,13 +608,13 @@ TEST_F(OpenEndsTest, ObliqueMeshTubeCarriesThePressureDrivenFlow) {
   const sim::Inflow& in = *scene.vessel->inflow;
   const sim::OpenEnds& ends = *in.open;
   EXPECT_LT(glm::length(glm::dvec3(ends.inlet.axis) - tube.axis), 1e-3);
-  EXPECT_LT(glm::length(glm::dvec3(ends.outlet.axis) + tube.axis), 1e-3);
+  EXPECT_LT(glm::length(glm::dvec3(ends.outlets[0].axis) + tube.axis), 1e-3);
   EXPECT_NEAR(ends.inlet.radius, 0.002, 0.002 * 0.01);
   sim::Simulation sim(ctx(), scene);
   const sim::Snapshot start = sim.snapshot();
   const std::uint32_t lumen0 = lumenCount(start, in);
   const double dp = scene.sph.spacing, R = 0.002, mu = 0.1;
-  const double L = 0.018 - ends.inlet.length - ends.outlet.length;  // the lumen between the planes
+  const double L = 0.018 - ends.inlet.length - ends.outlets[0].length;  // the lumen between the planes
   const double nominal = 300.0 / L;
   double speed = 0.0, want = 0.0;
   developedStates(sim, 6, [&](const sim::Snapshot& s) {

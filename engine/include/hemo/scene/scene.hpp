@@ -107,10 +107,12 @@ struct Vessel {
   std::shared_ptr<const VesselMesh> mesh;
   std::vector<std::string> endRoles;
   std::vector<MeshRegion> meshRegions;
-  // Shape::Mesh with open ends (vessel.outlet): the inlet's and the outlet's frames, from the
-  // mesh's loops (their caps' centres, inward normals and equivalent radii; the buffers'
-  // lengths and reach are set with the rest of the open ends).
-  sim::OpenEnd meshInlet, meshOutlet;
+  // Shape::Mesh with open ends (vessel.outlet): the inlet's and the outlets' frames, from the
+  // mesh's loops (their caps' centres, inward normals and equivalent radii; the outlets in the
+  // order of the mesh's loops; the buffers' lengths and reach are set with the rest of the
+  // open ends).
+  sim::OpenEnd meshInlet;
+  std::vector<sim::OpenEnd> meshOutlets;
 };
 
 // The blood surface's grid (hemo/surface/marching_cubes.hpp).

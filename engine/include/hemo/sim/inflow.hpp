@@ -26,17 +26,18 @@
 // stand for proportionally more volume (their spacing grows as (m / m0)^(1/3) at rest
 // density), and the cap bounds how long a bleed can be fed.
 //
-// Open ends (Inflow::open): the vessel is not periodic. Each end (the inlet, the outlet) has
-// its own frame: the centre of the vessel's end, the axis into the lumen, the lumen's radius
+// Open ends (Inflow::open): the vessel is not periodic. Each end (the inlet, and one or more
+// outlets: a branching vessel has several) has its own frame: the centre of the vessel's end, the axis into the lumen, the lumen's radius
 // there. The slab of the lumen a buffer length in from the end is the end's buffer; past it
 // lies the lumen. The inlet buffer moves at the inflow's profile and speed (the velocity
-// inlet), the outlet buffer at the same flow rate (a flow-controlled outlet) or, as a pressure
-// end (below), holds a pressure. Fluid past either end, or out of the domain through a tear,
+// inlet), a single outlet's buffer at the same flow rate (a flow-controlled outlet) or, as a
+// pressure end (below), holds a pressure (several outlets are pressure ends: a flow split
+// would need its ratios). Fluid past either end, or out of the domain through a tear,
 // is parked (HEMO_KIND_PARKED of interface/sph.h: a free fluid slot far outside the domain,
 // which no pass sees), and every particle that leaves a buffer into the lumen gets its image a
 // buffer length back along the end's axis, at the buffer's far end, in a parked slot
 // (sph/open_spawn.comp), so each buffer always holds the same particles, as if it were fed
-// through a periodic seam (the outlet's only when the flow reverses). The refill runs on the
+// through a periodic seam (an outlet's only when the flow reverses). The refill runs on the
 // GPU at the start of every step that rebuilds the neighbour list; a crosser still owed its
 // image forces a rebuild once it is `pendingMargin` into the lumen, so the gap at the buffer's
 // far end never reaches within the support of the buffer particles the lumen sees. The
@@ -63,6 +64,10 @@ struct OpenEnd {
   float radius = 0.0f;            // m, the lumen's radius at the end
   float length = 0.0f;            // m, the buffer's along the axis
   float reach = 0.0f;             // m, of the end's region from the axis (the lumen and its wall)
+  // A pressure end (OpenEnds): its buffer holds this pressure over the background pressure
+  // (Pa; the inlet's rises over the inflow's ramp and follows its waveform).
+  bool pressure = false;
+  float pressurePa = 0.0f;
   // A crosser's image lies at its position less this (a buffer length along the axis, in
   // single precision as the GPU takes it).
   glm::vec3 shift() const { return axis * length; }
@@ -88,7 +93,12 @@ struct EscapeGrid {
 };
 
 struct OpenEnds {
-  OpenEnd inlet, outlet;
+  static constexpr std::uint32_t kMaxEnds = 8;  // the inlet and up to 7 outlets
+  OpenEnd inlet;
+  std::vector<OpenEnd> outlets;
+  std::size_t endCount() const { return 1 + outlets.size(); }
+  // End k: the inlet (0), then the outlets.
+  const OpenEnd& end(std::size_t k) const { return k == 0 ? inlet : outlets.at(k - 1); }
   // Blood farther than this outside the vessel's wall is parked (and counted as escaped), so a
   // bleed frees its slots for the buffers without waiting for the blood to leave the domain
   // (m; 0: only blood that leaves the domain). The mask of the grid's cells where that holds.
@@ -97,16 +107,12 @@ struct OpenEnds {
   float pendingMargin = 0.0f; // m (see above)
   glm::vec3 parking{0.0f};    // m, where parked slots lie (outside the domain, beyond every support)
   glm::vec3 boxMin{-3.0e38f}, boxMax{3.0e38f};  // m, the domain: fluid beyond is parked
-  // Pressure ends: a buffer that holds a pressure (Pa over the background pressure; the
-  // inlet's rises over the inflow's ramp and follows its waveform) instead of the Tait law's, and moves at the lumen's
-  // axial velocity next to its plane, radius by radius (a zero gradient along the axis), from
-  // a slab of `slab` m (Tafuni et al. 2018 prescribe the pressure and extrapolate the
-  // velocity likewise). Without: the inlet moves at the inflow's profile, and so does the
-  // outlet (a flow-controlled outlet). A pressure inlet needs a pressure outlet.
-  bool pressureInlet = false;
-  float inletPressure = 0.0f;   // Pa
-  bool pressureOutlet = false;
-  float outletPressure = 0.0f;  // Pa
+  // Pressure ends (OpenEnd::pressure): a buffer that holds its pressure instead of the Tait
+  // law's, and moves at the lumen's axial velocity next to its plane, radius by radius (a zero
+  // gradient along the axis), from a slab of `slab` m (Tafuni et al. 2018 prescribe the
+  // pressure and extrapolate the velocity likewise). Without: the inlet moves at the inflow's
+  // profile, and so does a single outlet (a flow-controlled outlet). A pressure inlet needs
+  // pressure outlets, and so do several outlets.
   float slab = 0.0f;            // m
   // Each pressure end's buffer also moves faster by the pressure the lumen next to its plane
   // has in excess of the outlet's (the inlet: lacks of the inlet's) times this, 1 / (rho0 c0)
@@ -155,18 +161,19 @@ struct InflowParams {
     float origin[4];  // xyz m; w: the buffer's length (m)
     float axis[4];    // xyz into the lumen; w: the lumen's radius (m)
     float shift[4];   // xyz: a crosser's image lies at its position less this (m); w: the reach (m)
-    float drive[4];   // x: the flow outlet's speed over the inlet's, (R_inlet / R_outlet)^2
-  } ends[2];          // the inlet's, the outlet's
+    float drive[4];   // x: a flow outlet's speed over the inlet's, (R_inlet / R_outlet)^2;
+                      // y: a pressure end's pressure (Pa over the background); z: 1 for a pressure end
+  } ends[OpenEnds::kMaxEnds];  // the inlet's, the outlets'
   float parking[4];   // xyz m
   float pendingMargin;
-  std::uint32_t open, inletPressure, outletPressure;
-  float pressures[4];  // inlet's, outlet's (Pa over the background), slab (m), 1 / (rho0 c0)
+  std::uint32_t open, endCount, reserved2;
+  float slab[4];       // x: the pressure ends' slab (m); y: 1 / (rho0 c0)
   float boxMin[4];     // the domain (m; xyz)
   float boxMax[4];
   float escapeOrigin[4];         // EscapeGrid: xyz m; w: 1 / cell (1/m)
   std::uint32_t escapeDims[4];   // xyz cells; w: 1 where the mask parks blood
 };
-static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + 2 * 64 + 112);
+static_assert(sizeof(InflowParams) == 64 + 4 * Inflow::kMaxSamples + OpenEnds::kMaxEnds * 64 + 112);
 
 // `restDensity` rho0 (kg/m^3) and `particleMass` m0 (kg) of the fluid.
 InflowParams makeInflowParams(const Inflow& inflow, float restDensity, float particleMass);

@@ -306,9 +306,18 @@ class SphSolver {
   void recordOpenRefill(gpu::CommandRecorder& rec);
   bool openEnds() const { return openOn_; }
   // Open ends: the crossing counters (HEMO_OPEN_COUNTER_* of interface/sph.h), a readback.
+  // in, inBack, parkedStart: the inlet's crossings into the lumen and back, and its parked;
+  // out, outBack, parkedEnd: the outlets' together, out of the lumen and back in, and parked;
+  // spawned: every end's images.
   struct OpenCounts {
     std::uint32_t in = 0, inBack = 0, out = 0, outBack = 0, parkedEnd = 0, parkedStart = 0, spawned = 0;
     std::uint32_t parkedOutside = 0;  // left the domain across the axis (through a tear)
+    // Per end (the inlet, then the outlets): left its buffer into the lumen, came into it from
+    // the lumen, parked past its end, spawned into its buffer.
+    struct End {
+      std::uint32_t leave = 0, enter = 0, parked = 0, spawned = 0;
+    };
+    std::vector<End> ends;
   };
   OpenCounts readOpenCounts() const;
   const gpu::Buffer& pending() const { return pending_; }
@@ -566,6 +575,7 @@ class SphSolver {
   std::uint32_t continuity_ = 0;  // the integrator's constant 1
   bool inflowOn_ = false;        // setInflow has given a zone: the integrator with its code
   bool openOn_ = false;          // ... with open ends (the integrator's constant 3 = 2, the refill)
+  std::uint32_t openEnds_ = 0;   // ... how many (the inlet and the outlets)
   // inflow: 0 none, 1 the zone, 2 the zone with open ends (the integrator's constant 3)
   const gpu::ComputePipeline& integratePipeline(std::uint32_t mode, std::uint32_t inflow, bool collect = false);
   std::uint32_t inflowVariant() const { return openOn_ ? 2u : inflowOn_ ? 1u : 0u; }
