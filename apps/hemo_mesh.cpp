@@ -1,12 +1,15 @@
 // hemo-mesh: writes the project's own vessel surfaces as binary STL (hemo/scene/mesh_vessel.hpp,
 // vesselSurface), for mesh scenes and tests: a tube along x, bent up and back over its length
-// if asked, with a saccular aneurysm on the outer side of the bend's crest.
+// if asked, with a saccular aneurysm on the outer side of the bend's crest; or a branching
+// vessel (branchSurface): a parent tube that splits into two daughters.
 #include "cli.hpp"
 #include "hemo/io/atomic_file.hpp"
 #include "hemo/io/mesh.hpp"
 #include "hemo/scene/mesh_vessel.hpp"
 
 #include <cstdio>
+#include <numbers>
+#include <string>
 
 int main(int argc, char** argv) {
   const char* usage =
@@ -17,15 +20,56 @@ int main(int argc, char** argv) {
       "  with S > 0, straight runs of length S lead into the bend and out of it (all of it shifted S along x: the ends at\n"
       "  x = 0 and L + 2 S; open inlets and outlets want straight ends for their buffers);\n"
       "  N x M quads (M = 0: about square).\n"
+      "hemo-mesh --out FILE.stl --length-m L --radius-m R --branch-angle-deg A --branch-radius-m RB --split-m X --spread-m Y\n"
+      "          [--cell-m C] [--unit-m U]\n"
+      "  a branching vessel: a parent tube of radius R from x = 0 splits at x = X into two daughters of radius RB at +-A\n"
+      "  degrees in the x-y plane, which turn parallel to x once Y off the axis and end at x = L; marching cubes over the\n"
+      "  lumen on a grid of C (default RB / 8).\n"
       "  Coordinates are written in units of U m (default 0.001: millimetres, as segmentation tools write them).\n"
       "  Prints the two open ends' centres in m (for the scene's vessel.mesh.ends).\n";
   if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
   try {
     const auto args = hemo::cli::parse(argc, argv, {"--out", "--length-m", "--radius-m", "--bend-height-m", "--sac-radius-m", "--sac-offset-m",
-                                                    "--straight-m", "--around", "--along", "--unit-m"});
+                                                    "--straight-m", "--around", "--along", "--unit-m", "--branch-angle-deg",
+                                                    "--branch-radius-m", "--split-m", "--spread-m", "--cell-m"});
     if (!args.positional.empty()) throw hemo::cli::UsageError("unexpected argument '" + args.positional[0] + "'");
     if (!args.has("--out")) throw hemo::cli::UsageError("--out FILE.stl is required");
     if (!args.has("--length-m") || !args.has("--radius-m")) throw hemo::cli::UsageError("--length-m and --radius-m are required");
+    const double unit = args.number("--unit-m", 0.001, 1e-9, 1e3);
+    const std::string out = args.text("--out");
+    auto write = [&](hemo::io::TriangleMesh mesh, const char* what) {
+      for (glm::dvec3& p : mesh.vertices) p /= unit;
+      hemo::io::writeStl(out, mesh, std::string(what) + ", unit " + std::to_string(unit) + " m");
+      std::printf("wrote %s: %zu triangles, %zu vertices, unit %g m\n", out.c_str(), mesh.triangles.size(), mesh.vertices.size(), unit);
+    };
+    if (args.has("--branch-angle-deg")) {
+      for (const char* key : {"--bend-height-m", "--sac-radius-m", "--sac-offset-m", "--straight-m", "--around", "--along"}) {
+        if (args.has(key)) throw hemo::cli::UsageError(std::string(key) + " does not apply to a branching vessel (--branch-angle-deg)");
+      }
+      for (const char* key : {"--branch-radius-m", "--split-m", "--spread-m"}) {
+        if (!args.has(key)) throw hemo::cli::UsageError(std::string(key) + " is required with --branch-angle-deg");
+      }
+      hemo::scene::BranchSurfaceSpec spec;
+      spec.length = args.number("--length-m", 0.0, 1e-6, 1.0);
+      spec.radius = args.number("--radius-m", 0.0, 1e-7, 0.5);
+      spec.angle = args.number("--branch-angle-deg", 0.0, 1e-3, 80.0) * std::numbers::pi / 180.0;
+      spec.branchRadius = args.number("--branch-radius-m", 0.0, 1e-7, 0.5);
+      spec.split = args.number("--split-m", 0.0, 0.0, 1.0);
+      spec.spread = args.number("--spread-m", 0.0, 0.0, 1.0);
+      spec.cell = args.number("--cell-m", 0.0, 0.0, 1.0);
+      hemo::io::TriangleMesh mesh;
+      try {
+        mesh = hemo::scene::branchSurface(spec);
+      } catch (const std::invalid_argument& e) {
+        throw hemo::cli::UsageError(e.what());
+      }
+      write(std::move(mesh), "hemo-mesh branching vessel");
+      std::printf("ends at (0, 0, 0) m, (%g, %g, 0) m and (%g, %g, 0) m\n", spec.length, spec.spread, spec.length, -spec.spread);
+      return 0;
+    }
+    for (const char* key : {"--branch-radius-m", "--split-m", "--spread-m", "--cell-m"}) {
+      if (args.has(key)) throw hemo::cli::UsageError(std::string(key) + " applies only to a branching vessel (--branch-angle-deg)");
+    }
     hemo::scene::VesselSurfaceSpec spec;
     spec.length = args.number("--length-m", 0.0, 1e-6, 1.0);
     spec.radius = args.number("--radius-m", 0.0, 1e-7, 0.5);
@@ -36,17 +80,13 @@ int main(int argc, char** argv) {
     if (args.has("--sac-radius-m") != args.has("--sac-offset-m")) throw hemo::cli::UsageError("--sac-radius-m and --sac-offset-m go together");
     spec.around = static_cast<std::uint32_t>(args.count("--around", 64, 8, 4096));
     spec.along = static_cast<std::uint32_t>(args.count("--along", 0, 0, 100000));
-    const double unit = args.number("--unit-m", 0.001, 1e-9, 1e3);
     hemo::io::TriangleMesh mesh;
     try {
       mesh = hemo::scene::vesselSurface(spec);
     } catch (const std::invalid_argument& e) {
       throw hemo::cli::UsageError(e.what());
     }
-    for (glm::dvec3& p : mesh.vertices) p /= unit;
-    const std::string out = args.text("--out");
-    hemo::io::writeStl(out, mesh, "hemo-mesh vessel surface, unit " + std::to_string(unit) + " m");
-    std::printf("wrote %s: %zu triangles, %zu vertices, unit %g m\n", out.c_str(), mesh.triangles.size(), mesh.vertices.size(), unit);
+    write(std::move(mesh), "hemo-mesh vessel surface");
     std::printf("ends at (0, 0, 0) m and (%g, 0, 0) m\n", spec.length + 2.0 * spec.straight);
     return 0;
   } catch (const hemo::cli::UsageError& e) {

@@ -457,6 +457,9 @@ int main(int argc, char** argv) {
       summary["open_mass_out_kg"] = m * (double(o.out) - double(o.outBack));
       summary["open_particles_parked"] = o.parkedEnd + o.parkedStart;
       summary["open_particles_spawned"] = o.spawned;
+      nlohmann::json outlets = nlohmann::json::array();  // (each outlet's, in the scene's order)
+      for (std::size_t e = 1; e < o.ends.size(); ++e) outlets.push_back(m * (double(o.ends[e].enter) - double(o.ends[e].leave)));
+      summary["open_outlet_mass_out_kg"] = outlets;
     }
     if (!scene.tools.empty()) {
       summary["tools_file"] = "tools.csv";

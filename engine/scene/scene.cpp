@@ -110,7 +110,7 @@ const std::vector<Field>& schema() {
             {
                 {"file", Kind::String, "", 0, 0, false, "", "STL (binary or ASCII) or OBJ file of the lumen's surface, relative to the scene file: one connected surface of triangles wound counter-clockwise seen from outside, open only at its ends."},
                 {"unit_m", Kind::Number, "m", 0, 1e3, true, 1.0, "Metres per unit of the file's coordinates: 0.001 for millimetres (what segmentation tools export)."},
-                {"ends", Kind::Objects, "", 0, kInf, false, Json::array(), "Every open boundary loop of the surface, named; a loop no entry names is an error (a hole). Either the ends lie on the two planes of a periodic x axis, matching across the seam (the blood leaving the outlet comes back through the inlet), or the vessel has open ends (vessel.outlet): one inlet and one outlet anywhere, each in the frame of its loop (the cap's centre, inward normal and equivalent radius), straight for its buffer's length.", {},
+                {"ends", Kind::Objects, "", 0, kInf, false, Json::array(), "Every open boundary loop of the surface, named; a loop no entry names is an error (a hole). Either the ends lie on the two planes of a periodic x axis, matching across the seam (the blood leaving the outlet comes back through the inlet), or the vessel has open ends (vessel.outlet): one inlet and 1 to 7 outlets (a branching vessel) anywhere, each in the frame of its loop (the cap's centre, inward normal and equivalent radius), straight for its buffer's length.", {},
                  {
                      {"role", Kind::Choice, "", 0, 0, false, nullptr, "What the end is: the inlet (on a periodic vessel, on the domain's min x plane when vessel.inflow drives the flow: the zone starts there) or an outlet.", {"inlet", "outlet"}},
                      {"at_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "A point at the end's centre (within its radius): which loop the entry names."},
@@ -159,11 +159,11 @@ const std::vector<Field>& schema() {
                 {"hold_lumen_pressure", Kind::Bool, "", 0, 0, false, false, "The zone is also the blood supply: each step a zone particle's mass becomes m rho0 / rho (between its initial mass and max_mass_ratio times it), so the zone holds the lumen at fluid.background_pressure_Pa while the wall stretches and blood leaves through a rupture."},
                 {"max_mass_ratio", Kind::Number, "1", 1, 1e3, false, 4.0, "Cap of a particle's mass over its initial mass under hold_lumen_pressure."},
             }},
-           {"outlet", Kind::Section, "", 0, 0, false, Json::object(), "Open ends (tubes and aneurysms along x, and mesh vessels with one inlet and one outlet; with vessel.inflow, on a domain whose x axis is not periodic): the inflow zone is the inlet buffer, fed by an image of each particle that leaves it into the lumen; the outlet buffer at the vessel's other end moves with the inflow's velocity profile and flow rate, each along its end's axis, and fluid past either end leaves the simulation (its slot parked for the inlet to reuse). The lumen's mass balance is counted exactly (hemo-run's summary, open_*).", {},
+           {"outlet", Kind::Section, "", 0, 0, false, Json::object(), "Open ends (tubes and aneurysms along x, and mesh vessels with one inlet and one or more outlets; with vessel.inflow, on a domain whose x axis is not periodic): the inflow zone is the inlet buffer, fed by an image of each particle that leaves it into the lumen; each outlet's buffer moves with the inflow's velocity profile and flow rate (one outlet) or holds a pressure, each along its end's axis, and fluid past any end leaves the simulation (its slot parked for the buffers to reuse). The lumen's mass balance is counted exactly (hemo-run's summary, open_*).", {},
             {
-                {"condition", Kind::Choice, "", 0, 0, false, "none", "none: the vessel is periodic and recycles its outflow (vessel.inflow); flow: open ends, the outlet buffer drawing the inlet's flow rate; pressure: open ends, the outlet buffer holding pressure_Pa and moving at the lumen's own axial velocity next to it, radius by radius (zero gradient).", {"none", "flow", "pressure"}},
-                {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "condition pressure: the outlet buffer's pressure over fluid.background_pressure_Pa."},
-                {"buffer_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of the outlet buffer at the vessel's end, along its axis (0: the inflow zone's length); at least the kernel support 2h."},
+                {"condition", Kind::Choice, "", 0, 0, false, "none", "none: the vessel is periodic and recycles its outflow (vessel.inflow); flow: open ends, the outlet buffer drawing the inlet's flow rate; pressure: open ends, each outlet buffer holding pressure_Pa and moving at the lumen's own axial velocity next to it, radius by radius (zero gradient); a vessel with several outlets needs it.", {"none", "flow", "pressure"}},
+                {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "condition pressure: the outlet buffers' pressure over fluid.background_pressure_Pa (every outlet's)."},
+                {"buffer_length_m", Kind::Number, "m", 0, 1e3, false, 0.0, "Length of each outlet's buffer at the vessel's end, along its axis (0: the inflow zone's length); at least the kernel support 2h."},
                 {"park_escaped_beyond_m", Kind::Number, "m", 0, 1, false, 0.0, "Blood farther than this outside the vessel's wall (beyond its outer layer) is removed, its slot freed for the buffers, and counted as escaped, so a bleeding vessel does not run out of free slots while its blood crosses the domain (0: only blood that leaves the domain). Give more than the wall moves, or blood in a swelling sac would be taken; the domain is divided into cells of two spacings, and a cell takes the blood in it when all of it lies that far out."},
                 {"reserve_particles", Kind::Integer, "1", 0, 1e8, false, 0, "Free fluid slots for the buffers' images beyond those the outlet frees (0: automatic, twice the inlet buffer's particles and half the vessel's fluid: a sac that swells draws blood in through both ends). A run that runs out stops and says so."},
             }},
@@ -662,10 +662,13 @@ void parseMesh(const Checker& c, const Json& v, const Json& raw, const Scene& s,
     w.start = w.meshInlet.origin;
     // (the length: the nearest outlet's distance, which bounds the buffers)
     w.length = 3.0e38f;
-    for (std::size_t e = 0; e < loops.size(); ++e) {
-      if (w.endRoles[e] != "outlet") continue;
-      w.meshOutlets.push_back(frame(loops[e]));
-      w.length = std::min(w.length, float(glm::length(loops[e].centroid - inlet->centroid)));
+    // (the outlets in the order of the scene's entries)
+    for (std::size_t k = 0; k < ends.size(); ++k) {
+      for (std::size_t e = 0; e < loops.size(); ++e) {
+        if (claimed[e] != int(k) || w.endRoles[e] != "outlet") continue;
+        w.meshOutlets.push_back(frame(loops[e]));
+        w.length = std::min(w.length, float(glm::length(loops[e].centroid - inlet->centroid)));
+      }
     }
   }
   if (raw.contains("inflow") && raw["inflow"].value("profile", "none") != "none") {

@@ -138,4 +138,28 @@ struct VesselSurfaceSpec {
 // Throws std::invalid_argument naming the parameter.
 io::TriangleMesh vesselSurface(const VesselSurfaceSpec& spec);
 
+// A branching vessel (hemo-mesh --branch-angle-deg): a parent tube of radius R along +x from
+// `start` splits `split` along into two daughters of radius Rb, whose axes leave the parent's
+// at +-angle in the x-y plane until they lie `spread` off it, then run parallel to x to the
+// ends at x0 + length (straight, for open ends' buffers). The lumen is the union of capsules
+// (cylinders with spherical ends) of those radii about the axes; the surface is marching
+// cubes (hemo's case table, reference::marchingCubes) over its signed distance, sampled on a
+// grid of about `cell` whose first and last planes are the ends' x = x0 and x0 + length, so
+// the surface is open there: three boundary loops, the inlet at x0 and the two outlets at
+// (x0 + length, y0 +- spread, z0). Grid values within 2% of a cell of the surface are moved
+// out to that distance, so no vertex lands on a grid point (no zero-area triangle). The
+// vertices are shared through their grid edges.
+struct BranchSurfaceSpec {
+  glm::dvec3 start{0.0};      // m, the parent's axis at x = x0
+  double length = 0.0;        // m, from the inlet's plane to the outlets'
+  double radius = 0.0;        // m, R
+  double branchRadius = 0.0;  // m, Rb (<= R)
+  double angle = 0.0;         // rad, each daughter's to the parent's axis (0, 80 degrees]
+  double split = 0.0;         // m along x from x0 to the split
+  double spread = 0.0;        // m, each daughter's straight run off the parent's axis (> Rb)
+  double cell = 0.0;          // m, the grid's spacing (0: Rb / 8)
+};
+// Throws std::invalid_argument naming the parameter.
+io::TriangleMesh branchSurface(const BranchSurfaceSpec& spec);
+
 }  // namespace hemo::scene

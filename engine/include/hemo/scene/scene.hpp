@@ -109,7 +109,7 @@ struct Vessel {
   std::vector<MeshRegion> meshRegions;
   // Shape::Mesh with open ends (vessel.outlet): the inlet's and the outlets' frames, from the
   // mesh's loops (their caps' centres, inward normals and equivalent radii; the outlets in the
-  // order of the mesh's loops; the buffers' lengths and reach are set with the rest of the
+  // order of the scene's vessel.mesh.ends; the buffers' lengths and reach are set with the rest of the
   // open ends).
   sim::OpenEnd meshInlet;
   std::vector<sim::OpenEnd> meshOutlets;
