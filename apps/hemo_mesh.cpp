@@ -21,10 +21,11 @@ int main(int argc, char** argv) {
       "  x = 0 and L + 2 S; open inlets and outlets want straight ends for their buffers);\n"
       "  N x M quads (M = 0: about square).\n"
       "hemo-mesh --out FILE.stl --length-m L --radius-m R --branch-angle-deg A --branch-radius-m RB --split-m X --spread-m Y\n"
-      "          [--cell-m C] [--unit-m U]\n"
+      "          [--sac-radius-m RS --sac-offset-m C] [--cell-m H] [--unit-m U]\n"
       "  a branching vessel: a parent tube of radius R from x = 0 splits at x = X into two daughters of radius RB at +-A\n"
-      "  degrees in the x-y plane, which turn parallel to x once Y off the axis and end at x = L; marching cubes over the\n"
-      "  lumen on a grid of C (default RB / 8).\n"
+      "  degrees in the x-y plane, which turn parallel to x once Y off the axis and end at x = L; with a spherical sac of\n"
+      "  radius RS centred C past the split on the axis (an aneurysm at the apex); marching cubes over the lumen on a grid\n"
+      "  of H (default RB / 8).\n"
       "  Coordinates are written in units of U m (default 0.001: millimetres, as segmentation tools write them).\n"
       "  Prints the two open ends' centres in m (for the scene's vessel.mesh.ends).\n";
   if (hemo::cli::printUsageIfAsked(argc, argv, usage)) return 0;
@@ -37,13 +38,14 @@ int main(int argc, char** argv) {
     if (!args.has("--length-m") || !args.has("--radius-m")) throw hemo::cli::UsageError("--length-m and --radius-m are required");
     const double unit = args.number("--unit-m", 0.001, 1e-9, 1e3);
     const std::string out = args.text("--out");
+    if (args.has("--sac-radius-m") != args.has("--sac-offset-m")) throw hemo::cli::UsageError("--sac-radius-m and --sac-offset-m go together");
     auto write = [&](hemo::io::TriangleMesh mesh, const char* what) {
       for (glm::dvec3& p : mesh.vertices) p /= unit;
       hemo::io::writeStl(out, mesh, std::string(what) + ", unit " + std::to_string(unit) + " m");
       std::printf("wrote %s: %zu triangles, %zu vertices, unit %g m\n", out.c_str(), mesh.triangles.size(), mesh.vertices.size(), unit);
     };
     if (args.has("--branch-angle-deg")) {
-      for (const char* key : {"--bend-height-m", "--sac-radius-m", "--sac-offset-m", "--straight-m", "--around", "--along"}) {
+      for (const char* key : {"--bend-height-m", "--straight-m", "--around", "--along"}) {
         if (args.has(key)) throw hemo::cli::UsageError(std::string(key) + " does not apply to a branching vessel (--branch-angle-deg)");
       }
       for (const char* key : {"--branch-radius-m", "--split-m", "--spread-m"}) {
@@ -57,6 +59,8 @@ int main(int argc, char** argv) {
       spec.split = args.number("--split-m", 0.0, 0.0, 1.0);
       spec.spread = args.number("--spread-m", 0.0, 0.0, 1.0);
       spec.cell = args.number("--cell-m", 0.0, 0.0, 1.0);
+      spec.sacRadius = args.number("--sac-radius-m", 0.0, 0.0, 1.0);
+      spec.sacOffset = args.number("--sac-offset-m", 0.0, 0.0, 1.0);
       hemo::io::TriangleMesh mesh;
       try {
         mesh = hemo::scene::branchSurface(spec);
@@ -77,7 +81,6 @@ int main(int argc, char** argv) {
     spec.sacRadius = args.number("--sac-radius-m", 0.0, 0.0, 1.0);
     spec.sacOffset = args.number("--sac-offset-m", 0.0, 0.0, 1.0);
     spec.straight = args.number("--straight-m", 0.0, 0.0, 1.0);
-    if (args.has("--sac-radius-m") != args.has("--sac-offset-m")) throw hemo::cli::UsageError("--sac-radius-m and --sac-offset-m go together");
     spec.around = static_cast<std::uint32_t>(args.count("--around", 64, 8, 4096));
     spec.along = static_cast<std::uint32_t>(args.count("--along", 0, 0, 100000));
     hemo::io::TriangleMesh mesh;

@@ -24,7 +24,8 @@ struct Capsule {
 // Signed distance from p to a capsule's surface (negative inside).
 double capsuleDistance(const Capsule& c, glm::dvec3 p) {
   const glm::dvec3 ab = c.b - c.a;
-  const double t = std::clamp(glm::dot(p - c.a, ab) / glm::dot(ab, ab), 0.0, 1.0);
+  const double length2 = glm::dot(ab, ab);
+  const double t = length2 > 0.0 ? std::clamp(glm::dot(p - c.a, ab) / length2, 0.0, 1.0) : 0.0;  // (a sphere: a = b)
   return glm::length(p - (c.a + t * ab)) - c.radius;
 }
 
@@ -47,6 +48,15 @@ io::TriangleMesh branchSurface(const BranchSurfaceSpec& s) {
   const double bend = s.split + s.spread / std::tan(s.angle);  // x - x0 where the daughters turn parallel
   require(std::isfinite(s.length) && s.length >= bend + 2.0 * s.branchRadius,
           "the length must reach at least two branch radii past the bends (at " + std::to_string(bend) + " m from the inlet)");
+  require(std::isfinite(s.sacRadius) && s.sacRadius >= 0.0, "the sac's radius must be zero (none) or positive");
+  if (s.sacRadius > 0.0) {
+    const double apex = s.branchRadius / std::sin(s.angle);
+    require(std::isfinite(s.sacOffset) && s.sacOffset > 0.0 && s.sacOffset - s.sacRadius < apex,
+            "the sac must lie past the split and reach the apex between the daughters (its offset less its radius under " +
+                std::to_string(apex) + " m)");
+    require(s.split + s.sacOffset + s.sacRadius < s.length - 2.0 * s.branchRadius, "the sac must end two branch radii before the outlets");
+    require(s.sacRadius < s.spread, "the sac's radius must be under the spread");
+  }
   // The capsules: the parent, and per daughter its oblique leg and its straight run; the
   // parent and the runs reach two cells past the grid's end planes, so the surface meets them
   // as plain cylinders.
@@ -57,18 +67,23 @@ io::TriangleMesh branchSurface(const BranchSurfaceSpec& s) {
     caps.push_back({splitPoint, turn, s.branchRadius});
     caps.push_back({turn, o + glm::dvec3(s.length + 2.0 * cell, side * s.spread, 0.0), s.branchRadius});
   }
-  // The grid: x from x0 to x0 + length exactly, y and z past the lumen by three cells (off the
-  // axis by a fraction of a cell, so the parent's axis plane holds no grid points).
+  if (s.sacRadius > 0.0) {
+    const glm::dvec3 centre = splitPoint + glm::dvec3(s.sacOffset, 0.0, 0.0);
+    caps.push_back({centre, centre, s.sacRadius});
+  }
+  // The grid: x from x0 to x0 + length exactly, y and z past the lumen by three cells; in y an
+  // even number of points, symmetric about the parent's axis (the two daughters' surfaces are
+  // mirror images), none on it; in z off the axis by a fraction of a cell.
   reference::ScalarGrid grid;
   const auto nx = std::uint32_t(std::max(2.0, std::round(s.length / cell)));
   grid.spacing = s.length / double(nx);
   const double h = grid.spacing;
-  const double yHalf = s.spread + s.branchRadius + 3.0 * h, zHalf = s.radius + 3.0 * h;
-  const auto ny = std::uint32_t(std::ceil(2.0 * yHalf / h)) + 1, nz = std::uint32_t(std::ceil(2.0 * zHalf / h)) + 1;
+  const double yHalf = s.spread + s.branchRadius + 3.0 * h, zHalf = std::max(s.radius, s.sacRadius) + 3.0 * h;
+  const auto ny = 2 * std::uint32_t(std::ceil(yHalf / h)), nz = std::uint32_t(std::ceil(2.0 * zHalf / h)) + 1;
   const std::size_t points = std::size_t(nx + 1) * ny * nz;
   require(points <= 64u * 1024u * 1024u, "the grid of " + std::to_string(points) + " points is too fine (raise the cell)");
   grid.points = glm::uvec3(nx + 1, ny, nz);
-  grid.origin = o - glm::dvec3(0.0, 0.5 * double(ny - 1) * h + 0.137 * h, 0.5 * double(nz - 1) * h + 0.291 * h);
+  grid.origin = o - glm::dvec3(0.0, 0.5 * double(ny - 1) * h, 0.5 * double(nz - 1) * h + 0.291 * h);
   grid.values.resize(points);
   const double floorValue = 0.02 * h;
   for (std::uint32_t k = 0; k < nz; ++k) {

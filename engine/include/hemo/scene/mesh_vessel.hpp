@@ -146,7 +146,9 @@ io::TriangleMesh vesselSurface(const VesselSurfaceSpec& spec);
 // cubes (hemo's case table, reference::marchingCubes) over its signed distance, sampled on a
 // grid of about `cell` whose first and last planes are the ends' x = x0 and x0 + length, so
 // the surface is open there: three boundary loops, the inlet at x0 and the two outlets at
-// (x0 + length, y0 +- spread, z0). Grid values within 2% of a cell of the surface are moved
+// (x0 + length, y0 +- spread, z0). An optional saccular aneurysm at the apex: a sphere of
+// radius Rs centred `sacOffset` past the split along x (between the daughters, where the
+// parent's flow meets the carina; it must reach the apex, Rb / sin(angle) past the split). Grid values within 2% of a cell of the surface are moved
 // out to that distance, so no vertex lands on a grid point (no zero-area triangle). The
 // vertices are shared through their grid edges.
 struct BranchSurfaceSpec {
@@ -158,6 +160,8 @@ struct BranchSurfaceSpec {
   double split = 0.0;         // m along x from x0 to the split
   double spread = 0.0;        // m, each daughter's straight run off the parent's axis (> Rb)
   double cell = 0.0;          // m, the grid's spacing (0: Rb / 8)
+  double sacRadius = 0.0;     // m, Rs (0: no sac)
+  double sacOffset = 0.0;     // m, from the split to the sac's centre along x
 };
 // Throws std::invalid_argument naming the parameter.
 io::TriangleMesh branchSurface(const BranchSurfaceSpec& spec);
