@@ -7,12 +7,50 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
+#include <vector>
 #include <fstream>
 #include <random>
 #include <string>
 
 namespace hemo::reference {
 namespace {
+
+// Womersley's mean speed against a finite-difference solution of its radial equation,
+// mu (1/r) d/dr (r du/dr) - i omega rho u = -G (u(R) = 0, du/dr(0) = 0), on 2,000 cells, for
+// Womersley numbers from 0.5 to 12; and its limits (Poiseuille's, in phase, as alpha -> 0).
+TEST(ReferenceAnalytic, WomersleyMeanSpeedSolvesTheRadialEquation) {
+  const double rho = 1060.0, mu = 0.1, R = 0.002;
+  const std::complex<double> G(300.0, -120.0), i(0.0, 1.0);
+  for (const double alpha : {0.5, 2.0, 3.6, 7.0, 12.0}) {
+    const double omega = alpha * alpha * mu / (rho * R * R);
+    const int n = 2000;
+    const double h = R / n;
+    // Unknowns u_0..u_{n-1} at r_k = (k + 1/2) h; u_n = 0 at the wall (a ghost at r = R + h/2: -u_{n-1}).
+    std::vector<std::complex<double>> a(n), b(n), c(n), d(n, -G / mu);
+    for (int k = 0; k < n; ++k) {
+      const double r = (k + 0.5) * h, rm = k * h, rp = (k + 1) * h;
+      a[k] = rm / (r * h * h);
+      c[k] = rp / (r * h * h);
+      b[k] = -(a[k] + c[k]) - i * omega * rho / mu;
+    }
+    b[n - 1] -= c[n - 1];  // (the ghost)
+    for (int k = 1; k < n; ++k) {  // Thomas
+      const std::complex<double> m = a[k] / b[k - 1];
+      b[k] -= m * c[k - 1];
+      d[k] -= m * d[k - 1];
+    }
+    std::vector<std::complex<double>> u(n);
+    u[n - 1] = d[n - 1] / b[n - 1];
+    for (int k = n - 2; k >= 0; --k) u[k] = (d[k] - c[k] * u[k + 1]) / b[k];
+    std::complex<double> mean = 0.0;
+    for (int k = 0; k < n; ++k) mean += u[k] * 2.0 * (k + 0.5) * h * h / (R * R);
+    const std::complex<double> w = womersleyMeanSpeed(G, omega, rho, mu, R);
+    EXPECT_LT(std::abs(w - mean), 1e-4 * std::abs(mean)) << "alpha " << alpha << ": " << w << " against " << mean;
+  }
+  const std::complex<double> slow = womersleyMeanSpeed(G, 1e-6, rho, mu, R);
+  EXPECT_LT(std::abs(slow - G * R * R / (8.0 * mu)), 1e-6 * std::abs(slow));
+}
 
 TEST(ReferenceGrid, CellsAreXFastestAndClamped) {
   Grid g{{0, 0, 0}, 1.0, {4, 3, 2}};
