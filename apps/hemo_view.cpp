@@ -32,6 +32,7 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <iterator>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -41,7 +42,7 @@ namespace {
 const char* kUsage =
     "usage: hemo-view SCENE.json [--device SEL] [--size WxH] [--steps-per-frame K] [--frames N]\n"
     "                 [--tool probe|grasper|blade|none] [--tool-speed V] [--script FILE]\n"
-    "                 [--screenshot FILE.png]\n"
+    "                 [--screenshot FILE.png] [--wall-map strain|wss|tawss|osi|pressure|broken]\n"
     "  --size WxH          window size (default 1280x720)\n"
     "  --steps-per-frame K simulation steps between frames (default 8)\n"
     "  --frames N          quit after N presented frames (default: run until closed)\n"
@@ -49,12 +50,33 @@ const char* kUsage =
     "  --tool-speed V      the fastest a hand-driven tool moves, m/s of simulated time (default 0.25)\n"
     "  --script FILE       replay input: lines 'FRAME ACTION ARGS' (docs/viewer.md)\n"
     "  --screenshot FILE   write the last frame, panel included, as a PNG when the viewer quits\n"
+    "  --wall-map MAP      colour the wall from the start by spring strain (default), wall shear\n"
+    "                      stress, its time average, the oscillatory shear index, pressure or the\n"
+    "                      fraction of springs broken (M cycles through them)\n"
     "mouse: left drag orbits, wheel zooms, right drag moves the active tool on the plane facing\n"
     "the camera (a blade cuts while dragged), Shift+wheel or Up/Down moves it in depth;\n"
     "keys: Tab next tool, G close/open a grasper, Space pause, N step, R reset, S surface,\n"
     "T wall surface, P particles, W wall particles, L springs, B boundary, C cutaway, H panel,\n"
     "Esc/Q quit\n"
     "hemo-view --help prints this text\n";
+
+// The wall maps, in the order of hemo::sim::MassSpring::ShadeBy: --wall-map's names and the
+// panel's labels.
+const char* kWallMapNames[] = {"strain", "wss", "tawss", "osi", "pressure", "broken"};
+const char* kWallMapLabels[] = {"spring strain", "wall shear stress", "time-averaged WSS", "oscillatory shear index",
+                                "pressure", "springs broken"};
+static_assert(std::size(kWallMapNames) == hemo::sim::MassSpring::kShadeModes);
+int wallMapIndex(const std::string& name) {
+  for (std::size_t k = 0; k < std::size(kWallMapNames); ++k) {
+    if (name == kWallMapNames[k]) return int(k);
+  }
+  return -1;
+}
+// The maps made from the wall shear stress (WCSPH only).
+bool wallMapNeedsShear(int map) {
+  using By = hemo::sim::MassSpring::ShadeBy;
+  return map == int(By::WallShear) || map == int(By::MeanWallShear) || map == int(By::OscillatoryShear);
+}
 
 // The hand's hold on one tool.
 struct Hand {
@@ -76,9 +98,11 @@ struct ViewState {
   bool wallParticles = true; // ... else as particles (W)
   // What the wall is coloured by (M cycles): spring strain, the wall shear stress, or its time
   // average since the map was turned on (sim::MassSpring::ShadeBy); the shear's red end (Pa).
-  int wallMap = 0;
-  bool wallMaps = false;  // the scene can have them (a wall, WCSPH)
+  int wallMap = 0;        // hemo::sim::MassSpring::ShadeBy (kWallMapNames)
+  bool wallMaps = false;  // the scene can have them (a wall)
+  bool shearMaps = false; // ... and the wall shear's (WCSPH)
   float shearRange = 10.0f;
+  float pressureRange = 1000.0f;  // Pa: red
   float strainRange = 0.1f;
   bool quit = false;
   bool reset = false;
@@ -102,6 +126,21 @@ struct ViewState {
 };
 
 bool haveTools(const ViewState& s) { return s.active < s.tools.size(); }
+
+// The value the wall's colour reaches red at, for its map: the strain's and the shear's and
+// the pressure's ranges, the oscillatory shear index's largest 1/2, all springs broken.
+float wallMapScale(const ViewState& s) {
+  using By = hemo::sim::MassSpring::ShadeBy;
+  switch (By(s.wallMap)) {
+    case By::Strain: return s.strainRange;
+    case By::WallShear:
+    case By::MeanWallShear: return s.shearRange;
+    case By::OscillatoryShear: return 0.5f;
+    case By::Pressure: return s.pressureRange;
+    case By::BrokenFraction: return 1.0f;
+  }
+  return s.strainRange;
+}
 
 // Takes the active tool into the hand (its target starts where it is now).
 Hand& grab(ViewState& s) {
@@ -140,7 +179,11 @@ void handleKey(ViewState& s, int key) {
     case GLFW_KEY_H: s.panel = !s.panel; break;
     case GLFW_KEY_T: s.wallSurface = !s.wallSurface; break;
     case GLFW_KEY_M:
-      if (s.wallMaps) s.wallMap = (s.wallMap + 1) % 3;
+      if (s.wallMaps) {
+        do {
+          s.wallMap = (s.wallMap + 1) % int(hemo::sim::MassSpring::kShadeModes);
+        } while (!s.shearMaps && wallMapNeedsShear(s.wallMap));
+      }
       break;
     case GLFW_KEY_TAB:
       if (!s.tools.empty()) s.active = (s.active + 1) % std::uint32_t(s.tools.size());
@@ -403,12 +446,13 @@ int main(int argc, char** argv) {
       throw hemo::cli::UsageError("--tool expects probe, grasper, blade or none, got '" + handKind + "'");
     }
     wallMapName = args.text("--wall-map", "strain");
-    if (wallMapName != "strain" && wallMapName != "wss" && wallMapName != "tawss") {
-      throw hemo::cli::UsageError("--wall-map expects strain, wss or tawss, got '" + wallMapName + "'");
+    if (wallMapIndex(wallMapName) < 0) {
+      throw hemo::cli::UsageError("--wall-map expects strain, wss, tawss, osi, pressure or broken, got '" + wallMapName + "'");
     }
     if (args.has("--script")) script = loadScript(args.text("--script"));
     scene = hemo::scene::loadScene(args.positional[0]);
-    if (wallMapName != "strain" && (!scene.vessel || scene.sph.pressureSolver == hemo::sim::PressureSolver::Dfsph)) {
+    if (wallMapName != "strain" && !scene.vessel) throw hemo::cli::UsageError("--wall-map " + wallMapName + " needs a vessel wall");
+    if (wallMapNeedsShear(wallMapIndex(wallMapName)) && scene.sph.pressureSolver == hemo::sim::PressureSolver::Dfsph) {
       throw hemo::cli::UsageError("--wall-map " + wallMapName + " needs a vessel wall under WCSPH (fluid.solver \"wcsph\")");
     }
     if (toolSpeed > 0.5f * scene.sph.soundSpeed) {
@@ -521,11 +565,15 @@ int main(int argc, char** argv) {
     state.wallSurface = sim->wallParticles() > 0 && sim->springs() > 0;
     state.frame.cutaway = !state.wallSurface;
     state.frame.wallOpacity = 0.5f;
-    // The wall maps (wall shear stress and its time average) where the solver makes them; the
-    // shear's colour scale ends at 8 mu U / R (four times Poiseuille's wall shear at the mean
-    // speed U / 2, for the scene's expected speed U and the vessel's radius R).
-    state.wallMaps = sim->springs() > 0 && !sim->solver().solvesPressure();
-    state.wallMap = wallMapName == "wss" ? 1 : wallMapName == "tawss" ? 2 : 0;
+    // The wall maps (the wall shear's where the solver makes them: WCSPH); the shear's colour
+    // scale ends at 8 mu U / R (four times Poiseuille's wall shear at the mean speed U / 2, for
+    // the scene's expected speed U and the vessel's radius R), the pressure's at twice the
+    // lumen's background pressure and rho U^2 (at least 100 Pa).
+    state.wallMaps = sim->springs() > 0;
+    state.shearMaps = state.wallMaps && !sim->solver().solvesPressure();
+    state.wallMap = wallMapIndex(wallMapName);
+    state.pressureRange = std::max(100.0f, 2.0f * (std::max(scene.sph.backgroundPressure, 0.0f) +
+                                                   scene.sph.restDensity * scene.expectedMaxSpeed * scene.expectedMaxSpeed));
     state.strainRange = state.frame.strainScale;
     if (scene.vessel && scene.vessel->radius > 0.0f) {
       state.shearRange = std::max(0.01f, 8.0f * scene.sph.viscosity * std::max(scene.expectedMaxSpeed, 1e-3f) / scene.vessel->radius);
@@ -638,10 +686,13 @@ int main(int argc, char** argv) {
           ImGui::SliderFloat("opacity", &state.frame.wallOpacity, 0.05f, 1.0f, "%.2f");
         }
         if (state.wallMaps) {
-          const char* maps[] = {"spring strain", "wall shear stress", "time-averaged WSS"};
-          ImGui::Combo("wall colour (M)", &state.wallMap, maps, 3);
-          if (state.wallMap != 0) {
+          const int before = state.wallMap;
+          ImGui::Combo("wall colour (M)", &state.wallMap, kWallMapLabels, int(hemo::sim::MassSpring::kShadeModes));
+          if (!state.shearMaps && wallMapNeedsShear(state.wallMap)) state.wallMap = before;  // (not under DFSPH)
+          if (wallMapNeedsShear(state.wallMap) && state.wallMap != int(hemo::sim::MassSpring::ShadeBy::OscillatoryShear)) {
             ImGui::SliderFloat("red at (Pa)", &state.shearRange, 0.01f, 1000.0f, "%.3g", ImGuiSliderFlags_Logarithmic);
+          } else if (state.wallMap == int(hemo::sim::MassSpring::ShadeBy::Pressure)) {
+            ImGui::SliderFloat("red at (Pa)", &state.pressureRange, 1.0f, 1.0e5f, "%.3g", ImGuiSliderFlags_Logarithmic);
           }
         }
         if (sim->wallParticles() > 0) {
@@ -720,9 +771,9 @@ int main(int argc, char** argv) {
 
       rec.begin();
       if (state.surface) sim->recordSurface(rec);
-      if (state.wallMap != 0 && !sim->wallShearEnabled()) sim->enableWallShear();  // (again after a reset)
+      if (wallMapNeedsShear(state.wallMap) && !sim->wallShearEnabled()) sim->enableWallShear();  // (again after a reset)
       sim->recordWallShade(rec, hemo::sim::MassSpring::ShadeBy(state.wallMap));
-      state.frame.strainScale = state.wallMap == 0 ? state.strainRange : state.shearRange;
+      state.frame.strainScale = wallMapScale(state);
       const hemo::render::ToolView tools{state.tools.empty() ? nullptr : &state.tools, state.now};
       hemo::render::WallSurfaceView wallView;
       if (state.wallSurface) {

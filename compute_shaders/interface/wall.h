@@ -127,8 +127,9 @@
 #define HEMO_SHADE_BINDING_PARAMS 7
 #define HEMO_SHADE_BINDING_SHADE 8
 #define HEMO_SHADE_BINDING_WSS 9          // HEMO_SPRINGF_BINDING_WSS (push mode 1)
-#define HEMO_SHADE_BINDING_SHEAR_SUMS 10  // HEMO_SHEARACC_BINDING_SUMS (push mode 2)
-#define HEMO_SHADE_BINDING_COUNT 11
+#define HEMO_SHADE_BINDING_SHEAR_SUMS 10  // HEMO_SHEARACC_BINDING_SUMS (push modes 2, 3)
+#define HEMO_SHADE_BINDING_STATE 11       // the fluid's state (rho, p, ...) per slot (push mode 4)
+#define HEMO_SHADE_BINDING_COUNT 12
 
 // The wall shear maps' accumulation (wall/shear_accumulate.comp), after each step, per point
 // id: the step's wall shear stress (HEMO_SPRINGF_BINDING_WSS at the point's slot) times the

@@ -3,9 +3,11 @@
 // unbroken springs (|x_b - x_a| / rest - 1, minimum image on periodic axes; 0 when all are
 // compressed or broken), fraction of its springs that broke); vec2(0) for other kinds. A
 // gather over the particle's springs (CSR by id), like wall/spring_forces.comp. The CPU twin
-// is io::wallPointStats. With push.mode 1 the first component is the particle's wall shear
-// stress instead (|tau|, Pa, the last force pass's), with 2 its time average (sum |tau| dt /
-// sum dt, Pa; wall/shear_accumulate.comp).
+// is io::wallPointStats. The first component is instead, by push.mode (hemo/sim/wall.hpp,
+// MassSpring::ShadeBy): 1 the particle's wall shear stress (|tau|, Pa, the last force pass's),
+// 2 its time average (sum |tau| dt / sum dt, Pa; wall/shear_accumulate.comp), 3 its oscillatory
+// shear index (1 - |sum tau dt| / sum |tau| dt) / 2, 4 its pressure (Pa, the last density and
+// boundary passes'), 5 the fraction of its springs broken.
 #extension GL_GOOGLE_include_directive : require
 #include "interface/sph.h"
 #include "interface/wall.h"
@@ -24,10 +26,11 @@ HEMO_SPH_PARAMS_UNIFORM(HEMO_SHADE_BINDING_PARAMS);
 layout(std430, binding = HEMO_SHADE_BINDING_SHADE) writeonly buffer Shade { vec2 shade[]; };
 layout(std430, binding = HEMO_SHADE_BINDING_WSS) readonly buffer Wss { vec4 wss[]; };
 layout(std430, binding = HEMO_SHADE_BINDING_SHEAR_SUMS) readonly buffer ShearSums { vec4 shearSums[]; };
+layout(std430, binding = HEMO_SHADE_BINDING_STATE) readonly buffer State { vec4 state[]; };  // (rho, p, ...) per slot
 layout(push_constant) uniform Push {
   uint n;
   uint idCount;
-  uint mode;  // 0 strain, 1 wall shear stress, 2 its time average
+  uint mode;  // 0 strain, 1 wall shear stress, 2 its time average, 3 OSI, 4 pressure, 5 broken fraction
 } pc;
 
 void main() {
@@ -53,12 +56,20 @@ void main() {
     const vec3 delta = hemo_min_image(positions[slotOfId[s.b]].xyz - positions[slotOfId[s.a]].xyz, pp);
     strain = max(strain, length(delta) / s.restLength - 1.0);
   }
+  const float brokenFraction = total > 0u ? float(broken) / float(total) : 0.0;
   float value = strain;
   if (pc.mode == 1u) {
     value = length(wss[i].xyz);
   } else if (pc.mode == 2u) {
     const float seconds = shearSums[pc.idCount].x;
     value = seconds > 0.0 ? shearSums[id].w / seconds : 0.0;
+  } else if (pc.mode == 3u) {
+    const vec4 sum = shearSums[id];
+    value = sum.w > 0.0 ? 0.5 * (1.0 - min(length(sum.xyz) / sum.w, 1.0)) : 0.0;
+  } else if (pc.mode == 4u) {
+    value = state[i].y;
+  } else if (pc.mode == 5u) {
+    value = brokenFraction;
   }
-  shade[i] = vec2(value, total > 0u ? float(broken) / float(total) : 0.0);
+  shade[i] = vec2(value, brokenFraction);
 }

@@ -471,7 +471,8 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   if (s.sph.periodic[0]) c.fail("domain.periodic", "a vessel with open ends (vessel.outlet) must not be periodic along x");
   const bool meshed = w.shape == Vessel::Shape::Mesh;
   if (w.shape == Vessel::Shape::Bifurcation) {
-    c.fail("vessel.outlet", "open ends apply to a tube, an aneurysm or a mesh vessel with one inlet and one outlet (not to a bifurcation yet)");
+    c.fail("vessel.outlet", "open ends apply to a tube, an aneurysm or a mesh vessel; the analytic bifurcation is a loop on a periodic "
+                            "axis (for a vessel that branches into open outlets, use a mesh: hemo-mesh --branch-angle-deg writes one)");
   }
   if (w.inflow->holdPressure) {
     c.fail("vessel.inflow.hold_lumen_pressure", "cannot be used with open ends (the zone's mass supply is for a closed, recycled loop)");

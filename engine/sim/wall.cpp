@@ -263,6 +263,7 @@ MassSpring::MassSpring(gpu::Context& context, const ParticleStore& particles, co
     substepFromScratchSet_ = substepSet(scratchPositions_, scratchVelocities_, a.positions, a.velocities);
   }
   params_ = fluid.params;
+  state_ = fluid.state;
   makeShadeSet();
 }
 
@@ -280,11 +281,14 @@ void MassSpring::makeShadeSet() {
                                     {HEMO_SHADE_BINDING_PARAMS, params_},
                                     {HEMO_SHADE_BINDING_SHADE, &shade_},
                                     {HEMO_SHADE_BINDING_WSS, &wss_},
-                                    {HEMO_SHADE_BINDING_SHEAR_SUMS, shearSums_ ? shearSums_.get() : &wss_}});
+                                    {HEMO_SHADE_BINDING_SHEAR_SUMS, shearSums_ ? shearSums_.get() : &wss_},
+                                    {HEMO_SHADE_BINDING_STATE, state_}});
 }
 
 void MassSpring::recordShade(gpu::CommandRecorder& rec, std::uint32_t n, ShadeBy by) {
-  if (by != ShadeBy::Strain && !wallShear_) throw std::logic_error("recordShade: shading by wall shear needs setWallShear(true)");
+  const bool shear = by == ShadeBy::WallShear || by == ShadeBy::MeanWallShear || by == ShadeBy::OscillatoryShear;
+  if (std::uint32_t(by) >= kShadeModes) throw std::invalid_argument("recordShade: no such shade");
+  if (shear && !wallShear_) throw std::logic_error("recordShade: shading by wall shear needs setWallShear(true)");
   rec.computeToCompute();
   rec.dispatch(*shadeStage_, shadeSet_, ShadePush{n, idCount_, std::uint32_t(by)}, shadeStage_->groupsFor(std::max(n, 1u)));
   rec.computeToCompute();

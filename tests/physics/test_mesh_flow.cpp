@@ -8,6 +8,7 @@
 #include "gpu_test.hpp"
 #include "interface/sph.h"
 #include "hemo/io/mesh.hpp"
+#include "hemo/io/output.hpp"
 #include "hemo/scene/build.hpp"
 #include "hemo/scene/mesh_vessel.hpp"
 #include "hemo/sim/probes.hpp"
@@ -96,6 +97,40 @@ Flow flowOf(gpu::Context& ctx, const scene::Scene& scene, double settled = 0.03,
   const sim::Simulation::WallShearMaps maps = sim.readWallShear();
   EXPECT_NEAR(maps.seconds, 0.01, 1e-4) << "the maps average over the time since they were enabled";
   const sim::Snapshot s = sim.snapshot();
+  // What hemo-view colours the wall by (wall/point_shade.comp) against the maps, the snapshot
+  // and the output files' figures: the oscillatory shear index, the pressure, the fraction of
+  // springs broken (io::wallPointStats).
+  {
+    using By = sim::MassSpring::ShadeBy;
+    const io::WallPointStats stats = io::wallPointStats(s, sim.solver().wall()->readSprings(), sim.solver().grid().spec().period);
+    const std::vector<std::uint32_t> idOfSlot = sim.store().readIds();  // (the shade is per slot, the snapshot per id)
+    for (const By by : {By::OscillatoryShear, By::Pressure, By::BrokenFraction}) {
+      gpu::CommandRecorder rec(ctx);
+      rec.begin();
+      sim.recordWallShade(rec, by);
+      rec.end();
+      rec.submitAndWait();
+      const auto shade = sim.wallShade()->readback<glm::vec2>(s.positions.size());
+      std::size_t checked = 0, off = 0;
+      double most = 0.0;
+      for (std::size_t i = 0; i < s.positions.size(); ++i) {
+        const std::uint32_t id = idOfSlot[i];
+        if (id >= maps.osi.size() || s.velocities[id].w != float(HEMO_KIND_WALL)) continue;
+        const double want = by == By::OscillatoryShear ? maps.osi[id] : by == By::Pressure ? s.densityPressure[id].y : stats.brokenFraction[id];
+        const double scale = by == By::Pressure ? std::max(1.0, std::abs(want)) : 1.0;
+        const bool bad = std::abs(shade[i].x - want) > 1e-5 * scale;
+        if (bad && off < 3) std::printf("shade %d slot %zu: %.9g against %.9g\n", int(by), i, double(shade[i].x), want);
+        off += bad;
+        most = std::max(most, double(shade[i].x));
+        ++checked;
+      }
+      EXPECT_GT(checked, 100u);
+      EXPECT_EQ(off, 0u) << "shade " << int(by);
+      if (by == By::Pressure) {
+        EXPECT_GT(most, 0.0) << "the wall must carry the blood's pressure";
+      }
+    }
+  }
   EXPECT_EQ(s.viscosity.empty(), !scene.sph.nonNewtonian());
   if (!s.viscosity.empty() && law) {
     std::array<int, kBins> inBin{};

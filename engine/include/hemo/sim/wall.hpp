@@ -169,10 +169,13 @@ class MassSpring {
   const gpu::Buffer& counters() const { return counters_; }  // uint[4] (interface/wall.h)
   // Per slot of the first n: vec2(largest strain of the particle's unbroken springs, fraction
   // of its springs broken) for wall particles, 0 for others (wall/point_shade.comp), into
-  // shade(); what the renderer colours the wall by. With ShadeBy::WallShear the first
-  // component is the particle's wall shear stress (Pa) instead, with MeanWallShear its time
-  // average (Pa); both need setWallShear(true).
-  enum class ShadeBy : std::uint32_t { Strain = 0, WallShear = 1, MeanWallShear = 2 };
+  // shade(); what the renderer colours the wall by. The first component is instead, with
+  // ShadeBy::WallShear, the particle's wall shear stress (Pa), with MeanWallShear its time
+  // average (Pa), with OscillatoryShear its oscillatory shear index (0 to 1/2; these three
+  // need setWallShear(true)), with Pressure its pressure (Pa), with BrokenFraction the fraction
+  // of its springs broken.
+  enum class ShadeBy : std::uint32_t { Strain = 0, WallShear = 1, MeanWallShear = 2, OscillatoryShear = 3, Pressure = 4, BrokenFraction = 5 };
+  static constexpr std::uint32_t kShadeModes = 6;
   void recordShade(gpu::CommandRecorder& rec, std::uint32_t n, ShadeBy by = ShadeBy::Strain);
   const gpu::Buffer& shade() const { return shade_; }
   const gpu::Buffer& springs() const { return springs_; }  // GpuSpring records, broken flags live
@@ -220,6 +223,7 @@ class MassSpring {
   const gpu::ComputePipeline* shearAccumulate_ = nullptr;
   gpu::DescriptorSet shearSet_;
   const gpu::Buffer* params_ = nullptr;
+  const gpu::Buffer* state_ = nullptr;  // the fluid's state per slot (the shade's pressure)
   void makeShadeSet();
   const gpu::ComputePipeline* forces_;
   const gpu::ComputePipeline* shadeStage_;
