@@ -114,6 +114,7 @@ const std::vector<Field>& schema() {
                  {
                      {"role", Kind::Choice, "", 0, 0, false, nullptr, "What the end is: the inlet (on a periodic vessel, on the domain's min x plane when vessel.inflow drives the flow: the zone starts there) or an outlet.", {"inlet", "outlet"}},
                      {"at_m", Kind::Vec3, "m", -1e6, 1e6, false, nullptr, "A point at the end's centre (within its radius): which loop the entry names."},
+                     {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "An outlet's own pressure over fluid.background_pressure_Pa, in place of vessel.outlet.pressure_Pa (a pressure outlet of a vessel with open ends): branches whose downstream beds differ."},
                  }},
                 {"regions", Kind::Objects, "", 0, kInf, false, Json::array(), "Parts of the wall with other tissue, such as an aneurysm's thinner, weaker dome: a spring whose midpoint lies within a region's sphere takes its stiffness and strength scales (the first region that holds it).", {},
                  {
@@ -532,11 +533,20 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   o.inlet.length = zone;
   o.inlet.pressure = pressureInlet;
   o.inlet.pressurePa = pressureInlet ? inflowSection["pressure_Pa"].get<float>() : 0.0f;
-  for (sim::OpenEnd& end : o.outlets) {
+  for (std::size_t k = 0; k < o.outlets.size(); ++k) {
+    sim::OpenEnd& end = o.outlets[k];
     end.reach = end.radius + float(w.layers + 1) * s.sph.spacing;
     end.length = buffer;
     end.pressure = condition == "pressure";
     end.pressurePa = end.pressure ? out["pressure_Pa"].get<float>() : 0.0f;
+    // (a mesh outlet's own pressure)
+    const auto own = meshed ? w.meshEndPressures.find(w.meshOutletEntries[k]) : w.meshEndPressures.end();
+    if (own != w.meshEndPressures.end()) {
+      if (!end.pressure) {
+        c.fail("vessel.mesh.ends[" + std::to_string(own->first) + "].pressure_Pa", "applies only with vessel.outlet.condition \"pressure\"");
+      }
+      end.pressurePa = own->second;
+    }
   }
   if (meshed) {
     checkStraightEnd(c, *w.mesh, o.inlet, "vessel.inflow.zone_length_m", "inlet", h2);
@@ -630,6 +640,16 @@ void parseMesh(const Checker& c, const Json& v, const Json& raw, const Scene& s,
     w.endRoles[e] = ends[std::size_t(claimed[e])]["role"].get<std::string>();
   }
   const bool open = raw.contains("outlet") && raw["outlet"].is_object() && raw["outlet"].value("condition", "none") != "none";
+  // An outlet's own pressure (vessel.mesh.ends[k].pressure_Pa; parseOutlet takes it).
+  const Json* rawEnds = raw.contains("mesh") && raw["mesh"].contains("ends") ? &raw["mesh"]["ends"] : nullptr;
+  for (std::size_t k = 0; k < ends.size(); ++k) {
+    const bool given = rawEnds && k < rawEnds->size() && (*rawEnds)[k].contains("pressure_Pa");
+    if (!given) continue;
+    const std::string p = "vessel.mesh.ends[" + std::to_string(k) + "].pressure_Pa";
+    if (ends[k]["role"].get<std::string>() != "outlet") c.fail(p, "applies to an outlet, not to the inlet (its pressure is vessel.inflow.pressure_Pa)");
+    if (!open) c.fail(p, "applies to a pressure outlet of a vessel with open ends (vessel.outlet.condition \"pressure\")");
+    w.meshEndPressures[k] = ends[k]["pressure_Pa"].get<float>();
+  }
   if (!loops.empty() && !s.sph.periodic[0] && !open) {
     c.fail("domain.periodic", "a mesh vessel with open ends needs either a periodic x axis with its ends on the two planes, or open "
                               "inlets and outlets (vessel.outlet.condition \"flow\" or \"pressure\")");
@@ -668,6 +688,7 @@ void parseMesh(const Checker& c, const Json& v, const Json& raw, const Scene& s,
       for (std::size_t e = 0; e < loops.size(); ++e) {
         if (claimed[e] != int(k) || w.endRoles[e] != "outlet") continue;
         w.meshOutlets.push_back(frame(loops[e]));
+        w.meshOutletEntries.push_back(k);
         w.length = std::min(w.length, float(glm::length(loops[e].centroid - inlet->centroid)));
       }
     }

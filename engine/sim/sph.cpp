@@ -198,7 +198,7 @@ SphSettings resolveNeighbourSearch(const gpu::Context& context, const ParticleSt
   return s;
 }
 // The open ends' profile bins (interface/sph.h).
-constexpr std::uint64_t kOpenBins = HEMO_OPEN_BINS, kOpenSumWords = HEMO_OPEN_SUM_WORDS, kOpenProfile = HEMO_OPEN_PROFILE_SIZE;
+constexpr std::uint64_t kOpenSumWords = HEMO_OPEN_SUM_WORDS, kOpenProfile = HEMO_OPEN_PROFILE_SIZE;
 static_assert(OpenEnds::kMaxEnds == HEMO_OPEN_MAX_ENDS);
 // The boundary pass's indirect arguments of each page of the list, apart by the largest
 // storage-buffer offset alignment Vulkan allows.

@@ -753,19 +753,95 @@ std::unique_ptr<BranchTube> branchTube(const std::string& tag) {
   return t;
 }
 
+// A branching tube's run to 0.04 s. From 0.02 s, at eleven states 2 ms apart: each outlet's
+// net outflow since the start (particles), whose least-squares slope is its flow rate (one
+// window's count moves by the few particles next to the planes), and each daughter's mean
+// speed along its straight run (from a branch radius past its bend to two spacings before its
+// buffer); and the lumen's mass balance at the end.
+struct BranchFlow {
+  double rate[2] = {};   // m^3/s, by outlet
+  double speed[2] = {};  // m/s, by daughter
+  double samples[2] = {};
+  std::array<std::int64_t, 3> balance{};  // net in, net out, the lumen's change (particles)
+  sim::SphSolver::OpenCounts counts;
+};
+
+BranchFlow runBranches(gpu::Context& ctx, const BranchTube& tube, const scene::Scene& scene) {
+  const sim::Inflow& in = *scene.vessel->inflow;
+  const sim::OpenEnds& ends = *in.open;
+  sim::Simulation sim(ctx, scene);
+  const std::uint32_t lumen0 = lumenCount(sim.snapshot(), in);
+  const scene::BranchSurfaceSpec& g = tube.spec;
+  const double dp = scene.sph.spacing, turn = (g.split + g.spread / std::tan(g.angle) + g.branchRadius) * 1e-3;
+  BranchFlow f;
+  std::vector<double> times, outflow[2];
+  sim::RunOptions opt;
+  for (int k = 0; k <= 10; ++k) {
+    opt.until = 0.02 + 0.002 * k;
+    sim.run(opt);
+    const sim::Snapshot s = sim.snapshot();
+    const auto o = sim.openCounts();
+    times.push_back(sim.time());
+    for (int b = 0; b < 2; ++b) outflow[b].push_back(double(o.ends[std::size_t(b) + 1].enter) - double(o.ends[std::size_t(b) + 1].leave));
+    for (std::size_t i = 0; i < s.positions.size(); ++i) {
+      const glm::dvec3 p(s.positions[i]);
+      if (s.velocities[i].w != float(sim::ParticleKind::Fluid) || p.x < turn) continue;
+      for (int b = 0; b < 2; ++b) {
+        const sim::OpenEnd& e = ends.outlets[std::size_t(b)];
+        const glm::dvec2 l = e.local(p);
+        if (l.x < e.length + 2.0 * dp || l.y >= double(e.radius) * e.radius) continue;
+        f.speed[b] += double(s.velocities[i].x);  // (the daughters run along +x)
+        f.samples[b] += 1.0;
+      }
+    }
+  }
+  for (int b = 0; b < 2; ++b) {
+    double tm = 0.0, qm = 0.0, stq = 0.0, stt = 0.0;
+    for (std::size_t k = 0; k < times.size(); ++k) tm += times[k] / double(times.size()), qm += outflow[b][k] / double(times.size());
+    for (std::size_t k = 0; k < times.size(); ++k) stq += (times[k] - tm) * (outflow[b][k] - qm), stt += (times[k] - tm) * (times[k] - tm);
+    f.rate[b] = stq / stt * scene.sph.particleMass() / scene.sph.restDensity;
+    f.speed[b] /= std::max(f.samples[b], 1.0);
+  }
+  f.counts = sim.openCounts();
+  f.balance = netCrossings(f.counts, lumenCount(sim.snapshot(), in), lumen0);
+  const auto& o = f.counts;
+  std::printf("branching tube to t = %.4f s: in %u (back %u), out %u (back %u; %d and %d by outlet), parked %u + %u + %u, spawned %u; "
+              "lumen %u -> %lld; flow from 0.02 s %.3e and %.3e m^3/s; the daughters' mean speeds %.4f and %.4f m/s\n",
+              sim.time(), o.in, o.inBack, o.out, o.outBack, int(o.ends[1].enter) - int(o.ends[1].leave),
+              int(o.ends[2].enter) - int(o.ends[2].leave), o.parkedEnd, o.parkedStart, o.parkedOutside, o.spawned, lumen0,
+              static_cast<long long>(lumen0 + f.balance[2]), f.rate[0], f.rate[1], f.speed[0], f.speed[1]);
+  EXPECT_GT(f.balance[0], 100);
+  EXPECT_LE(std::abs(double(f.balance[0] - f.balance[1] - f.balance[2])), 0.01 * double(f.balance[0]));
+  EXPECT_EQ(o.parkedOutside, 0u);
+  EXPECT_GT(f.samples[0], 1000.0);
+  EXPECT_GT(f.samples[1], 1000.0);
+  return f;
+}
+
+// The Poiseuille network of a branching tube (m^3/s by outlet): the parent's resistance
+// 8 mu L / (pi R^4) in series with the two daughters' in parallel, lengths along the axes
+// between the buffers' planes and the split, the junction's losses left out; the inlet at
+// `inlet` Pa, the outlets at `outlets` Pa (over the background).
+std::array<double, 2> branchNetwork(const BranchTube& tube, const sim::OpenEnds& ends, double mu, double inlet, std::array<double, 2> outlets) {
+  const scene::BranchSurfaceSpec& g = tube.spec;
+  const double R = g.radius * 1e-3, Rb = g.branchRadius * 1e-3;
+  const double parent = g.split * 1e-3 - ends.inlet.length;
+  const double daughter =
+      g.spread * 1e-3 / std::sin(g.angle) + (g.length - g.split - g.spread / std::tan(g.angle)) * 1e-3 - ends.outlets[0].length;
+  const double rp = 8.0 * mu * parent / (std::numbers::pi * std::pow(R, 4)), rd = 8.0 * mu * daughter / (std::numbers::pi * std::pow(Rb, 4));
+  const double node = (inlet / rp + (outlets[0] + outlets[1]) / rd) / (1.0 / rp + 2.0 / rd);  // the split's pressure
+  return {(node - outlets[0]) / rd, (node - outlets[1]) / rd};
+}
+
 // The branching vessel with three open ends, each in its loop's frame: the lumen's count
 // changes exactly by what the GPU counted through the three planes (1% allowed); the two
 // daughters, mirror images but for their walls' sampled points, carry the same flow (their
 // mean speeds along their straight runs within 5%; measured 1.4%, and 71 against 72 particles
-// out by 0.04 s); and the flow from 0.02 s on comes within 20% of the Poiseuille network's,
-// the parent's resistance 8 mu L / (pi R^4) in series with the two daughters' in parallel
-// (lengths along the axes between the buffers' planes and the split; the junction's losses
-// left out; measured 1.05).
+// out by 0.04 s); and the flow comes within 20% of the Poiseuille network's (measured 1.05).
 TEST_F(OpenEndsTest, BranchingMeshSplitsThePressureDrivenFlow) {
   const auto tube = branchTube("flow");
   const scene::Scene scene = scene::parseScene(tube->scene.dump(), "branch_tube");
-  const sim::Inflow& in = *scene.vessel->inflow;
-  const sim::OpenEnds& ends = *in.open;
+  const sim::OpenEnds& ends = *scene.vessel->inflow->open;
   ASSERT_EQ(ends.outlets.size(), 2u);
   EXPECT_LT(glm::length(glm::dvec3(ends.inlet.axis) - glm::dvec3(1.0, 0.0, 0.0)), 1e-3);
   EXPECT_NEAR(ends.inlet.radius, 0.002, 0.002 * 0.02);
@@ -775,69 +851,40 @@ TEST_F(OpenEndsTest, BranchingMeshSplitsThePressureDrivenFlow) {
     EXPECT_NEAR(std::abs(e.origin.y), 0.004, 1e-5);
     EXPECT_TRUE(e.pressure);
   }
-  sim::Simulation sim(ctx(), scene);
-  const sim::Snapshot start = sim.snapshot();
-  const std::uint32_t lumen0 = lumenCount(start, in);
-  // From 0.02 s to 0.04 s, at eleven states 2 ms apart: the outlets' net outflow since the
-  // start (particles), and each daughter's mean speed along its straight run (from a branch
-  // radius past its bend to two spacings before its buffer).
-  const scene::BranchSurfaceSpec& g = tube->spec;
-  const double dp = scene.sph.spacing, turn = (g.split + g.spread / std::tan(g.angle) + g.branchRadius) * 1e-3;
-  double speed[2] = {}, samples[2] = {};
-  std::vector<double> times, outflow;  // (outflow: both outlets together)
-  sim::RunOptions opt;
-  for (int k = 0; k <= 10; ++k) {
-    opt.until = 0.02 + 0.002 * k;
-    sim.run(opt);
-    const sim::Snapshot s = sim.snapshot();
-    const auto o = sim.openCounts();
-    times.push_back(sim.time());
-    outflow.push_back(double(o.out) - double(o.outBack));
-    for (std::size_t i = 0; i < s.positions.size(); ++i) {
-      const glm::dvec3 p(s.positions[i]);
-      if (s.velocities[i].w != float(sim::ParticleKind::Fluid) || p.x < turn) continue;
-      for (int b = 0; b < 2; ++b) {
-        const sim::OpenEnd& e = ends.outlets[std::size_t(b)];
-        const glm::dvec2 l = e.local(p);
-        if (l.x < e.length + 2.0 * dp || l.y >= double(e.radius) * e.radius) continue;
-        speed[b] += double(s.velocities[i].x);  // (the daughters run along +x)
-        samples[b] += 1.0;
-      }
-    }
-  }
-  const sim::Snapshot end = sim.snapshot();
-  const auto o = sim.openCounts();
-  const auto [in64, out64, change] = netCrossings(o, lumenCount(end, in), lumen0);
-  // The flow rate (m^3/s): the least-squares slope of the net outflow over the states (one
-  // window's count moves by the few particles next to the planes), against the network's.
-  double tm = 0.0, qm = 0.0, stq = 0.0, stt = 0.0;
-  for (std::size_t k = 0; k < times.size(); ++k) tm += times[k] / double(times.size()), qm += outflow[k] / double(times.size());
-  for (std::size_t k = 0; k < times.size(); ++k) stq += (times[k] - tm) * (outflow[k] - qm), stt += (times[k] - tm) * (times[k] - tm);
-  const double rate = stq / stt * scene.sph.particleMass() / scene.sph.restDensity;
-  const double mu = 0.1, R = 0.002, Rb = 0.0016;
-  const double parent = g.split * 1e-3 - ends.inlet.length;
-  const double daughter =
-      g.spread * 1e-3 / std::sin(g.angle) + (g.length - g.split - g.spread / std::tan(g.angle)) * 1e-3 - ends.outlets[0].length;
-  const double resistance = 8.0 * mu * parent / (std::numbers::pi * std::pow(R, 4)) +
-                            0.5 * 8.0 * mu * daughter / (std::numbers::pi * std::pow(Rb, 4));
-  const double network = 300.0 / resistance;
-  const int out1 = int(o.ends[1].enter) - int(o.ends[1].leave), out2 = int(o.ends[2].enter) - int(o.ends[2].leave);
-  ASSERT_GT(samples[0], 1000.0);
-  ASSERT_GT(samples[1], 1000.0);
-  const double u0 = speed[0] / samples[0], u1 = speed[1] / samples[1];
-  std::printf("branching tube to t = %.4f s: in %u (back %u), out %u (back %u; %d and %d by outlet), parked %u + %u + %u, spawned %u; "
-              "lumen %u -> %lld; the daughters' mean speeds %.4f and %.4f m/s; flow %.3e m^3/s from 0.02 s, the Poiseuille "
-              "network's %.3e (ratio %.3f)\n",
-              sim.time(), o.in, o.inBack, o.out, o.outBack, out1, out2, o.parkedEnd, o.parkedStart, o.parkedOutside, o.spawned, lumen0,
-              static_cast<long long>(lumen0 + change), u0, u1, rate, network, rate / network);
-  ASSERT_GT(in64, 100);
-  EXPECT_LE(std::abs(double(in64 - out64 - change)), 0.01 * double(in64));
-  EXPECT_EQ(o.parkedOutside, 0u);
-  EXPECT_GT(out1, 30);
-  EXPECT_GT(out2, 30);
-  EXPECT_GT(u0, 0.0);
-  EXPECT_NEAR(u0 / u1, 1.0, 0.05);
-  EXPECT_NEAR(rate / network, 1.0, 0.2);
+  const BranchFlow f = runBranches(ctx(), *tube, scene);
+  const std::array<double, 2> network = branchNetwork(*tube, ends, 0.1, 300.0, {0.0, 0.0});
+  const double rate = f.rate[0] + f.rate[1], want = network[0] + network[1];
+  std::printf("the outlets together %.3e m^3/s, the Poiseuille network's %.3e (ratio %.3f); the daughters' speeds' ratio %.3f\n", rate,
+              want, rate / want, f.speed[0] / f.speed[1]);
+  EXPECT_GT(f.speed[0], 0.0);
+  EXPECT_NEAR(f.speed[0] / f.speed[1], 1.0, 0.05);
+  EXPECT_NEAR(rate / want, 1.0, 0.2);
+}
+
+// Outlets with their own pressures (vessel.mesh.ends[k].pressure_Pa): the second daughter's
+// outlet held 100 Pa above the first's, the flow divides as the Poiseuille network divides it
+// (the ratio of the daughters' mean speeds against the network's flows' within 15%) and the
+// total comes within 20% of the network's.
+TEST_F(OpenEndsTest, BranchesWithTheirOwnPressuresSplitAsTheirNetwork) {
+  const auto tube = branchTube("own_pressures");
+  nlohmann::json j = tube->scene;
+  j["vessel"]["mesh"]["ends"][2]["pressure_Pa"] = 100.0;
+  const scene::Scene scene = scene::parseScene(j.dump(), "branch_tube_pressures");
+  const sim::OpenEnds& ends = *scene.vessel->inflow->open;
+  ASSERT_EQ(ends.outlets.size(), 2u);
+  EXPECT_EQ(ends.outlets[0].pressurePa, 0.0f);
+  EXPECT_EQ(ends.outlets[1].pressurePa, 100.0f);
+  EXPECT_NEAR(ends.outlets[1].origin.y, -0.004, 1e-5);
+  const BranchFlow f = runBranches(ctx(), *tube, scene);
+  const std::array<double, 2> network = branchNetwork(*tube, ends, 0.1, 300.0, {0.0, 100.0});
+  const double rate = f.rate[0] + f.rate[1], want = network[0] + network[1];
+  const double split = f.speed[0] / f.speed[1], wantSplit = network[0] / network[1];
+  std::printf("outlets at 0 and 100 Pa: flows %.3e and %.3e m^3/s (the network's %.3e and %.3e); the daughters' speeds' ratio %.3f "
+              "(the network's %.3f); together %.3f of the network's\n",
+              f.rate[0], f.rate[1], network[0], network[1], split, wantSplit, rate / want);
+  EXPECT_GT(f.rate[0], f.rate[1]);
+  EXPECT_NEAR(split / wantSplit, 1.0, 0.15);
+  EXPECT_NEAR(rate / want, 1.0, 0.2);
 }
 
 TEST_F(OpenEndsTest, BadOpenEndsAreNamed) {
@@ -898,6 +945,11 @@ TEST_F(OpenEndsTest, BadOpenEndsAreNamed) {
     j = tube.scene;
     j["vessel"]["mesh"]["ends"][1]["role"] = "inlet";
     fails(j, "vessel.mesh.ends");
+    j = tube.scene;  // an outlet's own pressure at a flow outlet
+    j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"mean_speed_m_s", 0.1}, {"zone_length_m", 0.003}, {"ramp_s", 0.005}};
+    j["vessel"]["outlet"] = {{"condition", "flow"}};
+    j["vessel"]["mesh"]["ends"][1]["pressure_Pa"] = 50.0;
+    fails(j, "vessel.mesh.ends[1].pressure_Pa");
     const ObliqueTube bent = obliqueTube("bent", 1.5);
     fails(bent.scene, "vessel.inflow.zone_length_m");
     // (a gentler bend and short buffers pass: 0.29 mm off the axis in 3.1 mm)
@@ -914,6 +966,9 @@ TEST_F(OpenEndsTest, BadOpenEndsAreNamed) {
     j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"mean_speed_m_s", 0.1}, {"zone_length_m", 0.003}, {"ramp_s", 0.005}};
     j["vessel"]["outlet"] = {{"condition", "flow"}};
     fails(j, "vessel.outlet.condition");
+    j = tube->scene;
+    j["vessel"]["mesh"]["ends"][0]["pressure_Pa"] = 50.0;  // (the inlet's is vessel.inflow.pressure_Pa)
+    fails(j, "vessel.mesh.ends[0].pressure_Pa");
   }
 }
 

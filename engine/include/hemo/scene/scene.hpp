@@ -8,6 +8,7 @@
 #include <glm/vector_relational.hpp>
 
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -113,6 +114,8 @@ struct Vessel {
   // open ends).
   sim::OpenEnd meshInlet;
   std::vector<sim::OpenEnd> meshOutlets;
+  std::vector<std::size_t> meshOutletEntries;  // each outlet's entry in vessel.mesh.ends
+  std::map<std::size_t, float> meshEndPressures;  // entry -> its own pressure_Pa, where given
 };
 
 // The blood surface's grid (hemo/surface/marching_cubes.hpp).
