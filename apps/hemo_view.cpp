@@ -415,11 +415,32 @@ class Panel {
 
 // What the panel shows, refreshed from the batches' reports (and every few frames from the
 // counters, which are readbacks).
+// A volume in mL for the panel, three significant digits.
+std::string formatVolume(double millilitres) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3g", millilitres);
+  return text;
+}
+
 struct Readout {
   double fps = 0.0, stepsPerSecond = 0.0;
   std::uint32_t broken = 0, escaped = 0;
+  // Open ends: the net volume of blood in through the inlet and out through each outlet since
+  // the start (mL; from the GPU's crossing counts)
+  double openIn = 0.0;
+  std::vector<double> openOut;
   std::vector<glm::vec3> toolForce;  // N, the last step's, per tool
 };
+
+// Open ends: the readout's volumes (mL) from the GPU's counts (a readback, every few frames).
+void readOpenEnds(const hemo::sim::Simulation& sim, const hemo::scene::Scene& scene, Readout& r) {
+  if (!sim.openEnds()) return;
+  const auto o = sim.openCounts();
+  const double particle = 1e6 * double(scene.sph.particleMass()) / scene.sph.restDensity;
+  r.openIn = particle * (double(o.in) - double(o.inBack));
+  r.openOut.clear();
+  for (std::size_t e = 1; e < o.ends.size(); ++e) r.openOut.push_back(particle * (double(o.ends[e].enter) - double(o.ends[e].leave)));
+}
 
 }  // namespace
 
@@ -547,6 +568,7 @@ int main(int argc, char** argv) {
       readout.toolForce.assign(state.tools.size(), glm::vec3(0.0f));
       readout.broken = sim->brokenSprings();
       readout.escaped = sim->escapedParticles();
+      readOpenEnds(*sim, scene, readout);
     };
     attach();
 
@@ -668,6 +690,11 @@ int main(int argc, char** argv) {
         if (sim->wallParticles() > 0) ImGui::Text("broken springs %u of %u", readout.broken, sim->springs());
         ImGui::Text("escaped blood %u particles (%.3g mL)", readout.escaped,
                     1e6 * double(readout.escaped) * scene.sph.particleMass() / scene.sph.restDensity);
+        if (sim->openEnds()) {
+          std::string outlets;
+          for (double v : readout.openOut) outlets += (outlets.empty() ? "" : " + ") + formatVolume(v);
+          ImGui::Text("blood in %s mL, out %s mL", formatVolume(readout.openIn).c_str(), outlets.c_str());
+        }
         ImGui::Checkbox("pause (Space)", &state.paused);
         ImGui::SameLine();
         if (ImGui::Button("step (N)")) state.stepOnce = true;
@@ -767,6 +794,7 @@ int main(int argc, char** argv) {
       if (frames % 15 == 0) {
         readout.broken = sim->brokenSprings();
         readout.escaped = sim->escapedParticles();
+        readOpenEnds(*sim, scene, readout);
       }
 
       rec.begin();
@@ -808,6 +836,12 @@ int main(int argc, char** argv) {
                 static_cast<unsigned long long>(runSteps), sim->time(), frames / std::max(seconds, 1e-9));
     if (sim->wallParticles() > 0 || sim->fluidParticles() > 0) {
       std::printf("hemo-view: %u springs broken, %u particles escaped\n", sim->brokenSprings(), sim->escapedParticles());
+      if (sim->openEnds()) {
+        readOpenEnds(*sim, scene, readout);
+        std::string outlets;
+        for (double v : readout.openOut) outlets += (outlets.empty() ? "" : " + ") + formatVolume(v);
+        std::printf("hemo-view: open ends: blood in %s mL, out %s mL\n", formatVolume(readout.openIn).c_str(), outlets.c_str());
+      }
       if (sim->wallShearEnabled()) {
         const hemo::sim::Simulation::WallShearMaps maps = sim->readWallShear();
         double sum = 0.0, most = 0.0;
