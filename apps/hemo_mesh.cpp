@@ -39,7 +39,14 @@ int main(int argc, char** argv) {
     const double unit = args.number("--unit-m", 0.001, 1e-9, 1e3);
     const std::string out = args.text("--out");
     if (args.has("--sac-radius-m") != args.has("--sac-offset-m")) throw hemo::cli::UsageError("--sac-radius-m and --sac-offset-m go together");
-    auto write = [&](hemo::io::TriangleMesh mesh, const char* what) {
+    // Builds the surface (its parameter errors are usage errors) and writes it.
+    auto write = [&](const auto& build, const char* what) {
+      hemo::io::TriangleMesh mesh;
+      try {
+        mesh = build();
+      } catch (const std::invalid_argument& e) {
+        throw hemo::cli::UsageError(e.what());
+      }
       for (glm::dvec3& p : mesh.vertices) p /= unit;
       hemo::io::writeStl(out, mesh, std::string(what) + ", unit " + std::to_string(unit) + " m");
       std::printf("wrote %s: %zu triangles, %zu vertices, unit %g m\n", out.c_str(), mesh.triangles.size(), mesh.vertices.size(), unit);
@@ -61,13 +68,7 @@ int main(int argc, char** argv) {
       spec.cell = args.number("--cell-m", 0.0, 0.0, 1.0);
       spec.sacRadius = args.number("--sac-radius-m", 0.0, 0.0, 1.0);
       spec.sacOffset = args.number("--sac-offset-m", 0.0, 0.0, 1.0);
-      hemo::io::TriangleMesh mesh;
-      try {
-        mesh = hemo::scene::branchSurface(spec);
-      } catch (const std::invalid_argument& e) {
-        throw hemo::cli::UsageError(e.what());
-      }
-      write(std::move(mesh), "hemo-mesh branching vessel");
+      write([&] { return hemo::scene::branchSurface(spec); }, "hemo-mesh branching vessel");
       std::printf("ends at (0, 0, 0) m, (%g, %g, 0) m and (%g, %g, 0) m\n", spec.length, spec.spread, spec.length, -spec.spread);
       return 0;
     }
@@ -83,13 +84,7 @@ int main(int argc, char** argv) {
     spec.straight = args.number("--straight-m", 0.0, 0.0, 1.0);
     spec.around = static_cast<std::uint32_t>(args.count("--around", 64, 8, 4096));
     spec.along = static_cast<std::uint32_t>(args.count("--along", 0, 0, 100000));
-    hemo::io::TriangleMesh mesh;
-    try {
-      mesh = hemo::scene::vesselSurface(spec);
-    } catch (const std::invalid_argument& e) {
-      throw hemo::cli::UsageError(e.what());
-    }
-    write(std::move(mesh), "hemo-mesh vessel surface");
+    write([&] { return hemo::scene::vesselSurface(spec); }, "hemo-mesh vessel surface");
     std::printf("ends at (0, 0, 0) m and (%g, 0, 0) m\n", spec.length + 2.0 * spec.straight);
     return 0;
   } catch (const hemo::cli::UsageError& e) {

@@ -310,6 +310,31 @@ TEST_F(OpenEndsTest, ReverseFlowAtAVelocityInletKeepsTheBufferFull) {
   EXPECT_EQ(sim.lostParticles(), 0u);
 }
 
+// The open tube with a pressure inlet 300 Pa over a pressure outlet, in blood of 0.1 Pa s over
+// a background of 200 Pa; `pulse` (period s, waveform) makes the inlet's pressure pulsatile,
+// without a ramp. `lo`, `hi`: the lumen's middle along x, four spacings clear of both planes.
+struct PressureTube {
+  scene::Scene scene;
+  double lo = 0.0, hi = 0.0, length = 0.0;  // m; length: between the planes
+};
+PressureTube pressureTube(const std::string& name, double period = 0.0, const std::vector<double>& waveform = {}) {
+  nlohmann::json j = openTube();
+  j["fluid"]["viscosity_pa_s"] = 0.1;
+  j["fluid"]["background_pressure_Pa"] = 200.0;
+  j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"driven_by", "pressure"}, {"pressure_Pa", 300.0}, {"zone_length_m", 0.003},
+                           {"ramp_s", period > 0.0 ? 0.0 : 0.005}};
+  if (period > 0.0) j["vessel"]["inflow"]["pulse_period_s"] = period, j["vessel"]["inflow"]["waveform"] = waveform;
+  j["vessel"]["outlet"] = {{"condition", "pressure"}};
+  PressureTube t{scene::parseScene(j.dump(), name)};
+  const sim::Inflow& in = *t.scene.vessel->inflow;
+  const double dp = t.scene.sph.spacing;
+  const double outletPlane = double(in.open->outlets[0].origin.x) - in.open->outlets[0].length;
+  t.lo = in.zoneEnd + 4.0 * dp;
+  t.hi = outletPlane - 4.0 * dp;
+  t.length = outletPlane - in.zoneEnd;
+  return t;
+}
+
 // A pressure inlet and a pressure outlet 300 Pa apart over a 12 mm lumen (R = 2 mm = 4 dp,
 // blood of 0.1 Pa s so the flow is laminar and develops within the run: its slowest mode
 // decays as exp(-5.78 nu t / R^2), 7 ms): the flow the pressure drop drives is Poiseuille's,
@@ -318,20 +343,12 @@ TEST_F(OpenEndsTest, ReverseFlowAtAVelocityInletKeepsTheBufferFull) {
 // gradient is dp / L within 15% (it is flatter next to the planes, where the buffers'
 // pressure meets the lumen's over a kernel's width).
 TEST_F(OpenEndsTest, PressureDropDrivesPoiseuilleFlow) {
-  nlohmann::json j = openTube();
-  j["fluid"]["viscosity_pa_s"] = 0.1;
-  j["fluid"]["background_pressure_Pa"] = 200.0;
-  j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"driven_by", "pressure"}, {"pressure_Pa", 300.0},
-                           {"zone_length_m", 0.003}, {"ramp_s", 0.005}};
-  j["vessel"]["outlet"] = {{"condition", "pressure"}};
-  const scene::Scene scene = scene::parseScene(j.dump(), "open_tube");
-  const sim::Inflow& in = *scene.vessel->inflow;
-  sim::Simulation sim(ctx(), scene);
-  const float dp = scene.sph.spacing;
-  const double outletPlane = double(in.open->outlets[0].origin.x) - in.open->outlets[0].length;
-  const double lo = in.zoneEnd + 4.0 * dp, hi = outletPlane - 4.0 * dp;
+  const PressureTube tube = pressureTube("open_tube");
+  const sim::Inflow& in = *tube.scene.vessel->inflow;
+  sim::Simulation sim(ctx(), tube.scene);
+  const double lo = tube.lo, hi = tube.hi;
   const double R = in.radius, mu = 0.1;
-  const double nominal = 300.0 / (outletPlane - in.zoneEnd);
+  const double nominal = 300.0 / tube.length;
   // Averaged over 10 states 0.5 ms apart from t = 0.03 s (the pressure field carries acoustic
   // waves of tens of Pa): the lumen's pressure gradient (a least-squares line through the
   // middle's particles), and its particles' mean speed against Poiseuille's at their radii.
@@ -370,13 +387,8 @@ TEST_F(OpenEndsTest, PressureDropDrivesPoiseuilleFlow) {
 // particles hold bg + 300 w(t) at each state (within the pressure's change over a step), and
 // more blood comes in over the beats' high halves than over their low halves.
 TEST_F(OpenEndsTest, PulsatilePressureInletFollowsItsWaveform) {
-  nlohmann::json j = openTube();
-  j["fluid"]["viscosity_pa_s"] = 0.1;
-  j["fluid"]["background_pressure_Pa"] = 200.0;
-  j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"driven_by", "pressure"}, {"pressure_Pa", 300.0}, {"zone_length_m", 0.003},
-                           {"ramp_s", 0.0}, {"pulse_period_s", 0.02}, {"waveform", {2.0, 0.0}}};
-  j["vessel"]["outlet"] = {{"condition", "pressure"}};
-  const scene::Scene scene = scene::parseScene(j.dump(), "open_tube_pulsatile_pressure");
+  const PressureTube tube = pressureTube("open_tube_pulsatile_pressure", 0.02, {2.0, 0.0});
+  const scene::Scene& scene = tube.scene;
   const sim::Inflow& in = *scene.vessel->inflow;
   sim::Simulation sim(ctx(), scene);
   // (the buffer's pressure is the density pass's, at the start of the last step; the pressure
@@ -429,21 +441,14 @@ TEST_F(OpenEndsTest, PulsatilePressureInletFollowsItsWaveform) {
 // amplitude and 10 degrees in phase, and its mean against Poiseuille's within 10% (measured:
 // 0.99 in amplitude, 5 degrees ahead; the mean 0.99).
 TEST_F(OpenEndsTest, PulsatilePressureDrivesWomersleysFlow) {
-  nlohmann::json j = openTube();
-  j["fluid"]["viscosity_pa_s"] = 0.1;
-  j["fluid"]["background_pressure_Pa"] = 200.0;
   std::vector<double> waveform;
   for (int k = 0; k < 16; ++k) waveform.push_back(1.0 + 0.5 * std::cos(2.0 * std::numbers::pi * k / 16.0));
   const double period = 0.02, omega = 2.0 * std::numbers::pi / period;
-  j["vessel"]["inflow"] = {{"profile", "parabolic"}, {"driven_by", "pressure"}, {"pressure_Pa", 300.0}, {"zone_length_m", 0.003},
-                           {"ramp_s", 0.0}, {"pulse_period_s", period}, {"waveform", waveform}};
-  j["vessel"]["outlet"] = {{"condition", "pressure"}};
-  const scene::Scene scene = scene::parseScene(j.dump(), "open_tube_womersley");
+  const PressureTube tube = pressureTube("open_tube_womersley", period, waveform);
+  const scene::Scene& scene = tube.scene;
   const sim::Inflow& in = *scene.vessel->inflow;
   sim::Simulation sim(ctx(), scene);
-  const float dp = scene.sph.spacing;
-  const double outletPlane = double(in.open->outlets[0].origin.x) - in.open->outlets[0].length;
-  const double lo = in.zoneEnd + 4.0 * dp, hi = outletPlane - 4.0 * dp;
+  const double lo = tube.lo, hi = tube.hi;
   const double R = in.radius, mu = 0.1, rho = scene.sph.restDensity;
   // Least-squares fits of c0 + Re(c1 exp(i omega t)) to the gradient G = -dp/dx and the speed.
   const int states = 32;
