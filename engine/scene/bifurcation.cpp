@@ -62,8 +62,8 @@ LegFrame legFrame(const BifurcationGeometry::Segment& s) {
 
 BifurcationGeometry bifurcationGeometry(const AneurysmSpec& a) {
   const TubeSpec& t = a.tube;
-  if (!t.periodic) {
-    throw std::invalid_argument("bifurcation: the tube must be periodic along x (the merged flow returns through the seam)");
+  if (!t.periodic && !a.openEnds) {
+    throw std::invalid_argument("bifurcation: the tube must be periodic along x (the merged flow returns through the seam) or have open ends");
   }
   const double theta = a.branchAngle, len = a.branchLength, dp = t.spacing, L = t.length;
   if (!std::isfinite(theta) || !(theta > 0.0) || theta > 80.0 * std::numbers::pi / 180.0 + 1e-9) {
@@ -107,6 +107,11 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
     p.x -= L * std::floor((p.x - x0) / L);
     return p;
   };
+  // Open ends: the same vessel cut at the seam, its parent starting at x0 and ending at x0 + L;
+  // nothing links across the cut (the bins are not periodic), and the wall points within a
+  // spacing of either end are anchored (the vessel goes on beyond its cut, as the tube's end
+  // rings).
+  const double binPeriod = a.openEnds ? 1e3 * L : L;
   auto inside = [&](glm::dvec3 p, double r) { return bifurcationDistance(g, p, r) < -1e-6 * dp; };
   const double cy = t.centreYZ.x;
   auto mirror = [&](glm::dvec3 p) { return glm::dvec3(p.x, 2.0 * cy - p.y, p.z); };
@@ -114,10 +119,10 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
   // Wall candidates per layer: the legs' rings, then the joints' spheres.
   std::vector<glm::dvec3> pos, inward;
   std::vector<std::uint32_t> mirrorOf;  // each wall point's mirror image (itself on the plane)
-  Bins wallBins(x0, L, kLinkRadius * dp);
+  Bins wallBins(x0, binPeriod, kLinkRadius * dp);
   for (std::uint32_t l = 0; l < t.layers; ++l) {
     const double r = R + (l + 0.5) * dp;
-    Bins layerBins(x0, L, kLinkRadius * dp);
+    Bins layerBins(x0, binPeriod, kLinkRadius * dp);
     auto keep = [&](glm::dvec3 p, glm::dvec3 in, std::uint8_t element) {
       const auto id = std::uint32_t(pos.size());
       layerBins.add(p, id);
@@ -239,7 +244,7 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
   for (std::uint32_t i = 0; i < b.wall; ++i) {
     sim::WallPoint& w = net.points[i];
     w.mass = t.pointMass;
-    w.anchored = false;
+    w.anchored = a.openEnds && (pos[i].x - x0 < dp || x0 + L - pos[i].x < dp);
     if (mirrorOf[i] < i) continue;  // the image of a point already framed
     const bool onPlane = mirrorOf[i] == i;
     // At least sin(30 deg) along the normal (else the point keeps its built normal); on the
@@ -263,7 +268,7 @@ BifurcationBuild buildBifurcation(const AneurysmSpec& a) {
   // Fluid: rings per slice along every leg, then shells about every joint.
   ParticleSet& set = b.particles;
   for (std::uint32_t i = 0; i < b.wall; ++i) set.add(glm::vec3(pos[i]), t.fluidMass, float(HEMO_KIND_WALL), glm::vec3(inward[i]));
-  Bins fluidBins(x0, L, kLinkRadius * dp);
+  Bins fluidBins(x0, binPeriod, kLinkRadius * dp);
   std::uint32_t fluid = 0;
   // Mirror-symmetric as the wall: candidates from the upper half, each kept with its image,
   // those nearer the plane than half the clearance moved onto it and kept alone.

@@ -105,7 +105,7 @@ const std::vector<Field>& schema() {
        }},
       {"vessel", Kind::Section, "", 0, 0, false, Json::object(), "A vessel wall of wall particles joined by springs, filled with fluid; its axis runs along +x. Omit it for scenes without walls (no spring stage runs).", {},
        {
-           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, tube bulging all round halfway along, a bifurcation (two branches that split off and merge again halfway along a periodic tube), a surface mesh of the lumen (vessel.mesh), or none.", {"none", "tube", "saccular_aneurysm", "fusiform_aneurysm", "bifurcation", "mesh"}},
+           {"shape", Kind::Choice, "", 0, 0, false, "none", "Straight tube, tube with a spherical sac on its +z side halfway along, tube bulging all round halfway along, a bifurcation (two branches that split off and merge again halfway along the tube: a loop, periodic or with open ends; a vessel that branches into separate outlets is a mesh), a surface mesh of the lumen (vessel.mesh), or none.", {"none", "tube", "saccular_aneurysm", "fusiform_aneurysm", "bifurcation", "mesh"}},
            {"mesh", Kind::Section, "", 0, 0, false, Json::object(), "shape \"mesh\": the lumen's surface, as segmented from CT or MR angiography (docs/meshes.md). Its wall layers lie at (l + 1/2) dp outside the surface; start_m, length_m and radius_m come from the mesh and its inlet.", {},
             {
                 {"file", Kind::String, "", 0, 0, false, "", "STL (binary or ASCII) or OBJ file of the lumen's surface, relative to the scene file: one connected surface of triangles wound counter-clockwise seen from outside, open only at its ends."},
@@ -160,7 +160,7 @@ const std::vector<Field>& schema() {
                 {"hold_lumen_pressure", Kind::Bool, "", 0, 0, false, false, "The zone is also the blood supply: each step a zone particle's mass becomes m rho0 / rho (between its initial mass and max_mass_ratio times it), so the zone holds the lumen at fluid.background_pressure_Pa while the wall stretches and blood leaves through a rupture."},
                 {"max_mass_ratio", Kind::Number, "1", 1, 1e3, false, 4.0, "Cap of a particle's mass over its initial mass under hold_lumen_pressure."},
             }},
-           {"outlet", Kind::Section, "", 0, 0, false, Json::object(), "Open ends (tubes and aneurysms along x, and mesh vessels with one inlet and one or more outlets; with vessel.inflow, on a domain whose x axis is not periodic): the inflow zone is the inlet buffer, fed by an image of each particle that leaves it into the lumen; each outlet's buffer moves with the inflow's velocity profile and flow rate (one outlet) or holds a pressure, each along its end's axis, and fluid past any end leaves the simulation (its slot parked for the buffers to reuse). The lumen's mass balance is counted exactly (hemo-run's summary, open_*).", {},
+           {"outlet", Kind::Section, "", 0, 0, false, Json::object(), "Open ends (tubes, aneurysms and the bifurcation loop along x, and mesh vessels with one inlet and one or more outlets; with vessel.inflow, on a domain whose x axis is not periodic): the inflow zone is the inlet buffer, fed by an image of each particle that leaves it into the lumen; each outlet's buffer moves with the inflow's velocity profile and flow rate (one outlet) or holds a pressure, each along its end's axis, and fluid past any end leaves the simulation (its slot parked for the buffers to reuse). The lumen's mass balance is counted exactly (hemo-run's summary, open_*).", {},
             {
                 {"condition", Kind::Choice, "", 0, 0, false, "none", "none: the vessel is periodic and recycles its outflow (vessel.inflow); flow: open ends, the outlet buffer drawing the inlet's flow rate; pressure: open ends, each outlet buffer holding pressure_Pa and moving at the lumen's own axial velocity next to it, radius by radius (zero gradient); a vessel with several outlets needs it.", {"none", "flow", "pressure"}},
                 {"pressure_Pa", Kind::Number, "Pa", -1e6, 1e6, false, 0.0, "condition pressure: the outlet buffers' pressure over fluid.background_pressure_Pa (every outlet's)."},
@@ -471,10 +471,6 @@ void parseOutlet(const Checker& c, const Json& out, const Json& inflowSection, S
   if (!w.inflow) c.fail("vessel.outlet", "open ends need a vessel.inflow (the inlet): give vessel.inflow.profile");
   if (s.sph.periodic[0]) c.fail("domain.periodic", "a vessel with open ends (vessel.outlet) must not be periodic along x");
   const bool meshed = w.shape == Vessel::Shape::Mesh;
-  if (w.shape == Vessel::Shape::Bifurcation) {
-    c.fail("vessel.outlet", "open ends apply to a tube, an aneurysm or a mesh vessel; the analytic bifurcation is a loop on a periodic "
-                            "axis (for a vessel that branches into open outlets, use a mesh: hemo-mesh --branch-angle-deg writes one)");
-  }
   if (w.inflow->holdPressure) {
     c.fail("vessel.inflow.hold_lumen_pressure", "cannot be used with open ends (the zone's mass supply is for a closed, recycled loop)");
   }
@@ -838,13 +834,25 @@ void parseVessel(const Checker& c, const Json& v, const Json& raw, Scene& s, con
   }
   if (w.shape == Vessel::Shape::Bifurcation) {
     if (!given("branch_length_m") || !(w.branchLength > 0.0f)) c.fail("vessel.branch_length_m", "is required (and positive) for a bifurcation");
-    if (!w.periodic) c.fail("domain.periodic", "a bifurcation needs a periodic x axis (the merged flow returns through the seam)");
+    const bool open = w.inflow && w.inflow->open;
+    if (!w.periodic && !open) {
+      c.fail("domain.periodic", "a bifurcation needs a periodic x axis (the merged flow returns through the seam) or open ends (vessel.outlet)");
+    }
     try {
       const BifurcationGeometry g = bifurcationGeometry(vesselSpec(w, s.sph));
       halfWidth = float(g.joints[1].y - w.start.y) + w.radius + room;
       if (w.inflow && float(g.joints[0].x) - w.radius < w.inflow->zoneEnd) {
         c.fail("vessel.inflow.zone_length_m", "the inflow zone (to x = " + fmt(w.inflow->zoneEnd) + " m) must end a radius before the split at x = " +
                                                   fmt(g.joints[0].x) + " m (lengthen the tube or shorten the branches)");
+      }
+      // (open ends: the outlet's buffer likewise, a radius past the merge)
+      if (open) {
+        const sim::OpenEnd& outlet = w.inflow->open->outlets[0];
+        const float plane = outlet.origin.x - outlet.length;
+        if (plane - w.radius < float(g.joints[2].x)) {
+          c.fail("vessel.outlet.buffer_length_m", "the outlet buffer (from x = " + fmt(plane) + " m) must start a radius after the merge at x = " +
+                                                      fmt(g.joints[2].x) + " m (lengthen the tube or shorten the branches)");
+        }
       }
     } catch (const std::invalid_argument& e) {
       c.fail("vessel", e.what());

@@ -237,6 +237,36 @@ TEST(Bifurcation, SceneFilesAreCheckedAndBuild) {
   nlohmann::json shortLoop = j;
   shortLoop["vessel"]["branch_length_m"] = 0.004;
   expectError(shortLoop, {"vessel", "part at the bends"});
+
+  // With open ends the loop is cut at the seam: no spring crosses the cut, and the wall
+  // points within a spacing of either end are anchored (and only those).
+  nlohmann::json open = j;
+  open["domain"].erase("periodic");
+  open["vessel"]["outlet"] = {{"condition", "pressure"}};
+  const Scene os = parseScene(open.dump(), "b_open.json");
+  const SceneBuild ob = buildScene(os);
+  ASSERT_TRUE(ob.network);
+  const double dp = os.sph.spacing, L = os.vessel->length;
+  std::size_t anchoredStart = 0, anchoredEnd = 0, wrong = 0;
+  for (std::uint32_t i = 0; i < ob.wall; ++i) {
+    const double x = ob.particles.positions[i].x;
+    const bool nearEnd = x < dp || x > L - dp;
+    wrong += ob.network->points[i].anchored != nearEnd;
+    anchoredStart += ob.network->points[i].anchored && x < dp;
+    anchoredEnd += ob.network->points[i].anchored && x > L - dp;
+  }
+  EXPECT_EQ(wrong, 0u);
+  EXPECT_GT(anchoredStart, 20u);
+  EXPECT_GT(anchoredEnd, 20u);
+  double longest = 0.0;
+  for (const auto& sp : ob.network->springs) {
+    longest = std::max(longest, double(glm::length(ob.particles.positions[sp.a] - ob.particles.positions[sp.b])));
+  }
+  EXPECT_LT(longest, 2.0 * dp) << "a spring links across the cut";
+  EXPECT_EQ(countEscaped(os, ob.particles.positions, ob.particles.velocities), 0u);
+  nlohmann::json longBuffer = open;
+  longBuffer["vessel"]["outlet"]["buffer_length_m"] = 0.002;
+  expectError(longBuffer, {"vessel.outlet.buffer_length_m", "after the merge"});
 }
 
 }  // namespace

@@ -4,6 +4,9 @@
 // (an arterial loop, like a fenestration or a segment of the circle of Willis). The loop sits
 // halfway along a periodic parent, so what leaves the merge comes back through the periodic
 // seam to the inflow zone: the vessel runs for as long as wanted with a fixed particle count.
+// With open ends (AneurysmSpec::openEnds) the same vessel is cut at the seam: the parent
+// starts at x0 and ends at x0 + L, nothing links across the cut, and the wall points within a
+// spacing of either end are anchored.
 //
 // The lumen is a union of capsules (cylinders with spherical ends) of the tube's radius: the
 // parent (from the merge, across the seam, to the split) and the four branch legs, with the
@@ -38,7 +41,8 @@ struct BifurcationGeometry {
   double period = 0.0;             // m along x
 };
 
-// Throws std::invalid_argument on bad specs (naming the parameter). Needs a periodic tube,
+// Throws std::invalid_argument on bad specs (naming the parameter). Needs a periodic tube (or
+// open ends),
 // theta in (0, 80] degrees, and branches far enough apart at the bends that the loop opens
 // (2 L sin theta >= 2 (R + layers dp) + dp) and short enough to fit in the tube with a
 // straight parent of at least 4 dp.
