@@ -32,7 +32,7 @@
 // lies the lumen. The inlet buffer moves at the inflow's profile and speed (the velocity
 // inlet), a single outlet's buffer at the same flow rate (a flow-controlled outlet) or, as a
 // pressure end (below), holds a pressure (several outlets are pressure ends: a flow split
-// would need its ratios). Fluid past either end, or out of the domain through a tear,
+// would need its ratios). Fluid past any end, or out of the domain through a tear,
 // is parked (HEMO_KIND_PARKED of interface/sph.h: a free fluid slot far outside the domain,
 // which no pass sees), and every particle that leaves a buffer into the lumen gets its image a
 // buffer length back along the end's axis, at the buffer's far end, in a parked slot
