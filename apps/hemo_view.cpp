@@ -432,6 +432,14 @@ struct Readout {
   std::vector<glm::vec3> toolForce;  // N, the last step's, per tool
 };
 
+// The readout's open-end volumes as the panel and the summary print them:
+// "blood in V mL, out V1 + V2 mL" (three significant digits).
+std::string openEndsLine(const Readout& r) {
+  std::string outlets;
+  for (double v : r.openOut) outlets += (outlets.empty() ? "" : " + ") + formatVolume(v);
+  return "blood in " + formatVolume(r.openIn) + " mL, out " + outlets + " mL";
+}
+
 // Open ends: the readout's volumes (mL) from the GPU's counts (a readback, every few frames).
 void readOpenEnds(const hemo::sim::Simulation& sim, const hemo::scene::Scene& scene, Readout& r) {
   if (!sim.openEnds()) return;
@@ -690,11 +698,7 @@ int main(int argc, char** argv) {
         if (sim->wallParticles() > 0) ImGui::Text("broken springs %u of %u", readout.broken, sim->springs());
         ImGui::Text("escaped blood %u particles (%.3g mL)", readout.escaped,
                     1e6 * double(readout.escaped) * scene.sph.particleMass() / scene.sph.restDensity);
-        if (sim->openEnds()) {
-          std::string outlets;
-          for (double v : readout.openOut) outlets += (outlets.empty() ? "" : " + ") + formatVolume(v);
-          ImGui::Text("blood in %s mL, out %s mL", formatVolume(readout.openIn).c_str(), outlets.c_str());
-        }
+        if (sim->openEnds()) ImGui::TextUnformatted(openEndsLine(readout).c_str());
         ImGui::Checkbox("pause (Space)", &state.paused);
         ImGui::SameLine();
         if (ImGui::Button("step (N)")) state.stepOnce = true;
@@ -838,9 +842,7 @@ int main(int argc, char** argv) {
       std::printf("hemo-view: %u springs broken, %u particles escaped\n", sim->brokenSprings(), sim->escapedParticles());
       if (sim->openEnds()) {
         readOpenEnds(*sim, scene, readout);
-        std::string outlets;
-        for (double v : readout.openOut) outlets += (outlets.empty() ? "" : " + ") + formatVolume(v);
-        std::printf("hemo-view: open ends: blood in %s mL, out %s mL\n", formatVolume(readout.openIn).c_str(), outlets.c_str());
+        std::printf("hemo-view: open ends: %s\n", openEndsLine(readout).c_str());
       }
       if (sim->wallShearEnabled()) {
         const hemo::sim::Simulation::WallShearMaps maps = sim->readWallShear();
