@@ -41,8 +41,14 @@ uint hemo_list_ranges(HemoGrid grid, ivec3 c, vec3 lo, vec3 hi, bool fluid, floa
   const vec3 cellM = 1.0 / grid.invCell.xyz;  // cell size per axis, m
   const int hiX = int(dims.x) - 1;
   const int reachX = int(ceil(radius * grid.invCell.x));  // x-cells within R either way
-  const int cxLo = int(floor(lo.x));
-  const int cxHi = int(floor(hi.x));
+  // On a bounded x axis a box outside the grid is taken at the edge cell it is clamped into,
+  // in float before the int conversion: from its own far coordinate the trimmed range missed
+  // the edge cell, so it did not list the particles there that listed it (the lists must be
+  // symmetric: each pair's forces act on both).
+  const bool boundedX = grid.periodic.x == 0u;
+  const float cellsX = float(hiX);
+  const int cxLo = int(boundedX ? clamp(floor(lo.x), 0.0, cellsX) : floor(lo.x));
+  const int cxHi = int(boundedX ? clamp(floor(hi.x), 0.0, cellsX) : floor(hi.x));
   const float trim2 = radius * radius * 1.0001;
   uint count = 0u;
   for (int dz = -2; dz <= 2; ++dz) {
@@ -100,12 +106,12 @@ uint hemo_list_ranges(HemoGrid grid, ivec3 c, vec3 lo, vec3 hi, bool fluid, floa
         continue;
       }
 #endif
+      if (boundedX) {  // the edge cells hold the particles clamped into them
+        xLoF = clamp(xLoF, 0.0, cellsX);
+        xHiF = clamp(xHiF, 0.0, cellsX);
+      }
       int xLo = int(floor(xLoF));
       int xHi = int(floor(xHiF));
-      if (grid.periodic.x == 0u) {  // the edge cells hold the particles clamped into them
-        xLo = clamp(xLo, 0, hiX);
-        xHi = clamp(xHi, 0, hiX);
-      }
       xLo = max(xLo, cxLo - reachX);
       xHi = min(xHi, min(cxHi + reachX, xLo + hiX));  // never a cell twice round a periodic x axis
       // The x-cells [xLo, xHi] as up to two contiguous ranges on the grid (the second, empty
