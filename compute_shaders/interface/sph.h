@@ -591,7 +591,10 @@
 // integers: the order of the sum cannot change a bit) and one workgroup reduces the sums
 // (sph/dfsph_reduce.comp): the first prediction of a solve and every reduction always run;
 // each later (correction, prediction) pair is a gated region (hemo::gpu::DispatchGate) that
-// the reduction before it opens or closes, so the GPU decides how many run. The host records
+// the reduction before it opens or closes, so the GPU decides how many run. The first region
+// of each solve always opens (HEMO_DFSPH_MIN_*_CORRECTIONS): with none, a step whose mean
+// was within the tolerance had no pressure at all, and a local compression grew unchecked
+// until the mean passed it (a column at rest fell freely between the corrections). The host records
 // R regions per solve, R at most the cap (hemo::sim::SphSolver::setRecordedIterations): a
 // solve still open after the R-th, below the cap, marks the batch (HEMO_DFSPH_DEPTH_DEEPER)
 // and hemo::sim::Simulation::run runs the batch again from its start with the cap's worth
@@ -600,6 +603,10 @@
 #define HEMO_DFSPH_ERROR_SCALE 1048576.0
 #define HEMO_DFSPH_MODE_DENSITY 0u
 #define HEMO_DFSPH_MODE_DIVERGENCE 1u
+// Corrections each solve runs even where its first prediction is within the tolerance (as
+// Bender & Koschier 2017's loops do; docs/physics.md, "The pressure solver").
+#define HEMO_DFSPH_MIN_DENSITY_CORRECTIONS 1u
+#define HEMO_DFSPH_MIN_DIVERGENCE_CORRECTIONS 1u
 #define HEMO_DFSPH_BINDING_POSITIONS 0   // texel vec4 (x, m)
 #define HEMO_DFSPH_BINDING_VELOCITIES 1  // predict: texel vec4 (v, kind); correct: storage (its own record)
 #define HEMO_DFSPH_BINDING_ACCEL 2       // predict: texel vec4; correct: storage (its own record)

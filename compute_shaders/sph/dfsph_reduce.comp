@@ -3,7 +3,8 @@
 // compression of the last prediction over the fluid, from sph/dfsph_predict.comp's
 // fixed-point partials (summed as 64-bit integers, so in any order to the same bits), and the
 // decision on the next gated region (a correction and the prediction after it): open while the
-// mean exceeds the tolerance and the cap allows another correction. The region it closes runs
+// mean exceeds the tolerance, or fewer than the solve's minimum corrections have run, and the
+// cap allows another correction. The region it closes runs
 // no workgroups, and the reductions after it find the solve inactive and keep it closed.
 // The stats (HEMO_DFSPH_STAT_*) count what the solves did, for the host to read after a batch.
 #extension GL_GOOGLE_include_directive : require
@@ -26,6 +27,7 @@ layout(push_constant) uniform Push {
   uint slots;          // the gate's slots
   uint statBase;       // the solve's stats: 0 density, HEMO_DFSPH_STAT_COUNT divergence
   uint recorded;       // the gated regions the host recorded after this solve's first prediction
+  uint minIterations;  // corrections run even where the mean is within the tolerance
 } pc;
 
 #include "common/gate.glsl"
@@ -69,7 +71,7 @@ void main() {
       stats(HEMO_DFSPH_STAT_ITERATIONS) = 0u;
     }
     stats(HEMO_DFSPH_STAT_ERROR) = floatBitsToUint(error);
-    open = !converged && pc.iteration < pc.maxIterations;
+    open = (!converged || pc.iteration < pc.minIterations) && pc.iteration < pc.maxIterations;
     if (open) {
       stats(HEMO_DFSPH_STAT_ITERATIONS) += 1u;
       stats(HEMO_DFSPH_STAT_TOTAL) += 1u;

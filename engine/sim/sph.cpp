@@ -71,7 +71,7 @@ struct DfsphCorrectPush {  // sph/dfsph_correct.comp
 struct DfsphReducePush {  // sph/dfsph_reduce.comp
   std::uint32_t partialCount, fluid, iteration, maxIterations;
   float tolerance;
-  std::uint32_t slots, statBase, recorded;
+  std::uint32_t slots, statBase, recorded, minIterations;
 };
 struct DtReducePush {  // sph/dt_reduce.comp
   std::uint32_t wallBase;  // the wall stage's first partial
@@ -1439,7 +1439,9 @@ void SphSolver::recordPressureSolveOver(gpu::CommandRecorder& rec, std::uint32_t
   auto reduce = [&](std::uint32_t iteration) {
     rec.dispatch(*dfsphReduce_, dfsphReduceSet_,
                  DfsphReducePush{partials, particles_->fluidCount(), iteration, cap, settings_.solverTolerance,
-                                 pressureGate_.slots(), statBase, recorded},
+                                 pressureGate_.slots(), statBase, recorded,
+                                 mode == HEMO_DFSPH_MODE_DIVERGENCE ? HEMO_DFSPH_MIN_DIVERGENCE_CORRECTIONS
+                                                                    : HEMO_DFSPH_MIN_DENSITY_CORRECTIONS},
                  dfsphReduce_->groupsFor(1u));
     rec.computeToCompute();  // the stats; the gate's arguments before the region's indirect reads
   };

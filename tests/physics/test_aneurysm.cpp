@@ -154,9 +154,9 @@ TEST_F(AneurysmTest, SacRupturesFirstAndBloodEscapes) {
 // The large-step solver's sac tears near WCSPH's lumen pressure. The coarse aneurysm with
 // test 5's inflow and supply, the lumen pressure raised to 1.5 P*_sac over 30 ms, under WCSPH
 // (the wall at its own step) and under DFSPH (the wall in 8 substeps): the background pressure
-// at the first broken spring (from per-step statistics). Measured on lavapipe: DFSPH at 0.88
-// of WCSPH's (0.72 with 4 substeps, 1.05 with 16), in an eighth of the steps; with p = p_bg in
-// DFSPH's density pass (its first model) at 0.58-0.60. A tear's onset under the flow's loads
+// at the first broken spring (from per-step statistics). Measured on lavapipe: DFSPH at 0.855
+// of WCSPH's, in an eighth of the steps; with p = p_bg in DFSPH's density pass (its first
+// model) at 0.58-0.60. A tear's onset under the flow's loads
 // varies by some 10-20% with the step and the device's rounding, so the test asks for 30%,
 // which the first model fails; scenes/aneurysm.json's 10% goal is measured with hemo-run
 // (docs/physics.md, "Not yet" under "The pressure solver").
