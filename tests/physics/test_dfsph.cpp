@@ -17,6 +17,7 @@
 #include <cstring>
 #include <optional>
 #include <string>
+#include <nlohmann/json.hpp>
 
 namespace hemo::test {
 namespace {
@@ -92,21 +93,30 @@ TEST_F(DfsphTest, DamBreakFrontFollowsMartinAndMoyceAtALargerStep) {
   expectConverged(sim);
 }
 
+// A column of 0.1 m of water in a closed tank of 8 x 8 x 11 cm (dp = 1 cm, body-centred) under
+// DFSPH, at most `maxDt` per step, settled with damping until `settleUntil` (s).
+scene::Scene dfsphColumn(double maxDt, double settleUntil) {
+  nlohmann::json j = nlohmann::json::parse(R"({
+    "scene": "hydrostatic_dfsph",
+    "particles": { "spacing_m": 0.01 },
+    "fluid": { "density_kg_m3": 1000, "viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.4, "solver": "dfsph",
+               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.1], "lattice": "bcc" } ] },
+    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.11], "layers": 3 } ] },
+    "time": { "steps_per_batch": 64, "settle_damping_1_s": 30 },
+    "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.12, 0.12, 0.15] }
+  })");
+  j["time"]["max_dt_s"] = maxDt;
+  j["time"]["settle_until_s"] = settleUntil;
+  return scene::parseScene(j.dump(), "hydrostatic_dfsph");
+}
+
 // A column of 0.1 m (body-centred, settled with damping to 0.8 s, as WCSPH's
 // SphPhysicsTest.HydrostaticColumnLoadsTheFloorWithRhoGH): the fluid's load on the tank from
 // the pressure of each step's impulses, averaged over the steps from 0.8 s to 1.0 s weighted by
 // their dt (a single step's is not the hydrostatic pressure: interface/sph.h), carries the
 // fluid's weight within 2% and is rho0 g H within 5% (per floor area).
 TEST_F(DfsphTest, ColumnLoadsTheFloorWithRhoGH) {
-  scene::Scene scene = scene::parseScene(R"({
-    "scene": "hydrostatic_dfsph",
-    "particles": { "spacing_m": 0.01 },
-    "fluid": { "density_kg_m3": 1000, "viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.4, "solver": "dfsph",
-               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.1], "lattice": "bcc" } ] },
-    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.11], "layers": 3 } ] },
-    "time": { "max_dt_s": 0.004, "steps_per_batch": 64, "settle_damping_1_s": 30, "settle_until_s": 0.8 },
-    "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.12, 0.12, 0.15] }
-  })", "hydrostatic_dfsph");
+  scene::Scene scene = dfsphColumn(0.004, 0.8);
   sim::Simulation sim(ctx(), scene);
   const double g = 9.81, rho0 = 1000.0, H = 0.1, area = 0.08 * 0.08, h = scene.sph.h();
   sim::RunOptions settle;
@@ -184,15 +194,7 @@ TEST_F(DfsphTest, BloodAtRestInTheAneurysmStaysAtRestAtASmallStep) {
 // corrected at least once it blew up: by 0.4 s its median particle moved at 1 m/s and 456 had
 // left the tank, some 1 m up; now the fastest moves at 0.19 m/s (lavapipe).
 TEST_F(DfsphTest, ColumnStaysInItsTankAtASmallStep) {
-  scene::Scene scene = scene::parseScene(R"({
-    "scene": "hydrostatic_dfsph_small_step",
-    "particles": { "spacing_m": 0.01 },
-    "fluid": { "density_kg_m3": 1000, "viscosity_pa_s": 0.5, "expected_max_speed_m_s": 1.4, "solver": "dfsph",
-               "blocks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.1], "lattice": "bcc" } ] },
-    "boundary": { "tanks": [ { "min_m": [0, 0, 0], "max_m": [0.08, 0.08, 0.11], "layers": 3 } ] },
-    "time": { "max_dt_s": 0.0002, "steps_per_batch": 100, "settle_damping_1_s": 30, "settle_until_s": 0.2 },
-    "domain": { "min_m": [-0.04, -0.04, -0.04], "max_m": [0.12, 0.12, 0.15] }
-  })", "hydrostatic_dfsph_small_step");
+  scene::Scene scene = dfsphColumn(0.0002, 0.2);
   sim::Simulation sim(ctx(), scene);
   sim::RunOptions opt;
   opt.until = 0.4;
