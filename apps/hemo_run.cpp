@@ -486,6 +486,7 @@ int main(int argc, char** argv) {
       const hemo::sim::PressureSolveStats st = sim.solver().readPressureSolveStats();
       const hemo::sim::PressureSolveStats div = sim.solver().readPressureSolveStats(true);
       summary["solver_tolerance"] = scene.sph.solverTolerance;
+      summary["solver_compressible"] = scene.sph.solverCompressible;
       summary["solver_max_iterations"] = scene.sph.solverMaxIterations;
       summary["solver_iterations_mean"] = st.meanIterations();
       summary["solver_iterations_max"] = st.maxIterations;

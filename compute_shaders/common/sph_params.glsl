@@ -1,5 +1,5 @@
 // The SPH parameter block (see interface/sph.h for units), bound as a uniform buffer (its
-// layout is the same under std140 and std430: scalars and vec4 only, 288 bytes).
+// layout is the same under std140 and std430: scalars and vec4 only, 304 bytes).
 struct SphParams {
   vec4 gravity;
   float h;
@@ -45,6 +45,10 @@ struct SphParams {
   uvec4 gridDims;
   uvec4 gridPeriodic;
   vec4 carreau;  // non-Newtonian blood: (mu_inf, mu_0 - mu_inf, lambda, a) (interface/sph.h, "Viscosity")
+  float solveCompliance;  // DFSPH: the density solve's compliance 1 / c0^2 (s^2 m^-2; interface/sph.h)
+  float solvePad0;
+  float solvePad1;
+  float solvePad2;
 };
 
 // Declares `params` at a binding slot. A uniform buffer, not a storage buffer: llvmpipe reads a

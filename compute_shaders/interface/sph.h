@@ -112,6 +112,9 @@
 //   uvec4 gridPeriodic       candidate ranges with, as the list build does from its push constants
 //   vec4  carreau            non-Newtonian blood: (mu_inf, mu_0 - mu_inf (Pa s, over the lattice
 //                            factor), lambda (s), a); all 0 for Newtonian blood (see "Viscosity")
+//   float solveCompliance    DFSPH: the density solve's compliance 1 / c0^2 (s^2 m^-2; see "The
+//                            pressure solver"), 0 when fluid.solver_compressible is false
+//   float solvePad0..2       0
 
 // sph/build_list.comp: the neighbour (Verlet) list, over a grid of two parts (interface/grid.h:
 // the fluid's slots first, then the boundary and wall particles', each part by cell).
@@ -578,9 +581,14 @@
 //  density (mode 0), after the force pass: the predicted velocities v*_i = v_i + dt a_i lose
 //    the compression they would cause over the step dt,
 //      predict  rho*_i = rho_i + dt sum_j m_j (v*_i - v*_j) . gradW_ij,
-//               e_i = max(rho*_i - rho0, 0),  k_i = kappa_i / rho_i = e_i / (dt^2 D_i)
+//               e_i = max(rho*_i - rho0 - p_i C, 0),  k_i = kappa_i / rho_i = e_i / (dt^2 D_i + rho_i^2 C)
 //      correct  a_i -= sum_{j fluid} m_j (k_i + k_j) gradW_ij + sum_b m_b k_i gradW_ib
-//    to a mean e_i / rho0 at most the tolerance. The integrator's symplectic Euler step with
+//    to a mean e_i / rho0 at most the tolerance, p_i = sum of k_i rho_i^2 over the solve's
+//    corrections so far (kappa.w) and C = solveCompliance = 1 / c0^2: the compression the Tait
+//    law, linearised at rho0, gives that pressure stays (C = 0, fluid.solver_compressible
+//    false: none). Far above the acoustic step (dt^2 D_i >> rho_i^2 C) this is DFSPH's
+//    constant-density solve; far below it p_i -> c0^2 (rho*_i - rho0), WCSPH's pressure, with
+//    the compression held in the density from step to step instead of taken out within one. The integrator's symplectic Euler step with
 //    a = a_np + a_p is then the solver's v = v*, x += dt v. state.y shows the density pass's
 //    pressure plus that of the step's impulses over dt: the divergence solve's (sum of k_i)
 //    rho_i^2 / dt plus the density solve's sum of k_i rho_i^2, so its time average is the pressure that carries the fluid's
@@ -614,7 +622,7 @@
 #define HEMO_DFSPH_BINDING_STATE 4       // predict: storage vec4 (rho, p), its own record; correct: unused
 #define HEMO_DFSPH_BINDING_PAIR_COUNT 5  // the density pass's interacting pairs (HEMO_DENSITY_BINDING_PAIR_*)
 #define HEMO_DFSPH_BINDING_PAIR_LIST 6
-#define HEMO_DFSPH_BINDING_KAPPA 7       // vec4 (k_i, p_i, divergence sum of k_i, 0): predict's own record; correct reads (texel)
+#define HEMO_DFSPH_BINDING_KAPPA 7       // vec4 (k_i, p_i, divergence sum of k_i, the density solve's own p_i): predict's own record; correct reads (texel)
 #define HEMO_DFSPH_BINDING_VISCOUS_VEL 8  // correct: storage, its own record (the divergence solve's v)
 #define HEMO_DFSPH_CORRECT_BINDING_COUNT 9
 #define HEMO_DFSPH_BINDING_PARTIALS 9    // predict: uint per workgroup, sum of the errors in fixed point

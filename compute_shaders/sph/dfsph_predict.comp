@@ -2,9 +2,11 @@
 // DFSPH's prediction (interface/sph.h, "The pressure solver"). Density mode: for each fluid
 // slot, the density the predicted velocities v* = v + dt a would give at the end of the step,
 //   rho*_i = rho_i + dt sum_j m_j (v*_i - v*_j) . gradW_ij
-// (boundary neighbours move with their own velocity), its compression e_i = max(rho*_i - rho0, 0),
-// and the stiffness that removes it when i alone responds (Bender & Koschier 2017, eq. 8-9),
-//   kappa_i / rho_i = e_i / (dt^2 max(|sum_j m_j gradW_ij|^2 + sum_{j fluid} |m_j gradW_ij|^2, floor)).
+// (boundary neighbours move with their own velocity), its residual
+// e_i = max(rho*_i - rho0 - p_i C, 0) (p_i the density solve's own pressure so far, C its
+// compliance 1 / c0^2, 0 when incompressible), and the stiffness that removes it when i alone
+// responds (Bender & Koschier 2017, eq. 8-9, with the compliance in the diagonal),
+//   kappa_i / rho_i = e_i / (dt^2 max(|sum_j m_j gradW_ij|^2 + sum_{j fluid} |m_j gradW_ij|^2, floor) + rho_i^2 C).
 // Each workgroup sums e_i / rho0 in fixed point (HEMO_DFSPH_ERROR_SCALE) into its partial,
 // which sph/dfsph_reduce.comp reduces to the mean. The slots [0, n): fluid ones only.
 // Divergence mode: the velocities' compressive divergence d_i = max(sum_j m_j (v_i - v_j) .
@@ -34,7 +36,7 @@ HEMO_SPH_PARAMS_UNIFORM(HEMO_DFSPH_BINDING_PARAMS);
 layout(std430, binding = HEMO_DFSPH_BINDING_STATE) buffer State { vec4 state[]; };
 layout(binding = HEMO_DFSPH_BINDING_PAIR_COUNT) uniform usamplerBuffer pairCounts;
 layout(binding = HEMO_DFSPH_BINDING_PAIR_LIST) uniform usamplerBuffer pairList;
-// (k_i, p_i, the divergence solve's sum of k_i, 0): its own record only
+// (k_i, p_i, the divergence solve's sum of k_i, the density solve's own pressure): its own record only
 layout(std430, binding = HEMO_DFSPH_BINDING_KAPPA) buffer Kappa { vec4 kappa[]; };
 layout(std430, binding = HEMO_DFSPH_BINDING_PARTIALS) writeonly buffer Partials { uint partials[]; };
 layout(std140, binding = HEMO_DFSPH_BINDING_DT) uniform Dt { vec2 dtMinMax; };
@@ -111,15 +113,18 @@ void main() {
         e = rate * clock.lastDt / rho0;
       } else {
         const vec4 si = state[i];
-        const float compression = max(si.x + gDt * gDivergence - rho0, 0.0);
         // (dt = 0 once the run has ended: no stiffness, no error, and the last pressure kept)
         const bool running = gDt > 0.0;
         const float rho2 = si.x * si.x;
-        const float p = !running ? last.y : pc.iteration == 0u ? last.z * rho2 / gDt : last.y + last.x * rho2;
-        kappa[i] = vec4(running ? compression / (gDt * gDt * d) : 0.0, p, last.z, 0.0);
+        const bool first = pc.iteration == 0u;
+        const float p = !running ? last.y : first ? last.z * rho2 / gDt : last.y + last.x * rho2;
+        // the density solve's own pressure, which the compliance holds as compression
+        const float own = !running ? last.w : first ? 0.0 : last.w + last.x * rho2;
+        const float residual = max(si.x + gDt * gDivergence - rho0 - own * params.solveCompliance, 0.0);
+        kappa[i] = vec4(running ? residual / (gDt * gDt * d + rho2 * params.solveCompliance) : 0.0, p, last.z, own);
         // (the density pass's pressure, recomputed: this pass overwrites it)
         state[i].y = p + hemo_expansion_pressure(si.x, hemo_background_pressure(clock.time, params), params);
-        e = running ? compression / rho0 : 0.0;
+        e = running ? residual / rho0 : 0.0;
       }
       // (NaN counts as the largest error, so a blown-up solve never reads as converged)
       fixedError = uint(isnan(e) ? HEMO_DFSPH_ERROR_SCALE : min(e, 1.0) * HEMO_DFSPH_ERROR_SCALE + 0.5);

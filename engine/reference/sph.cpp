@@ -331,7 +331,8 @@ double dfsphDenominator(const std::vector<Pair>& pairs, double floor) {
 }  // namespace
 
 // The iteration both solves share: `corrections` + 1 predictions, each giving every fluid
-// particle its stiffness and error (predict(i, u) -> {k_i, e_i}, u the current values), and a
+// particle its stiffness and error (predict(i, u, p_i) -> {k_i, e_i}, u the current values,
+// p_i the particle's pressure entry so far), and a
 // correction after each but the last, u_i -= sum_j m_j (k_i + k_j) gradW_ij (boundary:
 // k_j = 0), adding accumulate(i, k_i) to the particle's pressure entry.
 template <class Predict, class Accumulate>
@@ -348,7 +349,7 @@ DfsphSolve dfsphIterate(const std::vector<SphParticle>& particles, const std::ve
     double error = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       if (particles[i].kind != 0) continue;
-      const glm::dvec2 ke = predict(i, out.values);
+      const glm::dvec2 ke = predict(i, out.values, out.pressure[i]);
       k[i] = ke.x;
       error += ke.y;
     }
@@ -373,12 +374,13 @@ DfsphSolve dfsphDensitySolve(const std::vector<SphParticle>& particles, const st
   const auto pairs = dfsphPairs(particles, m);
   return dfsphIterate(
       particles, pairs, aNp, corrections,
-      [&](std::size_t i, const std::vector<glm::dvec3>& a) {
+      [&](std::size_t i, const std::vector<glm::dvec3>& a, double pressure) {
         auto vStar = [&](std::size_t j) { return particles[j].kind == 0 ? particles[j].v + dt * a[j] : particles[j].v; };
         double div = 0.0;
         for (const Pair& p : pairs[i]) div += glm::dot(vStar(i) - vStar(p.j), p.mGradW);
-        const double compression = std::max(rho[i] + dt * div - m.rho0, 0.0);
-        return glm::dvec2(compression / (dt * dt * dfsphDenominator(pairs[i], floor)), std::min(compression / m.rho0, 1.0));
+        const double residual = std::max(rho[i] + dt * div - m.rho0 - pressure * m.solveCompliance, 0.0);
+        const double diagonal = dt * dt * dfsphDenominator(pairs[i], floor) + rho[i] * rho[i] * m.solveCompliance;
+        return glm::dvec2(residual / diagonal, std::min(residual / m.rho0, 1.0));
       },
       [&](std::size_t i, double k) { return k * rho[i] * rho[i]; });
 }
@@ -390,7 +392,7 @@ DfsphSolve dfsphDivergenceSolve(const std::vector<SphParticle>& particles, const
   for (const auto& p : particles) v.push_back(p.v);
   return dfsphIterate(
       particles, pairs, std::move(v), corrections,
-      [&](std::size_t i, const std::vector<glm::dvec3>& u) {
+      [&](std::size_t i, const std::vector<glm::dvec3>& u, double) {
         double div = 0.0;
         for (const Pair& p : pairs[i]) div += glm::dot(u[i] - u[p.j], p.mGradW);
         const double rate = std::max(div, 0.0);

@@ -391,6 +391,7 @@ SphParams makeParams(const SphSettings& s) {
     p.pressureSolver = 1u;
     p.c0 = 0.0f;
     p.solveFloor = float(0.25 * s.stiffnessDenominatorAtRest());
+    p.solveCompliance = s.solverCompressible ? float(1.0 / (double(s.soundSpeed) * s.soundSpeed)) : 0.0f;
   }
   for (int a = 0; a < 3; ++a) p.gravityOnly[a] = s.gravity[a];
   return p;
@@ -546,7 +547,7 @@ SphSolver::SphSolver(gpu::Context& context, ParticleStore& particles, glm::vec3 
       tileOccupied_(context, (std::uint64_t(tileSpec_.tiles()) + 2) * 4, gpu::MemoryUse::Device, "rebuild tiles occupied"),
       rebuildGate_(context, checkResult_, rebuildGateSlots(context, settings_, particles), "neighbour rebuild", 2),
       kappa_(context, settings_.pressureSolver == PressureSolver::Dfsph ? perParticle(particles, 16) : 16,
-             gpu::MemoryUse::Device, "dfsph stiffness and pressure (k, p, divergence sum of k)"),
+             gpu::MemoryUse::Device, "dfsph stiffness and pressure (k, p, divergence sum of k, density solve's p)"),
       solvePartials_(context, 16, gpu::MemoryUse::Device, "dfsph error partials"),
       solveStats_(context, 2 * HEMO_DFSPH_STAT_COUNT * 4, gpu::MemoryUse::Device, "dfsph stats"),
       // (a correction and a prediction per region; the density solve's regions, the divergence solve's)

@@ -29,6 +29,7 @@ inline reference::SphModel modelOf(const sim::SphParams& p, double time = 0.0) {
   m.deltaSph = p.deltaSph;
   m.c0 = p.c0;
   m.dfsph = p.pressureSolver != 0;
+  m.solveCompliance = p.solveCompliance;
   m.gravityOnly = {p.gravityOnly[0], p.gravityOnly[1], p.gravityOnly[2]};
   m.carreauYasuda = p.carreau[2] > 0.0f;  // (lambda is positive for non-Newtonian blood, else 0)
   m.muInf = p.carreau[0];

@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <memory>
+#include <utility>
 
 namespace hemo::test {
 namespace {
@@ -1032,10 +1033,12 @@ TEST_F(SphStageTest, CarreauYasudaViscosityMatchesReference) {
 // mean error. The list read four entries per texel and one.
 TEST_F(SphStageTest, DfsphSolvesMatchReference) {
   auto rng = rngFor();
-  for (const std::uint32_t capacity : {128u, 130u}) {
-    SCOPED_TRACE(testing::Message() << "capacity " << capacity);
+  // (the compressible solve, the default, with either list width; the incompressible one)
+  for (const auto& [capacity, compressible] : {std::pair{128u, true}, std::pair{130u, true}, std::pair{128u, false}}) {
+    SCOPED_TRACE(testing::Message() << "capacity " << capacity << (compressible ? ", compressible" : ", incompressible"));
     sim::SphSettings s = settings();
     s.pressureSolver = sim::PressureSolver::Dfsph;
+    s.solverCompressible = compressible;
     s.solverTolerance = 1.0e-7f;
     s.solverMaxIterations = 3;
     s.neighbourCapacity = capacity;
@@ -1114,6 +1117,19 @@ TEST_F(SphStageTest, DfsphSolvesMatchReference) {
     EXPECT_GT(compressed, 0) << "some fluid should be compressed, at p_bg";
     const auto aNp = reference::accelerations(moved, rp, model);
     const auto dens = reference::dfsphDensitySolve(moved, rho, aNp, dt, model, floor, 3);
+    ASSERT_EQ(model.solveCompliance > 0.0, compressible);
+    if (compressible) {
+      // the compliance should matter here: the incompressible solve's pressure differs
+      reference::SphModel stiff = model;
+      stiff.solveCompliance = 0.0;
+      const auto incompressible = reference::dfsphDensitySolve(moved, rho, aNp, dt, stiff, floor, 3);
+      double largest = 0.0, change = 0.0;
+      for (std::size_t i = 0; i < moved.size(); ++i) {
+        largest = std::max(largest, std::abs(incompressible.pressure[i]));
+        change = std::max(change, std::abs(incompressible.pressure[i] - dens.pressure[i]));
+      }
+      EXPECT_GT(change, 0.05 * largest) << "the compliance should change the solved pressure in this case";
+    }
     double accelScale = 0.0, pressureScale = 0.0, pressureChange = 0.0;
     for (std::size_t i = 0; i < moved.size(); ++i) {
       if (moved[i].kind != 0) continue;

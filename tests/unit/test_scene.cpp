@@ -165,6 +165,11 @@ TEST(Scene, PressureSolverSettingsAreCheckedAndItsLimitsNamed) {
   EXPECT_EQ(s.sph.pressureSolver, sim::PressureSolver::Dfsph);
   EXPECT_FLOAT_EQ(s.sph.solverTolerance, 1e-4f);
   EXPECT_EQ(s.sph.solverMaxIterations, 40u);
+  EXPECT_TRUE(s.sph.solverCompressible);
+  j["fluid"]["solver_compressible"] = false;
+  EXPECT_FALSE(parseScene(j.dump(), "ok.json").sph.solverCompressible);
+  j["fluid"]["solver_compressible"] = "yes";
+  expectError(j, {"fluid.solver_compressible"});
   EXPECT_EQ(parseScene(validScene().dump(), "ok.json").sph.pressureSolver, sim::PressureSolver::Wcsph);
   j = validScene();
   j["fluid"]["solver"] = "iisph";

@@ -44,6 +44,9 @@ struct SphModel {
   // expansion only, p = max(B ((min(rho, rho0) / rho0)^7 - 1) + p_bg, 0); boundary particles
   // take rho0 and their fluid neighbours' kernel-weighted mean pressure, within [0, p_bg].
   bool dfsph = false;
+  // DFSPH's density solve: the compliance 1 / c0^2 (s^2 m^-2) its residual
+  // rho* - rho0 - p / c0^2 holds, p the solve's own pressure so far; 0: incompressible.
+  double solveCompliance = 0.0;
   // Non-Newtonian blood (interface/sph.h, "Viscosity"): each fluid particle's viscosity
   // muInf + (mu0 - muInf) (1 + (lambda |S|)^a)^((n - 1) / a) at its shear rate (shearRates());
   // a fluid pair's viscous term takes mu_i + mu_j and a

@@ -121,6 +121,10 @@ struct SphSettings {
   PressureSolver pressureSolver = PressureSolver::Wcsph;
   float solverTolerance = 1.0e-3f;  // DFSPH: the mean compression (rho* - rho0)+ / rho0 it iterates to
   std::uint32_t solverMaxIterations = 50;  // DFSPH: the cap on each solve's corrections per step
+  // DFSPH: the density solve holds the compression the Tait law linearised at rho0 gives its
+  // pressure (compliance 1 / c0^2), so it models WCSPH's fluid; false: incompressible
+  // (interface/sph.h, "The pressure solver").
+  bool solverCompressible = true;
   // The fluid has parked slots (open vessel ends, hemo/sim/inflow.hpp): the solver then walks
   // a per-particle list (the cluster and cell-walk passes would meet the parked slots, which
   // all lie at one point) under WCSPH.
@@ -177,8 +181,10 @@ struct SphParams {
   // non-Newtonian blood: (mu_inf, mu_0 - mu_inf (Pa s, over the lattice factor), lambda (s), a);
   // zeros for Newtonian blood
   float carreau[4];
+  float solveCompliance;  // DFSPH: the density solve's compliance 1 / c0^2 (s^2 m^-2), 0: incompressible
+  float solvePad[3];
 };
-static_assert(sizeof(SphParams) == 288);
+static_assert(sizeof(SphParams) == 304);
 
 SphParams makeParams(const SphSettings& s);
 
