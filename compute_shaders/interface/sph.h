@@ -566,8 +566,10 @@
 // the blood is at or above rho0, falling as it expands) and the boundary pass rho0 and its
 // fluid neighbours' mean of it, so the force pass gives the non-pressure acceleration a_np
 // (with those pressures' pair terms, which load a vessel's wall with its lumen pressure).
-// After the density solve a wall takes the reaction of both solves' mirrored boundary terms (wall/dfsph_reaction.comp). Two solves per step, each a relaxed Jacobi iteration of two pair passes with the
-// stiffness denominator D_i = max(|sum_j m_j gradW_ij|^2 + sum_{j fluid} |m_j gradW_ij|^2, floor)
+// After the density solve a wall takes the reaction of both solves' mirrored boundary terms
+// (wall/dfsph_reaction.comp). Two solves per step, each a relaxed Jacobi iteration of two pair
+// passes with the stiffness denominator
+//   D_i = max(|sum_j m_j gradW_ij|^2 + sum_{j fluid} |m_j gradW_ij|^2, floor)
 // (j over fluid and boundary neighbours; a boundary neighbour moves with its own velocity and
 // mirrors i's stiffness, as in Akinci et al. 2012):
 //  divergence (mode 1), after the density pass and before the boundary pass: the velocities
@@ -581,18 +583,20 @@
 //  density (mode 0), after the force pass: the predicted velocities v*_i = v_i + dt a_i lose
 //    the compression they would cause over the step dt,
 //      predict  rho*_i = rho_i + dt sum_j m_j (v*_i - v*_j) . gradW_ij,
-//               e_i = max(rho*_i - rho0 - p_i C, 0),  k_i = kappa_i / rho_i = e_i / (dt^2 D_i + rho_i^2 C)
+//               e_i = max(rho*_i - rho0 - p_i C, 0),
+//               k_i = kappa_i / rho_i = e_i / (dt^2 D_i + rho_i^2 C)
 //      correct  a_i -= sum_{j fluid} m_j (k_i + k_j) gradW_ij + sum_b m_b k_i gradW_ib
 //    to a mean e_i / rho0 at most the tolerance, p_i = sum of k_i rho_i^2 over the solve's
 //    corrections so far (kappa.w) and C = solveCompliance = 1 / c0^2: the compression the Tait
 //    law, linearised at rho0, gives that pressure stays (C = 0, fluid.solver_compressible
 //    false: none). Far above the acoustic step (dt^2 D_i >> rho_i^2 C) this is DFSPH's
 //    constant-density solve; far below it p_i -> c0^2 (rho*_i - rho0), WCSPH's pressure, with
-//    the compression held in the density from step to step instead of taken out within one. The integrator's symplectic Euler step with
-//    a = a_np + a_p is then the solver's v = v*, x += dt v. state.y shows the density pass's
-//    pressure plus that of the step's impulses over dt: the divergence solve's (sum of k_i)
-//    rho_i^2 / dt plus the density solve's sum of k_i rho_i^2, so its time average is the pressure that carries the fluid's
-//    weight (a single step's is not: a solve corrects the error left by earlier steps whenever
+//    the compression held in the density from step to step instead of taken out within one.
+//    The integrator's symplectic Euler step with a = a_np + a_p is then the solver's v = v*,
+//    x += dt v. state.y shows the density pass's pressure plus that of the step's impulses
+//    over dt: the divergence solve's (sum of k_i) rho_i^2 / dt plus the density solve's sum of
+//    k_i rho_i^2, so its time average is the pressure that carries the fluid's weight (a
+//    single step's is not: a solve corrects the error left by earlier steps whenever
 //    the mean passes the tolerance, and a short step, such as one that ends at the end time,
 //    shows that correction over its short dt).
 // Each prediction sums its error per workgroup in fixed point (2^-20 of rho0 per particle,

@@ -119,7 +119,8 @@ struct SphSettings {
   DensityMethod densityMethod = DensityMethod::Summation;
   float deltaSph = 0.1f;            // delta of the diffusion term (continuity only)
   PressureSolver pressureSolver = PressureSolver::Wcsph;
-  float solverTolerance = 1.0e-3f;  // DFSPH: the mean compression (rho* - rho0)+ / rho0 it iterates to
+  // DFSPH: the mean residual / rho0 each solve iterates to (see interface/sph.h)
+  float solverTolerance = 1.0e-3f;
   std::uint32_t solverMaxIterations = 50;  // DFSPH: the cap on each solve's corrections per step
   // DFSPH: the density solve holds the compression the Tait law linearised at rho0 gives its
   // pressure (compliance 1 / c0^2), so it models WCSPH's fluid; false: incompressible
